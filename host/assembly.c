@@ -1,0 +1,185 @@
+/* What can be said of a parsed assembly: its canonical text (written with the same
+ * model table the parser reads, so it always reads back), its hash, the kernel build
+ * options for the models it uses, and whether light can pass through it. */
+#include "lsqt/assembly.h"
+#include "lsqt_internal.h"
+
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+void lsqt_sb_init(lsqt_sb *sb, char *buf, size_t cap)
+{
+    sb->buf = buf;
+    sb->cap = buf ? cap : 0;
+    sb->len = 0;
+    if (sb->cap)
+        buf[0] = '\0';
+}
+
+void lsqt_sb_printf(lsqt_sb *sb, const char *fmt, ...)
+{
+    char *dst = NULL;
+    size_t room = 0;
+    if (sb->len < sb->cap) {
+        dst = sb->buf + sb->len;
+        room = sb->cap - sb->len;
+    }
+    va_list ap;
+    va_start(ap, fmt);
+    int n = vsnprintf(dst, room, fmt, ap);
+    va_end(ap);
+    if (n > 0)
+        sb->len += (size_t)n;
+}
+
+void lsqt_assembly_free(lsqt_assembly *a)
+{
+    if (!a)
+        return;
+    free(a->layers);
+    free(a->media);
+    memset(a, 0, sizeof *a);
+}
+
+int lsqt_layer_transmits(const lsqt_layer *l)
+{
+    switch (l->kind) {
+    case LSQT_BSDF_LAMBERTIAN:
+    case LSQT_BSDF_MS_LAMBERTIAN:
+        return l->fT > 0;
+    case LSQT_BSDF_MS_DIELECTRIC:
+        return l->kT > 0;
+    case LSQT_BSDF_MS_CONDUCTIVE:
+    case LSQT_BSDF_OREN_NAYAR:
+        return 0;
+    default:
+        return 1;
+    }
+}
+
+int lsqt_assembly_transmits(const lsqt_assembly *a)
+{
+    for (int i = 0; i < a->n_layers; i++)
+        if (!lsqt_layer_transmits(&a->layers[i]))
+            return 0;
+    return a->n_layers > 0;
+}
+
+static const char *model_name(const lsqt_line_desc *d, int kind, const char *none)
+{
+    const lsqt_model *m = lsqt_model_of_kind(d, kind);
+    return m ? m->name : none;
+}
+
+const char *lsqt_bsdf_name(int kind) { return model_name(&lsqt_layer_line, kind, "unknown BSDF"); }
+
+const char *lsqt_phase_name(int kind)
+{
+    return kind == LSQT_PHASE_NONE ? "none" : model_name(&lsqt_medium_line, kind, "unknown phase");
+}
+
+static const char *choice_word(const lsqt_key *k, int v)
+{
+    for (int i = 0; k->choices[i]; i++)
+        if (i == v)
+            return k->choices[i];
+    return "?";
+}
+
+/* " key=value" for every key of the model, read from the line's struct. */
+static void write_keys(lsqt_sb *sb, const lsqt_model *m, const unsigned char *base)
+{
+    for (int i = 0; i < m->n_keys; i++) {
+        const lsqt_key *k = &m->keys[i];
+        const void *field = base + k->offset;
+        if (k->type == LSQT_NUM) {
+            lsqt_sb_printf(sb, " %s=%.17g", k->name, *(const double *)field);
+        } else {
+            int v = *(const int *)field;
+            if (k->type == LSQT_INT)
+                lsqt_sb_printf(sb, " %s=%d", k->name, v);
+            else
+                lsqt_sb_printf(sb, " %s=%s", k->name, choice_word(k, v));
+        }
+    }
+}
+
+/* One line: head and its keys, then the model (if any) and its keys. */
+static void write_line(lsqt_sb *sb, const lsqt_line_desc *d, const void *obj, int with_model)
+{
+    const unsigned char *base = obj;
+    lsqt_sb_printf(sb, "%s", d->head->name);
+    write_keys(sb, d->head, base);
+    if (with_model) {
+        int kind = *(const int *)(const void *)(base + d->kind_offset);
+        const lsqt_model *m = lsqt_model_of_kind(d, kind);
+        lsqt_sb_printf(sb, " %s", m ? m->name : "?");
+        if (m)
+            write_keys(sb, m, base);
+    }
+    lsqt_sb_printf(sb, "\n");
+}
+
+size_t lsqt_assembly_canonical(const lsqt_assembly *a, char *buf, size_t cap)
+{
+    lsqt_sb sb;
+    lsqt_sb_init(&sb, buf, cap);
+    for (int i = 0; a->media && i <= a->n_layers; i++) {
+        const lsqt_medium *m = &a->media[i];
+        write_line(&sb, &lsqt_medium_line, m, m->phase.kind != LSQT_PHASE_NONE);
+        if (i < a->n_layers)
+            write_line(&sb, &lsqt_layer_line, &a->layers[i], 1);
+    }
+    return sb.len;
+}
+
+/* 64-bit FNV-1a of the canonical text; 0 if there is no memory for the text. */
+uint64_t lsqt_assembly_hash(const lsqt_assembly *a)
+{
+    size_t n = lsqt_assembly_canonical(a, NULL, 0);
+    char *text = malloc(n + 1);
+    if (!text)
+        return 0;
+    lsqt_assembly_canonical(a, text, n + 1);
+    uint64_t h = 14695981039346656037ULL;
+    for (size_t i = 0; i < n; i++) {
+        h ^= (unsigned char)text[i];
+        h *= 1099511628211ULL;
+    }
+    free(text);
+    return h;
+}
+
+static int uses_phase(const lsqt_assembly *a, int kind)
+{
+    for (int i = 0; a->media && i <= a->n_layers; i++)
+        if (a->media[i].phase.kind == kind)
+            return 1;
+    return 0;
+}
+
+static int uses_bsdf(const lsqt_assembly *a, int kind)
+{
+    for (int i = 0; i < a->n_layers; i++)
+        if (a->layers[i].kind == kind)
+            return 1;
+    return 0;
+}
+
+size_t lsqt_assembly_build_options(const lsqt_assembly *a, char *buf, size_t cap)
+{
+    lsqt_sb sb;
+    lsqt_sb_init(&sb, buf, cap);
+    const lsqt_line_desc *descs[] = { &lsqt_medium_line, &lsqt_layer_line };
+    for (int d = 0; d < 2; d++) {
+        for (int i = 0; i < descs[d]->n_models; i++) {
+            const lsqt_model *m = &descs[d]->models[i];
+            int used = d == 0 ? uses_phase(a, m->kind) : uses_bsdf(a, m->kind);
+            if (m->macro && used)
+                lsqt_sb_printf(&sb, "%s-DLSQT_HAS_%s=1", sb.len ? " " : "", m->macro);
+        }
+    }
+    return sb.len;
+}

@@ -1,0 +1,185 @@
+#include "lsqt/cli.h"
+
+#include <ctype.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "lsqt/util.h"
+
+int lsqt_parse_double(const char *s, double *out)
+{
+    if (!s || !*s || isspace((unsigned char)*s)) return -1;
+    for (const char *p = s; *p; p++)
+        if (!strchr("0123456789+-.eE", *p)) return -1; /* no hex, inf, nan */
+    char *end = NULL;
+    double v = strtod(s, &end);
+    if (*end != '\0' || !isfinite(v)) return -1;
+    *out = v;
+    return 0;
+}
+
+int lsqt_parse_count(const char *s, double lo, double hi, uint64_t *out)
+{
+    double v;
+    if (lsqt_parse_double(s, &v) || v != floor(v) || v < lo || v > hi) return -1;
+    *out = (uint64_t)v;
+    return 0;
+}
+
+void lsqt_cli_help(FILE *f)
+{
+    fputs("usage: lsqt-cl [OPTIONS] FILE|-\n"
+          "Simulates the emergent BSDF of a layered assembly (LSQT file; - reads stdin) with\n"
+          "OpenCL, writing FILE.raw for raw2sqt and FILE.lss (progressive state: running again\n"
+          "adds paths to it).\n"
+          "\n"
+          "  -p, --path-count N          paths per outgoing direction (default 10000; 1e7 is fine)\n"
+          "  -wo, --wo-count N           outgoing directions (slices), 4-1024 (default 12)\n"
+          "      --wo-angles=A,B,...     explicit outgoing angles in degrees, [0, 90)\n"
+          "  -wi, --wi-count N           incident directions per slice, 16-1024 (default 80)\n"
+          "  -rx, --rrss-oversampling N  RRSS oversampling, 2-8 (default 4; RRSS not yet used)\n"
+          "  -rp, --rrss-path-frac F     RRSS path fraction, (0,1] (default 0.8; not yet used)\n"
+          "  -R, --restart               ignore an existing LSS and start over\n"
+          "  -s, --seed N                random seed, a non-negative integer (default 0)\n"
+          "  -t, --thread-count N        threads of a CPU (PoCL) device (default: all)\n"
+          "  -o, --output PATH           RAW file (default FILE.raw, Layered.raw for stdin)\n"
+          "  -H, --only-hemispherical    write OUT.R.raw and OUT.T.raw (transmission mirrored up)\n"
+          "  -d, --device D              OpenCL device: index, name substring, cpu or gpu\n"
+          "      --list-devices          list OpenCL devices and exit\n"
+          "      --double                compute in double precision (device needs fp64)\n"
+          "      --time-limit S          stop adding paths after S seconds\n"
+          "      --lss PATH              LSS file (default FILE.lss; none for stdin)\n"
+          "      --json PATH             machine-readable summary\n"
+          "  -q, --quiet                 print errors only\n"
+          "  -v, --verbose               print more (kernel build options, notes)\n"
+          "  -h, --help                  this text\n"
+          "Flags take their value as the next argument or after '=' (-wi 300, -wi=300).\n"
+          "Exit status: 0 success, 1 failure, 2 bad input or flags, 3 no usable OpenCL device.\n",
+          f);
+}
+
+enum flag_id {
+    F_PATHS, F_WO, F_WO_ANGLES, F_WI, F_RX, F_RP, F_RESTART, F_SEED, F_THREADS, F_OUTPUT,
+    F_HEMI, F_DEVICE, F_LIST, F_DOUBLE, F_TIME, F_LSS, F_JSON, F_QUIET, F_VERBOSE, F_HELP
+};
+
+static const struct flag {
+    const char *short_name, *long_name;
+    int id, takes_value;
+} flags[] = {
+    {"-p", "--path-count", F_PATHS, 1},      {"-wo", "--wo-count", F_WO, 1},
+    {NULL, "--wo-angles", F_WO_ANGLES, 1},   {"-wi", "--wi-count", F_WI, 1},
+    {"-rx", "--rrss-oversampling", F_RX, 1}, {"-rp", "--rrss-path-frac", F_RP, 1},
+    {"-R", "--restart", F_RESTART, 0},       {"-s", "--seed", F_SEED, 1},
+    {"-t", "--thread-count", F_THREADS, 1},  {"-o", "--output", F_OUTPUT, 1},
+    {"-H", "--only-hemispherical", F_HEMI, 0}, {"-d", "--device", F_DEVICE, 1},
+    {NULL, "--list-devices", F_LIST, 0},     {NULL, "--double", F_DOUBLE, 0},
+    {NULL, "--time-limit", F_TIME, 1},       {NULL, "--lss", F_LSS, 1},
+    {NULL, "--json", F_JSON, 1},             {"-q", "--quiet", F_QUIET, 0},
+    {"-v", "--verbose", F_VERBOSE, 0},       {"-h", "--help", F_HELP, 0},
+};
+
+static int parse_angles(const char *s, lsqt_cli *c)
+{
+    char buf[8192];
+    if (strlen(s) >= sizeof buf) return -1;
+    strcpy(buf, s);
+    c->n_wo_angles = 0;
+    for (char *tok = strtok(buf, ","); tok; tok = strtok(NULL, ",")) {
+        double deg;
+        if (c->n_wo_angles >= LSQT_MAX_WO || lsqt_parse_double(tok, &deg) || deg < 0 || deg >= 90)
+            return -1;
+        c->wo_angles[c->n_wo_angles++] = deg * LSQT_PI / 180.0;
+    }
+    return c->n_wo_angles > 0 ? 0 : -1;
+}
+
+/* Applies one flag's value; returns 0 or fills err. */
+static int apply(const struct flag *fl, const char *name, const char *v, lsqt_cli *c, char *err,
+                 size_t errcap)
+{
+    uint64_t n = 0;
+    double d = 0;
+    const char *expect = NULL;
+    switch (fl->id) {
+    case F_PATHS: if (lsqt_parse_count(v, 1, 9.0e15, &c->paths)) expect = "an integer path count >= 1 (e.g. 10000 or 1e7)"; break;
+    case F_WO: if (lsqt_parse_count(v, 4, 1024, &n)) expect = "an integer in 4-1024"; else c->wo_count = (int)n; c->sampling_given = 1; break;
+    case F_WO_ANGLES: if (parse_angles(v, c)) expect = "comma-separated angles in degrees in [0, 90), at most 1024"; c->sampling_given = 1; break;
+    case F_WI: if (lsqt_parse_count(v, 16, 1024, &n)) expect = "an integer in 16-1024"; else c->wi_count = (int)n; c->sampling_given = 1; break;
+    case F_RX: if (lsqt_parse_count(v, 2, 8, &n)) expect = "an integer in 2-8"; else c->rx = (int)n; c->sampling_given = 1; break;
+    case F_RP: if (lsqt_parse_double(v, &d) || !(d > 0 && d <= 1)) expect = "a number in (0, 1]"; else c->rp = d; c->sampling_given = 1; break;
+    case F_SEED: if (lsqt_parse_count(v, 0, 1.8e19, &c->seed)) expect = "a non-negative integer"; c->seed_given = c->sampling_given = 1; break;
+    case F_THREADS: if (lsqt_parse_count(v, 1, 4096, &n)) expect = "an integer in 1-4096"; else c->threads = (int)n; break;
+    case F_TIME: if (lsqt_parse_double(v, &d) || !(d > 0)) expect = "a positive number of seconds"; else c->time_limit = d; break;
+    case F_OUTPUT: if (!*v) expect = "a file name"; c->output = v; break;
+    case F_DEVICE: if (!*v) expect = "an index, a name substring, cpu or gpu"; c->device = v; break;
+    case F_LSS: if (!*v) expect = "a file name"; c->lss = v; break;
+    case F_JSON: if (!*v) expect = "a file name"; c->json = v; break;
+    case F_RESTART: c->restart = 1; break;
+    case F_HEMI: c->only_hemispherical = 1; break;
+    case F_LIST: c->list_devices = 1; break;
+    case F_DOUBLE: c->use_double = 1; break;
+    case F_QUIET: c->quiet = 1; break;
+    case F_VERBOSE: c->verbose = 1; break;
+    case F_HELP: c->help = 1; break;
+    default: break;
+    }
+    if (expect) {
+        snprintf(err, errcap, "bad value '%.64s' for %s: expected %s", v, name, expect);
+        return 2;
+    }
+    return 0;
+}
+
+int lsqt_cli_parse(int argc, char **argv, lsqt_cli *c, char *err, size_t errcap)
+{
+    memset(c, 0, sizeof *c);
+    c->paths = 10000;
+    c->wo_count = 12;
+    c->wi_count = 80;
+    c->rx = 4;
+    c->rp = 0.8;
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        if (a[0] != '-' || strcmp(a, "-") == 0) {
+            if (c->input) {
+                snprintf(err, errcap, "more than one input file: '%.200s' and '%.200s'", c->input, a);
+                return 2;
+            }
+            c->input = a;
+            continue;
+        }
+        /* "-wi=300" and "--wi-count=300" carry their value after '='. */
+        char name[64];
+        const char *eq = strchr(a, '=');
+        size_t nl = eq ? (size_t)(eq - a) : strlen(a);
+        if (nl >= sizeof name) nl = sizeof name - 1;
+        memcpy(name, a, nl);
+        name[nl] = '\0';
+        const struct flag *fl = NULL;
+        for (size_t k = 0; k < sizeof flags / sizeof *flags && !fl; k++)
+            if ((flags[k].short_name && strcmp(name, flags[k].short_name) == 0) ||
+                strcmp(name, flags[k].long_name) == 0)
+                fl = &flags[k];
+        if (!fl) {
+            snprintf(err, errcap, "unknown option '%.64s' (see --help)", a);
+            return 2;
+        }
+        const char *v = NULL;
+        if (fl->takes_value) {
+            if (eq) v = eq + 1;
+            else if (i + 1 < argc) v = argv[++i];
+            else {
+                snprintf(err, errcap, "%s needs a value (see --help)", name);
+                return 2;
+            }
+        } else if (eq) {
+            snprintf(err, errcap, "%s takes no value", name);
+            return 2;
+        }
+        int rc = apply(fl, name, v ? v : "", c, err, errcap);
+        if (rc) return rc;
+    }
+    return 0;
+}

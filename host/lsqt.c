@@ -1,0 +1,824 @@
+/* LSQT parser and validator (SPEC §3).
+ *
+ * The input is read line by line (media and layers alternate), each line with the model
+ * table below, which is the only place that names keys, defaults and valid ranges. Then
+ * whole-assembly rules run: pruning of what light cannot reach, then the rules about the
+ * bottom medium and notes. The input is untrusted (it is fuzzed): it need not be NUL
+ * terminated, may hold any bytes, and every failure is a message, never a crash. */
+#include "lsqt/assembly.h"
+#include "lsqt_internal.h"
+
+#include <limits.h>
+#include <locale.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* ---- The model table ------------------------------------------------------------ */
+
+#define OPEN 1
+#define CLOSED 0
+#define COUNT(a) ((int)(sizeof(a) / sizeof((a)[0])))
+#define MED(f) offsetof(lsqt_medium, f)
+#define PHASE(f) offsetof(lsqt_medium, phase.f)
+#define LAY(f) offsetof(lsqt_layer, f)
+
+#define NUM(name, def, lo, lo_open, hi, hi_open, off) \
+    { name, LSQT_NUM, def, lo, hi, lo_open, hi_open, NULL, off, 0 }
+#define CHOICE(name, def, words, off) { name, LSQT_CHOICE, def, 0, 0, 0, 0, words, off, 0 }
+#define FRACTION(name, def, off) NUM(name, def, 0, CLOSED, 1, CLOSED, off)
+#define G(name, off) NUM(name, 0, -1, OPEN, 1, OPEN, off)
+#define ALPHA NUM("alpha", 0.5, 0, OPEN, 100, CLOSED, LAY(alpha))
+/* default 0 = auto: resolved from alpha once the line is read */
+#define ITER_COUNT { "iter_count", LSQT_INT, 0, 1, 128, CLOSED, CLOSED, NULL, LAY(iter_count), 0 }
+#define MULTIPLE(def) CHOICE("use_multiple_scattering", def, bool_words, LAY(multiple_scattering))
+#define MODEL(name, alias, kind, macro, keys) { name, alias, kind, macro, keys, COUNT(keys) }
+
+static const char *const bool_words[] = { "false", "true", NULL };
+static const char *const sggx_types[] = { "Specular", "Diffuse", NULL };
+
+/* Media: upper bounds only keep the numbers sane; eta < 1 is refused later except for
+ * the metal below a conductive layer. */
+static const lsqt_key medium_keys[] = {
+    NUM("eta", 1, 0, OPEN, 100, CLOSED, MED(eta)),
+    NUM("mua", 0, 0, CLOSED, 1e12, CLOSED, MED(mua)),
+    NUM("mus", 0, 0, CLOSED, 1e12, CLOSED, MED(mus)),
+};
+static const lsqt_key hg_keys[] = { G("g", PHASE(g)) };
+static const lsqt_key hg2_keys[] = { G("g0", PHASE(g0)), G("g1", PHASE(g1)), FRACTION("b", 0, PHASE(b)) };
+static const lsqt_key rayleigh_keys[] = { NUM("rho", 0, -1, CLOSED, 1, CLOSED, PHASE(rho)) };
+static const lsqt_key sggx_keys[] = {
+    NUM("Apara", 1, 0, OPEN, 1e6, CLOSED, PHASE(apara)),
+    NUM("Aperp", 1, 0, OPEN, 1e6, CLOSED, PHASE(aperp)),
+    CHOICE("type", 0, sggx_types, PHASE(sggx_diffuse)),
+};
+
+/* Layers: |z| is bounded so that thicknesses stay finite. */
+static const lsqt_key layer_keys[] = {
+    { "z", LSQT_NUM, 0, -1e12, 1e12, CLOSED, CLOSED, NULL, LAY(z), 1 },
+};
+static const lsqt_key lambertian_keys[] = { FRACTION("fR", 1, LAY(fR)), FRACTION("fT", 0, LAY(fT)) };
+static const lsqt_key ms_lambertian_keys[] = {
+    ALPHA, FRACTION("fR", 1, LAY(fR)), FRACTION("fT", 0, LAY(fT)), ITER_COUNT, MULTIPLE(1),
+};
+static const lsqt_key ms_dielectric_keys[] = {
+    ALPHA, FRACTION("kR", 1, LAY(kR)), FRACTION("kT", 1, LAY(kT)), ITER_COUNT, MULTIPLE(1),
+};
+static const lsqt_key ms_conductive_keys[] = { ALPHA, ITER_COUNT, MULTIPLE(0) };
+static const lsqt_key oren_nayar_keys[] = {
+    FRACTION("fR", 1, LAY(fR)),
+    NUM("sigma", 0.1, 0, CLOSED, 0.8, CLOSED, LAY(sigma)),
+};
+
+static const lsqt_model medium_head = MODEL("Medium", NULL, 0, NULL, medium_keys);
+static const lsqt_model layer_head = MODEL("Layer", NULL, 0, NULL, layer_keys);
+
+static const lsqt_model phase_models[] = {
+    MODEL("HenyeyGreensteinPhase", "HenyeyGreenstein", LSQT_PHASE_HG, "PHASE_HG", hg_keys),
+    MODEL("HenyeyGreenstein2Phase", "HenyeyGreenstein2", LSQT_PHASE_HG2, "PHASE_HG2", hg2_keys),
+    MODEL("RayleighPhase", "Rayleigh", LSQT_PHASE_RAYLEIGH, "PHASE_RAYLEIGH", rayleigh_keys),
+    MODEL("SggxPhase", "Sggx", LSQT_PHASE_SGGX, "PHASE_SGGX", sggx_keys),
+};
+
+static const lsqt_model bsdf_models[] = {
+    { "NullBsdf", "Null", LSQT_BSDF_NULL, NULL, NULL, 0 },
+    MODEL("LambertianBsdf", "Lambertian", LSQT_BSDF_LAMBERTIAN, "BSDF_LAMBERTIAN",
+          lambertian_keys),
+    MODEL("MicrosurfaceLambertianBrdf", "MicrosurfaceLambertian", LSQT_BSDF_MS_LAMBERTIAN,
+          "BSDF_MS_LAMBERTIAN", ms_lambertian_keys),
+    MODEL("MicrosurfaceDielectricBsdf", "MicrosurfaceDielectric", LSQT_BSDF_MS_DIELECTRIC,
+          "BSDF_MS_DIELECTRIC", ms_dielectric_keys),
+    MODEL("MicrosurfaceConductiveBrdf", "MicrosurfaceConductive", LSQT_BSDF_MS_CONDUCTIVE,
+          "BSDF_MS_CONDUCTIVE", ms_conductive_keys),
+    MODEL("OrenNayarDiffuseBrdf", "OrenNayarDiffuse", LSQT_BSDF_OREN_NAYAR, "BSDF_OREN_NAYAR",
+          oren_nayar_keys),
+};
+
+const lsqt_line_desc lsqt_medium_line = {
+    &medium_head, phase_models, COUNT(phase_models), "phase model", PHASE(kind),
+};
+const lsqt_line_desc lsqt_layer_line = {
+    &layer_head, bsdf_models, COUNT(bsdf_models), "BSDF model", LAY(kind),
+};
+
+const lsqt_model *lsqt_model_of_kind(const lsqt_line_desc *d, int kind)
+{
+    for (int i = 0; i < d->n_models; i++)
+        if (d->models[i].kind == kind)
+            return &d->models[i];
+    return NULL;
+}
+
+/* ---- Tokens ---------------------------------------------------------------------- */
+
+typedef struct span {
+    const char *p;
+    size_t n;
+} span;
+
+static int span_is(span s, const char *word)
+{
+    size_t n = strlen(word);
+    return s.p && s.n == n && memcmp(s.p, word, n) == 0;
+}
+
+static span word(const char *s)
+{
+    span w = { s, strlen(s) };
+    return w;
+}
+
+static int is_space(char c) { return c == ' ' || c == '\t' || c == '\r'; }
+
+/* Next whitespace-separated token in [*cur, end); 0 at the end. */
+static int next_token(const char **cur, const char *end, span *tok)
+{
+    const char *p = *cur;
+    while (p < end && is_space(*p))
+        p++;
+    if (p == end)
+        return 0;
+    tok->p = p;
+    while (p < end && !is_space(*p))
+        p++;
+    tok->n = (size_t)(p - tok->p);
+    *cur = p;
+    return 1;
+}
+
+/* A token for a message: at most 40 bytes, anything unprintable shown as '?'. */
+static const char *show(span s, char out[48])
+{
+    size_t n = s.n > 40 ? 40 : s.n, i;
+    for (i = 0; i < n; i++)
+        out[i] = (s.p[i] >= 0x20 && s.p[i] < 0x7f) ? s.p[i] : '?';
+    strcpy(out + i, s.n > n ? "..." : "");
+    return out;
+}
+
+/* ---- Parser state and diagnostics --------------------------------------------------- */
+
+typedef struct medium_rec {
+    lsqt_medium m;
+    span tok[LSQT_MAX_KEYS]; /* its Medium keys as written (p NULL: default), for messages */
+} medium_rec;
+
+typedef struct parser {
+    const char *name;
+    lsqt_diag *diag;
+    int line;
+    medium_rec *media;
+    int n_media, cap_media;
+    lsqt_layer *layers;
+    int n_layers, cap_layers;
+    int n_pruned;
+} parser;
+
+/* One line being read. */
+typedef struct line_state {
+    const lsqt_line_desc *desc;
+    unsigned char *base;     /* the lsqt_medium or lsqt_layer being filled */
+    const lsqt_model *model; /* phase/BSDF model; NULL until its name is read */
+    span head, last;         /* "Medium"/"Layer" token, last token read */
+    span head_tok[LSQT_MAX_KEYS];
+    span model_tok[LSQT_MAX_KEYS];
+} line_state;
+
+/* Records the first error as "NAME:LINE: error: WHAT at 'TOKEN'; expected ..." and
+ * returns 2. line 0: not line specific; tok NULL: no token to show. */
+static int fail(parser *P, int line, const span *tok, const char *what, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 5, 6)))
+#endif
+    ;
+static int fail(parser *P, int line, const span *tok, const char *what, const char *fmt, ...)
+{
+    lsqt_diag *d = P->diag;
+    if (d->error[0])
+        return 2;
+    lsqt_sb sb;
+    lsqt_sb_init(&sb, d->error, sizeof d->error);
+    lsqt_sb_printf(&sb, "%s", P->name);
+    if (line > 0)
+        lsqt_sb_printf(&sb, ":%d", line);
+    lsqt_sb_printf(&sb, ": error: %s", what);
+    if (tok) {
+        char shown[48];
+        lsqt_sb_printf(&sb, " at '%s'", show(*tok, shown));
+    }
+    char expected[768];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(expected, sizeof expected, fmt, ap);
+    va_end(ap);
+    lsqt_sb_printf(&sb, "; expected %s", expected);
+    d->error_line = line;
+    return 2;
+}
+
+static void note(parser *P, int line, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+static void note(parser *P, int line, const char *fmt, ...)
+{
+    lsqt_diag *d = P->diag;
+    if (d->n_notes >= LSQT_DIAG_MAX_NOTES)
+        return;
+    char text[256];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(text, sizeof text, fmt, ap);
+    va_end(ap);
+    lsqt_sb sb;
+    lsqt_sb_init(&sb, d->notes[d->n_notes++], sizeof d->notes[0]);
+    lsqt_sb_printf(&sb, "%s:%d: note: %s", P->name, line, text);
+}
+
+static int out_of_memory(parser *P) { return fail(P, 0, NULL, "out of memory", "less input"); }
+
+/* Room for one more element of `size` bytes in arr (n used, *cap allocated): returns
+ * the array, perhaps moved, or NULL (arr is then still valid). */
+static void *grow(void *arr, int *cap, int n, size_t size)
+{
+    if (n < *cap)
+        return arr;
+    if (*cap > INT_MAX / 2)
+        return NULL;
+    int new_cap = *cap ? 2 * *cap : 8;
+    void *p = realloc(arr, (size_t)new_cap * size);
+    if (p)
+        *cap = new_cap;
+    return p;
+}
+
+/* ---- Table look-ups and messages built from the table ------------------------------- */
+
+static const lsqt_model *find_model(const lsqt_line_desc *d, span word)
+{
+    for (int i = 0; i < d->n_models; i++)
+        if (span_is(word, d->models[i].name) || span_is(word, d->models[i].alias))
+            return &d->models[i];
+    return NULL;
+}
+
+static const lsqt_key *find_key(const lsqt_model *m, span name)
+{
+    for (int i = 0; i < m->n_keys; i++)
+        if (span_is(name, m->keys[i].name))
+            return &m->keys[i];
+    return NULL;
+}
+
+/* The first head or model of any line that has a key of this name. */
+static const lsqt_model *key_owner(span name)
+{
+    const lsqt_line_desc *descs[] = { &lsqt_medium_line, &lsqt_layer_line };
+    for (int d = 0; d < 2; d++) {
+        if (find_key(descs[d]->head, name))
+            return descs[d]->head;
+        for (int i = 0; i < descs[d]->n_models; i++)
+            if (find_key(&descs[d]->models[i], name))
+                return &descs[d]->models[i];
+    }
+    return NULL;
+}
+
+static const lsqt_model *current_model(const line_state *ls)
+{
+    return ls->model ? ls->model : ls->desc->head;
+}
+
+static span *given_tokens(line_state *ls) { return ls->model ? ls->model_tok : ls->head_tok; }
+
+/* The token a key was written as, or NULL when it took its default. */
+static const span *token_of(const span *toks, const lsqt_model *m, const char *key)
+{
+    for (int i = 0; i < m->n_keys; i++)
+        if (strcmp(m->keys[i].name, key) == 0)
+            return toks[i].p ? &toks[i] : NULL;
+    return NULL;
+}
+
+static void list_models(const lsqt_line_desc *d, lsqt_sb *sb)
+{
+    for (int i = 0; i < d->n_models; i++)
+        lsqt_sb_printf(sb, "%s%s", i ? ", " : "", d->models[i].name);
+}
+
+/* What may come next on the line: "one of: eta mua mus or a phase model (...)". */
+static void expected_words(const line_state *ls, lsqt_sb *sb)
+{
+    const lsqt_model *m = current_model(ls);
+    if (m->n_keys == 0) {
+        lsqt_sb_printf(sb, "nothing after %s (it has no keys)", m->name);
+        return;
+    }
+    lsqt_sb_printf(sb, "one of:");
+    for (int i = 0; i < m->n_keys; i++)
+        lsqt_sb_printf(sb, " %s", m->keys[i].name);
+    if (ls->model) {
+        lsqt_sb_printf(sb, " (keys of %s)", m->name);
+    } else {
+        lsqt_sb_printf(sb, " or a %s (", ls->desc->model_what);
+        list_models(ls->desc, sb);
+        lsqt_sb_printf(sb, ")");
+    }
+}
+
+static void describe_range(const lsqt_key *k, lsqt_sb *sb)
+{
+    lsqt_sb_printf(sb, " in %c%g, %g%c", k->lo_open ? '(' : '[', k->lo, k->hi,
+                   k->hi_open ? ')' : ']');
+}
+
+/* What a valid value of the key looks like: "g=<number> in (-1, 1)". */
+static void describe_value(const lsqt_key *k, lsqt_sb *sb)
+{
+    if (k->type == LSQT_CHOICE) {
+        lsqt_sb_printf(sb, "%s=", k->name);
+        for (int i = 0; k->choices[i]; i++)
+            lsqt_sb_printf(sb, "%s%s", i ? "|" : "", k->choices[i]);
+        return;
+    }
+    lsqt_sb_printf(sb, "%s=<%s>", k->name, k->type == LSQT_INT ? "integer" : "number");
+    describe_range(k, sb);
+}
+
+/* ---- Values -------------------------------------------------------------------------- */
+
+static int is_digit(char c) { return c >= '0' && c <= '9'; }
+
+static size_t skip_digits(span s, size_t i)
+{
+    while (i < s.n && is_digit(s.p[i]))
+        i++;
+    return i;
+}
+
+/* Strict decimal number: [+-] digits [. digits] [e [+-] digits], the whole token, finite.
+ * The grammar is checked here because strtod also takes "inf", "nan" and hex floats; the
+ * '.' is handed to strtod as the locale's decimal point so a caller's setlocale cannot
+ * change what parses. Returns NULL or why the token is not a number. */
+static const char *parse_number(span s, double *v)
+{
+    size_t i = 0, mantissa;
+    if (i < s.n && (s.p[i] == '+' || s.p[i] == '-'))
+        i++;
+    size_t start = i;
+    i = skip_digits(s, i);
+    mantissa = i - start;
+    if (i < s.n && s.p[i] == '.') {
+        size_t frac = i + 1;
+        i = skip_digits(s, frac);
+        mantissa += i - frac;
+    }
+    if (mantissa == 0)
+        return "not a number";
+    if (i < s.n && (s.p[i] == 'e' || s.p[i] == 'E')) {
+        i++;
+        if (i < s.n && (s.p[i] == '+' || s.p[i] == '-'))
+            i++;
+        size_t exp_start = i;
+        i = skip_digits(s, i);
+        if (i == exp_start)
+            return "not a number";
+    }
+    if (i != s.n)
+        return "not a number";
+
+    char buf[160];
+    const char *point = localeconv()->decimal_point;
+    if (s.n + strlen(point) >= sizeof buf)
+        return "number too long";
+    size_t o = 0;
+    for (i = 0; i < s.n; i++) {
+        if (s.p[i] == '.') {
+            memcpy(buf + o, point, strlen(point));
+            o += strlen(point);
+        } else {
+            buf[o++] = s.p[i];
+        }
+    }
+    buf[o] = '\0';
+    char *end;
+    *v = strtod(buf, &end);
+    if (end != buf + o)
+        return "not a number";
+    if (!isfinite(*v))
+        return "number out of range";
+    return NULL;
+}
+
+/* Returns NULL or why the text is not a valid value of the key. */
+static const char *parse_value(const lsqt_key *k, span text, double *v)
+{
+    if (text.n == 0)
+        return "missing value after '='";
+    if (k->type == LSQT_CHOICE) {
+        for (int i = 0; k->choices[i]; i++) {
+            if (span_is(text, k->choices[i])) {
+                *v = i;
+                return NULL;
+            }
+        }
+        return "unknown value";
+    }
+    const char *why = parse_number(text, v);
+    if (!why && k->type == LSQT_INT && *v != floor(*v))
+        why = "not an integer";
+    if (!why && (k->lo_open ? !(*v > k->lo) : !(*v >= k->lo)))
+        why = "value out of range";
+    if (!why && (k->hi_open ? !(*v < k->hi) : !(*v <= k->hi)))
+        why = "value out of range";
+    return why;
+}
+
+static void store(unsigned char *base, const lsqt_key *k, double v)
+{
+    if (k->type == LSQT_NUM)
+        *(double *)(void *)(base + k->offset) = v;
+    else
+        *(int *)(void *)(base + k->offset) = (int)v;
+}
+
+static void apply_defaults(const lsqt_model *m, unsigned char *base)
+{
+    for (int i = 0; i < m->n_keys; i++)
+        store(base, &m->keys[i], m->keys[i].def);
+}
+
+/* ---- One line ------------------------------------------------------------------------ */
+
+static int read_key(parser *P, line_state *ls, span tok, const char *eq)
+{
+    const lsqt_model *m = current_model(ls);
+    span name = { tok.p, (size_t)(eq - tok.p) };
+    span text = { eq + 1, tok.n - name.n - 1 };
+    char buf[640], shown[48];
+    lsqt_sb sb;
+    lsqt_sb_init(&sb, buf, sizeof buf);
+
+    const lsqt_key *k = find_key(m, name);
+    if (!k) {
+        expected_words(ls, &sb);
+        const lsqt_model *owner = name.n ? key_owner(name) : NULL;
+        if (owner)
+            lsqt_sb_printf(&sb, " ('%s' is a key of %s)", show(name, shown), owner->name);
+        return fail(P, P->line, &tok, name.n ? "unknown key" : "missing key name before '='",
+                    "%s", buf);
+    }
+    span *given = &given_tokens(ls)[k - m->keys];
+    if (given->p)
+        return fail(P, P->line, &tok, "repeated key", "%s at most once (already given as '%s')",
+                    k->name, show(*given, shown));
+    double v = 0;
+    const char *why = parse_value(k, text, &v);
+    if (why) {
+        describe_value(k, &sb);
+        return fail(P, P->line, &tok, why, "%s", buf);
+    }
+    store(ls->base, k, v);
+    *given = tok;
+    return 0;
+}
+
+/* A word without '=': the model name, or a mistake. */
+static int read_word(parser *P, line_state *ls, span tok)
+{
+    const lsqt_model *model = find_model(ls->desc, tok);
+    if (model && !ls->model) {
+        ls->model = model;
+        *(int *)(void *)(ls->base + ls->desc->kind_offset) = model->kind;
+        apply_defaults(model, ls->base);
+        return 0;
+    }
+    char buf[640], what[96];
+    lsqt_sb sb;
+    lsqt_sb_init(&sb, buf, sizeof buf);
+    const lsqt_key *k = find_key(current_model(ls), tok);
+    if (k) {
+        describe_value(k, &sb);
+        return fail(P, P->line, &tok, "missing '=' and value", "%s", buf);
+    }
+    if (model)
+        snprintf(what, sizeof what, "a second %s", ls->desc->model_what);
+    else
+        snprintf(what, sizeof what, "unknown word");
+    expected_words(ls, &sb);
+    return fail(P, P->line, &tok, what, "%s", buf);
+}
+
+/* Names, keys and numbers are printable ASCII; anything else is garbage. */
+static int check_chars(parser *P, span tok)
+{
+    for (size_t i = 0; i < tok.n; i++) {
+        unsigned char c = (unsigned char)tok.p[i];
+        if (c <= 0x20 || c >= 0x7f)
+            return fail(P, P->line, &tok, "invalid character", "printable ASCII (byte 0x%02x "
+                        "at offset %zu of the word is not)", c, i);
+    }
+    return 0;
+}
+
+static int wrong_head(parser *P, const line_state *ls)
+{
+    int medium = ls->desc == &lsqt_medium_line;
+    const char *want = ls->desc->head->name;
+    const char *other = medium ? "Layer" : "Medium";
+    char what[64];
+    if (span_is(ls->head, other))
+        snprintf(what, sizeof what, "a %s line where a %s line belongs", other, want);
+    else
+        snprintf(what, sizeof what, "unknown line name");
+    return fail(P, P->line, &ls->head, what,
+                "%s here (lines alternate Medium, Layer, Medium, ..., Medium)", want);
+}
+
+static int check_required(parser *P, const line_state *ls)
+{
+    const lsqt_model *h = ls->desc->head;
+    for (int i = 0; i < h->n_keys; i++) {
+        if (h->keys[i].required && !ls->head_tok[i].p) {
+            char what[64], buf[128];
+            lsqt_sb sb;
+            lsqt_sb_init(&sb, buf, sizeof buf);
+            describe_value(&h->keys[i], &sb);
+            snprintf(what, sizeof what, "missing required key %s", h->keys[i].name);
+            return fail(P, P->line, &ls->head, what, "%s right after %s", buf, h->name);
+        }
+    }
+    return 0;
+}
+
+static int auto_iter_count(double alpha)
+{
+    return alpha <= 0.1 ? 1 : alpha <= 0.2 ? 2 : alpha <= 0.5 ? 4 : 6;
+}
+
+/* Top and bottom media must be clear (the metal below a conductive layer excepted). */
+static int require_clear(parser *P, const medium_rec *r, const char *which)
+{
+    static const char *const keys[] = { "mua", "mus" };
+    const double values[] = { r->m.mua, r->m.mus };
+    for (int i = 0; i < 2; i++) {
+        if (values[i] > 0) {
+            char what[64];
+            snprintf(what, sizeof what, "the %s medium %s", which, i ? "scatters" : "absorbs");
+            return fail(P, r->m.line, token_of(r->tok, &medium_head, keys[i]), what,
+                        "%s=0 (the top and bottom media must neither absorb nor scatter, "
+                        "except the metal below a MicrosurfaceConductiveBrdf)", keys[i]);
+        }
+    }
+    return 0;
+}
+
+static int finish_medium(parser *P, line_state *ls, lsqt_medium *m)
+{
+    medium_rec r;
+    memset(&r, 0, sizeof r);
+    memcpy(r.tok, ls->head_tok, sizeof r.tok);
+    const lsqt_layer *above = P->n_layers ? &P->layers[P->n_layers - 1] : NULL;
+    const span *eta_tok = token_of(r.tok, &medium_head, "eta");
+    const span *mus_tok = token_of(r.tok, &medium_head, "mus");
+    char buf[256];
+    lsqt_sb sb;
+    lsqt_sb_init(&sb, buf, sizeof buf);
+
+    if (above && above->kind == LSQT_BSDF_MS_CONDUCTIVE) {
+        if (m->mus > 0)
+            return fail(P, P->line, mus_tok, "the metal below a MicrosurfaceConductiveBrdf scatters",
+                        "mus=0 (the metal's eta + i*mua is the complex index)");
+    } else if (m->eta < 1) {
+        return fail(P, P->line, eta_tok, "eta below 1",
+                    "eta >= 1 (eta < 1 is allowed only for the metal below a "
+                    "MicrosurfaceConductiveBrdf)");
+    }
+    if (m->mus > 0 && m->phase.kind == LSQT_PHASE_NONE) {
+        list_models(&lsqt_medium_line, &sb);
+        return fail(P, P->line, mus_tok, "scattering medium without a phase model",
+                    "a phase model after the Medium keys when mus > 0: one of %s", buf);
+    }
+    if (m->mus == 0 && ls->model) {
+        note(P, P->line, "%s ignored: mus=0, the medium does not scatter", ls->model->name);
+        memset(&m->phase, 0, sizeof m->phase);
+    }
+    m->line = P->line;
+    r.m = *m;
+    if (P->n_media == 0 && require_clear(P, &r, "top"))
+        return 2;
+    medium_rec *media = grow(P->media, &P->cap_media, P->n_media, sizeof *P->media);
+    if (!media)
+        return out_of_memory(P);
+    P->media = media;
+    P->media[P->n_media++] = r;
+    return 0;
+}
+
+static int finish_layer(parser *P, line_state *ls, lsqt_layer *l)
+{
+    char buf[256];
+    lsqt_sb sb;
+    lsqt_sb_init(&sb, buf, sizeof buf);
+    if (!ls->model) {
+        list_models(&lsqt_layer_line, &sb);
+        return fail(P, P->line, &ls->last, "missing BSDF model",
+                    "a BSDF model after the Layer keys: one of %s", buf);
+    }
+    const lsqt_layer *prev = P->n_layers ? &P->layers[P->n_layers - 1] : NULL;
+    if (prev && !(l->z < prev->z))
+        return fail(P, P->line, token_of(ls->head_tok, &layer_head, "z"),
+                    "layer not below the previous one",
+                    "z < %g (z of the layer on line %d; z decreases down the file)", prev->z,
+                    prev->line);
+    if (find_key(ls->model, word("fT")) && l->fR + l->fT > 1 + 1e-12) {
+        /* name whichever of fR, fT was written last */
+        const span *fr = token_of(ls->model_tok, ls->model, "fR");
+        const span *ft = token_of(ls->model_tok, ls->model, "fT");
+        const span *tok = (!ft || (fr && fr->p > ft->p)) ? fr : ft;
+        snprintf(buf, sizeof buf, "fR + fT = %g exceeds 1", l->fR + l->fT);
+        return fail(P, P->line, tok, buf, "fR + fT <= 1 (fR=%g, fT=%g; the rest is absorbed)",
+                    l->fR, l->fT);
+    }
+    if (find_key(ls->model, word("iter_count")) && l->iter_count == 0)
+        l->iter_count = auto_iter_count(l->alpha);
+    l->line = P->line;
+    lsqt_layer *layers = grow(P->layers, &P->cap_layers, P->n_layers, sizeof *P->layers);
+    if (!layers)
+        return out_of_memory(P);
+    P->layers = layers;
+    P->layers[P->n_layers++] = *l;
+    return 0;
+}
+
+/* Reads one non-blank line whose first token is `head`; the rest is [cur, end). */
+static int read_line(parser *P, const char *cur, const char *end, span head)
+{
+    union {
+        lsqt_medium m;
+        lsqt_layer l;
+    } obj;
+    line_state ls;
+    memset(&obj, 0, sizeof obj);
+    memset(&ls, 0, sizeof ls);
+    int medium = P->n_media == P->n_layers;
+    ls.desc = medium ? &lsqt_medium_line : &lsqt_layer_line;
+    ls.base = (unsigned char *)&obj;
+    ls.head = ls.last = head;
+    if (check_chars(P, head))
+        return 2;
+    if (!span_is(head, ls.desc->head->name))
+        return wrong_head(P, &ls);
+    apply_defaults(ls.desc->head, ls.base);
+
+    span tok;
+    while (next_token(&cur, end, &tok)) {
+        ls.last = tok;
+        const char *eq = memchr(tok.p, '=', tok.n);
+        if (check_chars(P, tok) || (eq ? read_key(P, &ls, tok, eq) : read_word(P, &ls, tok)))
+            return 2;
+    }
+    if (check_required(P, &ls))
+        return 2;
+    return medium ? finish_medium(P, &ls, &obj.m) : finish_layer(P, &ls, &obj.l);
+}
+
+/* ---- The whole assembly ------------------------------------------------------------ */
+
+/* Light cannot pass the first layer that transmits nothing: keep that layer and, below
+ * it, the metal of a conductive layer or else a vacuum; drop the rest. */
+static void prune(parser *P)
+{
+    int p = 0;
+    while (p < P->n_layers && lsqt_layer_transmits(&P->layers[p]))
+        p++;
+    if (p == P->n_layers)
+        return;
+    const lsqt_layer *stop = &P->layers[p];
+    const char *name = lsqt_bsdf_name(stop->kind);
+    medium_rec *below = &P->media[p + 1];
+    int last_line = P->media[P->n_media - 1].m.line;
+    int metal = stop->kind == LSQT_BSDF_MS_CONDUCTIVE;
+    /* the metal stays, so pruning starts at the next layer */
+    int first_line = metal && p + 1 < P->n_layers ? P->layers[p + 1].line : below->m.line;
+    P->n_pruned = P->n_layers - (p + 1);
+    P->n_layers = p + 1;
+    P->n_media = p + 2;
+    if (metal) {
+        if (P->n_pruned)
+            note(P, stop->line, "%s transmits nothing: lines %d-%d cannot be reached and are "
+                 "not modelled (%d layer%s pruned; the metal on line %d is kept)", name,
+                 first_line, last_line, P->n_pruned, P->n_pruned > 1 ? "s" : "", below->m.line);
+        return;
+    }
+    const lsqt_medium *m = &below->m;
+    int vacuum = m->eta == 1 && m->mua == 0 && m->mus == 0;
+    if (P->n_pruned)
+        note(P, stop->line, "%s transmits nothing: lines %d-%d cannot be reached and are not "
+             "modelled (%d layer%s pruned; the bottom medium is now vacuum)", name, first_line,
+             last_line, P->n_pruned, P->n_pruned > 1 ? "s" : "");
+    else if (!vacuum)
+        note(P, stop->line, "%s transmits nothing: the medium on line %d cannot be reached "
+             "and is modelled as vacuum", name, m->line);
+    int line = m->line;
+    memset(below, 0, sizeof *below);
+    below->m.eta = 1;
+    below->m.line = line;
+}
+
+static void note_null_layers(parser *P)
+{
+    for (int i = 0; i < P->n_layers; i++) {
+        double above = P->media[i].m.eta, below = P->media[i + 1].m.eta;
+        if (P->layers[i].kind == LSQT_BSDF_NULL && above != below)
+            note(P, P->layers[i].line, "NullBsdf between eta=%g and eta=%g: light passes "
+                 "straight on, without refraction", above, below);
+    }
+}
+
+static int finish_assembly(parser *P)
+{
+    if (P->n_media == 0)
+        return fail(P, 0, NULL, "no layers (the input has no Medium or Layer lines)",
+                    "Medium, Layer, Medium, ..., Medium lines with at least one Layer");
+    if (P->n_layers == 0)
+        return fail(P, P->media[0].m.line, NULL, "no layers",
+                    "a Layer line after the Medium on line %d, then a bottom Medium line",
+                    P->media[0].m.line);
+    if (P->n_media == P->n_layers)
+        return fail(P, P->layers[P->n_layers - 1].line, NULL, "the input ends with a layer",
+                    "a bottom Medium line after the Layer on line %d",
+                    P->layers[P->n_layers - 1].line);
+    prune(P);
+    if (P->layers[P->n_layers - 1].kind != LSQT_BSDF_MS_CONDUCTIVE &&
+        require_clear(P, &P->media[P->n_media - 1], "bottom"))
+        return 2;
+    note_null_layers(P);
+    return 0;
+}
+
+static int hand_over(parser *P, lsqt_assembly *out)
+{
+    out->layers = malloc((size_t)P->n_layers * sizeof *out->layers);
+    out->media = malloc((size_t)P->n_media * sizeof *out->media);
+    if (!out->layers || !out->media) {
+        lsqt_assembly_free(out);
+        return out_of_memory(P);
+    }
+    memcpy(out->layers, P->layers, (size_t)P->n_layers * sizeof *out->layers);
+    for (int i = 0; i < P->n_media; i++)
+        out->media[i] = P->media[i].m;
+    out->n_layers = P->n_layers;
+    out->n_pruned_layers = P->n_pruned;
+    return 0;
+}
+
+static int parse_lines(parser *P, const char *text, size_t len)
+{
+    const char *p = text, *end = text + len;
+    while (p < end) {
+        const char *nl = memchr(p, '\n', (size_t)(end - p));
+        const char *line_end = nl ? nl : end;
+        const char *hash = memchr(p, '#', (size_t)(line_end - p));
+        const char *cur = p;
+        span head;
+        if (P->line == INT_MAX)
+            return fail(P, P->line, NULL, "too many lines", "fewer than %d lines", INT_MAX);
+        P->line++;
+        if (next_token(&cur, hash ? hash : line_end, &head) &&
+            read_line(P, cur, hash ? hash : line_end, head))
+            return 2;
+        p = nl ? nl + 1 : end;
+    }
+    return 0;
+}
+
+int lsqt_parse(const char *text, size_t len, const char *name, lsqt_assembly *out,
+               lsqt_diag *diag)
+{
+    lsqt_diag scratch;
+    parser P;
+    memset(&P, 0, sizeof P);
+    P.name = name ? name : "<input>";
+    P.diag = diag ? diag : &scratch;
+    memset(P.diag, 0, sizeof *P.diag);
+    if (!out)
+        return fail(&P, 0, NULL, "no assembly to fill", "a non-NULL output");
+    memset(out, 0, sizeof *out);
+
+    int rc;
+    if (!text && len > 0)
+        rc = fail(&P, 0, NULL, "no text", "a non-NULL text");
+    else
+        rc = text ? parse_lines(&P, text, len) : 0;
+    if (!rc)
+        rc = finish_assembly(&P);
+    if (!rc)
+        rc = hand_over(&P, out);
+    free(P.media);
+    free(P.layers);
+    return rc;
+}

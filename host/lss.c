@@ -1,0 +1,244 @@
+#include "lsqt/lss.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "lsqt/util.h"
+
+static const char magic[8] = {'L', 'S', 'Q', 'T', 'L', 'S', 'S', '\0'};
+
+/* ---- writing: a growing little-endian byte buffer ---- */
+typedef struct wbuf {
+    unsigned char *p;
+    size_t n, cap;
+    int oom;
+} wbuf;
+
+static void put(wbuf *w, const void *src, size_t n)
+{
+    if (w->oom) return;
+    if (w->n + n > w->cap) {
+        size_t cap = w->cap ? w->cap : 4096;
+        while (cap < w->n + n) cap *= 2;
+        unsigned char *g = realloc(w->p, cap);
+        if (!g) {
+            w->oom = 1;
+            return;
+        }
+        w->p = g;
+        w->cap = cap;
+    }
+    memcpy(w->p + w->n, src, n);
+    w->n += n;
+}
+
+static void put_u32(wbuf *w, uint32_t v)
+{
+    unsigned char b[4];
+    for (int i = 0; i < 4; i++) b[i] = (unsigned char)(v >> (8 * i));
+    put(w, b, 4);
+}
+
+static void put_u64(wbuf *w, uint64_t v)
+{
+    put_u32(w, (uint32_t)v);
+    put_u32(w, (uint32_t)(v >> 32));
+}
+
+static void put_f64(wbuf *w, double d)
+{
+    uint64_t v;
+    memcpy(&v, &d, 8);
+    put_u64(w, v);
+}
+
+static void put_f32(wbuf *w, float f)
+{
+    uint32_t v;
+    memcpy(&v, &f, 4);
+    put_u32(w, v);
+}
+
+int lsqt_lss_write(const char *path, const lsqt_state *st, char *err, size_t errcap)
+{
+    wbuf w = {NULL, 0, 0, 0};
+    const size_t nw = (size_t)st->n_wi;
+    put(&w, magic, 8);
+    put_u32(&w, LSQT_LSS_VERSION);
+    uint32_t layout[] = {LSQT_CHUNK, LSQT_BATCHES, LSQT_FIX_BITS, LSQT_HIST_NMU, LSQT_HIST_NPHI, LSQT_T_COUNT};
+    for (size_t i = 0; i < 6; i++) put_u32(&w, layout[i]);
+    put_u64(&w, st->seed);
+    put_u64(&w, st->hash);
+    put_u32(&w, (uint32_t)st->use_double);
+    put_u32(&w, (uint32_t)st->transmits);
+    put_u32(&w, st->flags);
+    put_f64(&w, st->seconds);
+    put_u32(&w, (uint32_t)st->n_slices);
+    put_u32(&w, (uint32_t)st->n_wi);
+    put_u64(&w, st->paths);
+    size_t tl = strlen(st->canonical);
+    put_u32(&w, (uint32_t)tl);
+    put(&w, st->canonical, tl);
+    for (int s = 0; s < st->n_slices; s++) {
+        put_f64(&w, st->theta_o[s]);
+        put_u64(&w, st->paths);
+        for (size_t k = 0; k < nw; k++)
+            for (int c = 0; c < 3; c++) put_f32(&w, st->wi[((size_t)s * nw + k) * 4 + (size_t)c]);
+        for (size_t i = 0; i < LSQT_BATCHES * nw; i++) put_u64(&w, st->nee[(size_t)s * LSQT_BATCHES * nw + i]);
+        for (size_t i = 0; i < LSQT_BATCHES * LSQT_T_COUNT; i++)
+            put_u64(&w, st->scalars[(size_t)s * LSQT_BATCHES * LSQT_T_COUNT + i]);
+        for (size_t i = 0; i < LSQT_HIST_BINS; i++) put_u64(&w, st->hist[(size_t)s * LSQT_HIST_BINS + i]);
+    }
+    put_u32(&w, lsqt_crc32(0, w.p, w.n));
+    if (w.oom) {
+        free(w.p);
+        snprintf(err, errcap, "out of memory writing '%s'", path);
+        return -1;
+    }
+    lsqt_atomic_file af;
+    int rc = lsqt_atomic_open(&af, path, err, errcap);
+    if (rc == 0) {
+        fwrite(w.p, 1, w.n, af.f);
+        rc = lsqt_atomic_commit(&af, err, errcap);
+    }
+    free(w.p);
+    return rc;
+}
+
+/* ---- reading: a bounds-checked cursor ---- */
+typedef struct rbuf {
+    const unsigned char *p;
+    size_t n, at;
+    int bad;
+} rbuf;
+
+static const unsigned char *take(rbuf *r, size_t n)
+{
+    if (r->bad || n > r->n - r->at) {
+        r->bad = 1;
+        return NULL;
+    }
+    const unsigned char *q = r->p + r->at;
+    r->at += n;
+    return q;
+}
+
+static uint32_t get_u32(rbuf *r)
+{
+    const unsigned char *b = take(r, 4);
+    if (!b) return 0;
+    return (uint32_t)b[0] | (uint32_t)b[1] << 8 | (uint32_t)b[2] << 16 | (uint32_t)b[3] << 24;
+}
+
+static uint64_t get_u64(rbuf *r)
+{
+    uint64_t lo = get_u32(r);
+    return lo | (uint64_t)get_u32(r) << 32;
+}
+
+static double get_f64(rbuf *r)
+{
+    uint64_t v = get_u64(r);
+    double d;
+    memcpy(&d, &v, 8);
+    return d;
+}
+
+static float get_f32(rbuf *r)
+{
+    uint32_t v = get_u32(r);
+    float f;
+    memcpy(&f, &v, 4);
+    return f;
+}
+
+int lsqt_lss_parse(const unsigned char *data, size_t len, lsqt_state *st, char *err, size_t errcap)
+{
+    memset(st, 0, sizeof *st);
+    if (len < 12 || memcmp(data, magic, 8) != 0) {
+        snprintf(err, errcap, "not an LSS file (bad magic)");
+        return -1;
+    }
+    uint32_t crc = (uint32_t)data[len - 4] | (uint32_t)data[len - 3] << 8 |
+                   (uint32_t)data[len - 2] << 16 | (uint32_t)data[len - 1] << 24;
+    if (lsqt_crc32(0, data, len - 4) != crc) {
+        snprintf(err, errcap, "corrupt or truncated LSS file (CRC mismatch)");
+        return -1;
+    }
+    rbuf r = {data, len - 4, 8, 0};
+    uint32_t version = get_u32(&r);
+    if (version != LSQT_LSS_VERSION) {
+        snprintf(err, errcap, "LSS version %u is not supported (this build reads %u)", version, LSQT_LSS_VERSION);
+        return -1;
+    }
+    const uint32_t layout[] = {LSQT_CHUNK, LSQT_BATCHES, LSQT_FIX_BITS, LSQT_HIST_NMU, LSQT_HIST_NPHI, LSQT_T_COUNT};
+    for (size_t i = 0; i < 6; i++)
+        if (get_u32(&r) != layout[i] && !r.bad) {
+            snprintf(err, errcap, "LSS tally layout differs from this build's; cannot continue it");
+            return -1;
+        }
+    uint64_t seed = get_u64(&r), hash = get_u64(&r);
+    uint32_t use_double = get_u32(&r), transmits = get_u32(&r), flags = get_u32(&r);
+    double seconds = get_f64(&r);
+    uint32_t n_slices = get_u32(&r), n_wi = get_u32(&r);
+    uint64_t paths = get_u64(&r);
+    uint32_t tl = get_u32(&r);
+    if (r.bad || n_slices < 1 || n_slices > 4096 || n_wi < 1 || n_wi > 65536 || use_double > 1 ||
+        transmits > 1 || tl > (1u << 24)) {
+        snprintf(err, errcap, "corrupt LSS header");
+        return -1;
+    }
+    /* The rest must have exactly the size the header announces. */
+    const size_t per_slice = 16 + (size_t)n_wi * 12 + (size_t)LSQT_BATCHES * n_wi * 8 +
+                             LSQT_BATCHES * LSQT_T_COUNT * 8 + LSQT_HIST_BINS * 8;
+    if (r.n - r.at != tl + per_slice * n_slices) {
+        snprintf(err, errcap, "corrupt LSS file (size does not match its header)");
+        return -1;
+    }
+    char *text = malloc((size_t)tl + 1);
+    if (!text) {
+        snprintf(err, errcap, "out of memory");
+        return -1;
+    }
+    memcpy(text, take(&r, tl), tl);
+    text[tl] = '\0';
+    int rc = lsqt_state_init(st, text, hash, seed, (int)n_slices, (int)n_wi, (int)transmits);
+    free(text);
+    if (rc) {
+        snprintf(err, errcap, "out of memory");
+        return -1;
+    }
+    st->use_double = (int)use_double;
+    st->flags = flags;
+    st->seconds = seconds;
+    st->paths = paths;
+    const size_t nw = n_wi;
+    for (size_t s = 0; s < n_slices; s++) {
+        st->theta_o[s] = get_f64(&r);
+        if (get_u64(&r) != paths) r.bad = 1;
+        for (size_t k = 0; k < nw; k++)
+            for (size_t c = 0; c < 3; c++) st->wi[(s * nw + k) * 4 + c] = get_f32(&r);
+        for (size_t i = 0; i < LSQT_BATCHES * nw; i++) st->nee[s * LSQT_BATCHES * nw + i] = get_u64(&r);
+        for (size_t i = 0; i < LSQT_BATCHES * LSQT_T_COUNT; i++)
+            st->scalars[s * LSQT_BATCHES * LSQT_T_COUNT + i] = get_u64(&r);
+        for (size_t i = 0; i < LSQT_HIST_BINS; i++) st->hist[s * LSQT_HIST_BINS + i] = get_u64(&r);
+    }
+    if (r.bad) {
+        lsqt_state_free(st);
+        snprintf(err, errcap, "corrupt LSS file (inconsistent slice records)");
+        return -1;
+    }
+    return 0;
+}
+
+int lsqt_lss_read(const char *path, lsqt_state *st, char *err, size_t errcap)
+{
+    size_t len = 0;
+    char *data = lsqt_read_file(path, &len, err, errcap);
+    if (!data) return -1;
+    char inner[512];
+    int rc = lsqt_lss_parse((const unsigned char *)data, len, st, inner, sizeof inner);
+    if (rc) snprintf(err, errcap, "'%s': %s", path, inner);
+    free(data);
+    return rc;
+}

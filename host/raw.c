@@ -1,0 +1,36 @@
+#include "lsqt/raw.h"
+
+#include <math.h>
+#include <stdio.h>
+
+#include "lsqt/util.h"
+
+int lsqt_raw_write(const char *path, const lsqt_state *st, const lsqt_slice_est *est, int mode,
+                   int *skipped, char *err, size_t errcap)
+{
+    lsqt_atomic_file af;
+    *skipped = 0;
+    if (lsqt_atomic_open(&af, path, err, errcap)) return -1;
+    FILE *f = af.f;
+    int spherical = mode == LSQT_RAW_ALL && st->transmits;
+    fprintf(f, "RAWB%c10A Layered-SQT\n1 0.5\n%d", spherical ? 'S' : 'H', st->n_slices);
+    for (int s = 0; s < st->n_slices; s++) fprintf(f, " %.9g", st->theta_o[s]);
+    fprintf(f, "\n");
+    for (int s = 0; s < st->n_slices; s++) {
+        for (int k = 0; k < st->n_wi; k++) {
+            const float *w = st->wi + ((size_t)s * (size_t)st->n_wi + (size_t)k) * 4;
+            double x = w[0], y = w[1], z = w[2], v = est[s].f[k].mean;
+            if ((mode == LSQT_RAW_REFLECT && z < 0) || (mode == LSQT_RAW_TRANSMIT && z > 0)) continue;
+            if (!isfinite(v)) {
+                (*skipped)++;
+                continue;
+            }
+            if (mode == LSQT_RAW_TRANSMIT) z = -z;
+            /* Each estimate twice, at y and -y: the BSDF is mirror symmetric about the
+             * plane of wo, and raw2sqt covers the sphere better with both. */
+            fprintf(f, "%d %.9g %.9g %.9g %.9g\n", s, x, y, z, v);
+            fprintf(f, "%d %.9g %.9g %.9g %.9g\n", s, x, -y, z, v);
+        }
+    }
+    return lsqt_atomic_commit(&af, err, errcap);
+}

@@ -1,0 +1,79 @@
+#include "lsqt/report.h"
+
+#include <math.h>
+
+#include "lsqt/util.h"
+
+void lsqt_report_summary(FILE *f, const lsqt_state *st, const lsqt_slice_est *est,
+                         const lsqt_run_info *ri)
+{
+    fprintf(f, "device: %s%s\n", ri->device, st->use_double ? " (double)" : "");
+    fprintf(f, "paths: %llu added per slice (%llu per slice in all) in %.3g s: %.4g paths/s\n",
+            ri->paths_added, (unsigned long long)st->paths, ri->seconds, ri->paths_per_second);
+    fprintf(f, "%5s %9s  %-21s %-21s %-10s %s\n", "slice", "theta_o", "R +- 1 s.e.", "T +- 1 s.e.",
+            "delta_T", "max rel err");
+    unsigned long long cut = 0;
+    int nonfinite = 0;
+    for (int s = 0; s < st->n_slices; s++) {
+        const lsqt_slice_est *e = &est[s];
+        fprintf(f, "%5d %8.3fd  %.6f +- %-9.2g %.6f +- %-9.2g %-10.4g %.3g\n", s,
+                e->theta_o * 180.0 / LSQT_PI, e->R.mean, e->R.err, e->T.mean, e->T.err,
+                e->delta_T.mean, e->max_rel_err);
+        cut += e->cut;
+        nonfinite += e->n_nonfinite;
+    }
+    for (int s = 0; s < st->n_slices; s++)
+        if (est[s].delta_T.mean > 0) {
+            fprintf(f, "note: unscattered light (delta_T) is a forward delta; it is in T and LSS, not in RAW\n");
+            break;
+        }
+    if (cut) fprintf(f, "warning: %llu paths reached the safety cap of %d events and were stopped\n", cut, LSQT_MAX_EVENTS);
+    if (nonfinite) fprintf(f, "warning: %d non-finite estimates were left out of RAW\n", nonfinite);
+    if (st->flags & LSQT_FLAG_OVERFLOW) fprintf(f, "warning: a tally overflowed its fixed-point range; values are clamped\n");
+    if (st->flags & LSQT_FLAG_NONFINITE) fprintf(f, "warning: non-finite path contributions were dropped\n");
+}
+
+static void json_num(FILE *f, double v)
+{
+    if (isfinite(v)) fprintf(f, "%.17g", v);
+    else fprintf(f, "null");
+}
+
+int lsqt_report_json(const char *path, const lsqt_state *st, const lsqt_slice_est *est,
+                     const lsqt_run_info *ri, char *err, size_t errcap)
+{
+    lsqt_atomic_file af;
+    if (lsqt_atomic_open(&af, path, err, errcap)) return -1;
+    FILE *f = af.f;
+    fprintf(f, "{\"device\": \"");
+    for (const char *p = ri->device; *p; p++) {
+        if (*p == '"' || *p == '\\') fputc('\\', f);
+        if ((unsigned char)*p >= 0x20) fputc(*p, f);
+    }
+    fprintf(f, "\", \"double\": %s, \"seed\": %llu, \"seconds\": ", st->use_double ? "true" : "false",
+            (unsigned long long)st->seed);
+    json_num(f, ri->seconds);
+    fprintf(f, ", \"paths_per_second\": ");
+    json_num(f, ri->paths_per_second);
+    fprintf(f, ", \"assembly_hash\": \"%016llx\", \"flags\": %u,\n \"slices\": [", (unsigned long long)st->hash,
+            st->flags);
+    for (int s = 0; s < st->n_slices; s++) {
+        const lsqt_slice_est *e = &est[s];
+        fprintf(f, "%s\n  {\"theta_o\": %.17g, \"paths\": %llu, \"R\": ", s ? "," : "", e->theta_o,
+                (unsigned long long)e->paths);
+        json_num(f, e->R.mean);
+        fprintf(f, ", \"R_err\": ");
+        json_num(f, e->R.err);
+        fprintf(f, ", \"T\": ");
+        json_num(f, e->T.mean);
+        fprintf(f, ", \"T_err\": ");
+        json_num(f, e->T.err);
+        fprintf(f, ", \"delta_T\": ");
+        json_num(f, e->delta_T.mean);
+        fprintf(f, ", \"max_rel_err\": ");
+        json_num(f, e->max_rel_err);
+        fprintf(f, ", \"cut_paths\": %llu}", (unsigned long long)e->cut);
+    }
+    fprintf(f, "\n ]}\n");
+    return lsqt_atomic_commit(&af, err, errcap);
+}

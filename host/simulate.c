@@ -1,0 +1,273 @@
+#include "lsqt/simulate.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "lsqt/util.h"
+
+/* Models the kernels can run today; the parser knows them all. */
+static int bsdf_supported(int kind) { return kind == LSQT_BSDF_NULL || kind == LSQT_BSDF_LAMBERTIAN; }
+static int phase_supported(int kind) { return kind == LSQT_PHASE_NONE || kind == LSQT_PHASE_HG; }
+
+const char *lsqt_unsupported_model(const lsqt_assembly *a, int *line)
+{
+    for (int i = 0; i < a->n_layers; i++)
+        if (!bsdf_supported(a->layers[i].kind)) {
+            *line = a->layers[i].line;
+            return lsqt_bsdf_name(a->layers[i].kind);
+        }
+    for (int m = 0; m <= a->n_layers; m++)
+        if (a->media[m].mus > 0 && !phase_supported(a->media[m].phase.kind)) {
+            *line = a->media[m].line;
+            return lsqt_phase_name(a->media[m].phase.kind);
+        }
+    return NULL;
+}
+
+static double medium_thickness(const lsqt_assembly *a, int m)
+{
+    return (m == 0 || m == a->n_layers) ? 0.0 : a->layers[m - 1].z - a->layers[m].z;
+}
+
+static double medium_tau(const lsqt_assembly *a, int m)
+{
+    return (a->media[m].mua + a->media[m].mus) * medium_thickness(a, m);
+}
+
+void lsqt_device_tables(const lsqt_assembly *a, lsqt_dev_scene *scene, lsqt_dev_medium *media,
+                        lsqt_dev_layer *layers)
+{
+    const int n = a->n_layers;
+    memset(scene, 0, sizeof *scene);
+    scene->n_layers = n;
+    scene->top_nonnull = scene->bottom_nonnull = -1;
+    for (int i = 0; i < n; i++) {
+        const lsqt_layer *l = &a->layers[i];
+        memset(&layers[i], 0, sizeof layers[i]);
+        layers[i].kind = l->kind;
+        layers[i].iter_count = l->iter_count;
+        layers[i].multiple_scattering = l->multiple_scattering;
+        layers[i].p[0] = (float)l->fR;
+        layers[i].p[1] = (float)l->fT;
+        if (l->kind != LSQT_BSDF_NULL) {
+            if (scene->top_nonnull < 0) scene->top_nonnull = i;
+            scene->bottom_nonnull = i;
+        }
+    }
+    for (int m = 0; m <= n; m++) {
+        const lsqt_medium *src = &a->media[m];
+        lsqt_dev_medium *d = &media[m];
+        memset(d, 0, sizeof *d);
+        d->eta = (float)src->eta;
+        d->mua = (float)src->mua;
+        d->mus = (float)src->mus;
+        d->mut = (float)(src->mua + src->mus);
+        d->thickness = (float)medium_thickness(a, m);
+        d->phase_kind = src->mus > 0 ? src->phase.kind : LSQT_PHASE_NONE;
+        d->pp[0] = (float)src->phase.g;
+    }
+    /* Optical thickness of the interior media strictly above / below each medium. */
+    double acc = 0.0;
+    for (int m = 0; m <= n; m++) {
+        media[m].tau_above = (float)acc;
+        acc += medium_tau(a, m);
+    }
+    acc = 0.0;
+    for (int m = n; m >= 0; m--) {
+        media[m].tau_below = (float)acc;
+        acc += medium_tau(a, m);
+    }
+}
+
+/* Device buffers of one simulation. */
+typedef struct sim_buffers {
+    cl_mem scene, media, layers, wo, wi, nee, scalars, hist, flags;
+} sim_buffers;
+
+static void buffers_release(sim_buffers *b)
+{
+    cl_mem *all[] = {&b->scene, &b->media, &b->layers, &b->wo, &b->wi,
+                     &b->nee, &b->scalars, &b->hist, &b->flags};
+    for (size_t i = 0; i < sizeof all / sizeof *all; i++)
+        if (*all[i]) clReleaseMemObject(*all[i]);
+}
+
+static cl_mem make_buffer(lsqt_context *cx, cl_mem_flags fl, size_t size, void *host, cl_int *e)
+{
+    if (*e != CL_SUCCESS) return NULL;
+    return clCreateBuffer(cx->ctx, fl | (host ? CL_MEM_COPY_HOST_PTR : 0), size, host, e);
+}
+
+static int build_options(lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st,
+                         char *opt, size_t cap, char *err, size_t errcap)
+{
+    size_t n = lsqt_assembly_build_options(a, opt, cap);
+    if (n >= cap) {
+        snprintf(err, errcap, "kernel build options too long");
+        return 1;
+    }
+    n += (size_t)snprintf(opt + n, cap - n, " -cl-std=CL1.2 -DLSQT_NWI=%d", st->n_wi);
+    if (st->use_double) {
+        if (!cx->dev.has_fp64) {
+            snprintf(err, errcap, "--double: %s has no fp64 support (cl_khr_fp64)", cx->dev.name);
+            return 1;
+        }
+        n += (size_t)snprintf(opt + n, cap - n, " -DLSQT_DOUBLE=1");
+    }
+    if (!cx->dev.has_int64_atomics) {
+        if (!cx->dev.little_endian) {
+            snprintf(err, errcap, "%s has neither 64-bit atomics nor little-endian words", cx->dev.name);
+            return 1;
+        }
+        snprintf(opt + n, cap - n, " -DLSQT_NO_INT64_ATOMICS=1");
+    }
+    return 0;
+}
+
+static void progress_draw(uint64_t done, uint64_t total, double elapsed, int n_slices)
+{
+    double frac = total ? (double)done / (double)total : 1.0;
+    double rate = elapsed > 0 ? (double)done * n_slices / elapsed : 0.0;
+    double eta = frac > 0 ? elapsed * (1.0 - frac) / frac : 0.0;
+    char bar[31];
+    int fill = (int)(frac * 30.0);
+    for (int i = 0; i < 30; i++) bar[i] = i < fill ? '#' : '.';
+    bar[30] = '\0';
+    fprintf(stderr, "\r[%s] %5.1f%%  %.3g paths/s  ETA %.0f s   ", bar, 100.0 * frac, rate, eta);
+    fflush(stderr);
+}
+
+int lsqt_simulate(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint64_t add_paths,
+                  const lsqt_sim_opts *o, lsqt_sim_stats *stats, char *err, size_t errcap)
+{
+    memset(stats, 0, sizeof *stats);
+    int line = 0;
+    const char *model = lsqt_unsupported_model(a, &line);
+    if (model) {
+        snprintf(err, errcap, "line %d: the model %s is not implemented in the kernels yet", line, model);
+        return 1;
+    }
+    char opt[1024];
+    if (build_options(cx, a, st, opt, sizeof opt, err, errcap)) return 1;
+    char *log = NULL;
+    cl_program prog = lsqt_program_build(cx, opt, &log, err, errcap);
+    if (!prog) {
+        if (log) fprintf(stderr, "OpenCL build log:\n%s\n", log);
+        free(log);
+        return 1;
+    }
+    cl_int e = CL_SUCCESS;
+    cl_kernel k = clCreateKernel(prog, "lsqt_walk", &e);
+    if (e != CL_SUCCESS) {
+        snprintf(err, errcap, "clCreateKernel(lsqt_walk): %s (%d)", lsqt_cl_error_name(e), (int)e);
+        clReleaseProgram(prog);
+        return 1;
+    }
+
+    /* Tables and tallies (the state's tallies go up, so a run continues where it was). */
+    const int n = a->n_layers;
+    lsqt_dev_scene scene;
+    lsqt_dev_medium *media = calloc((size_t)n + 1, sizeof *media);
+    lsqt_dev_layer *layers = calloc((size_t)n, sizeof *layers);
+    float *wo = calloc((size_t)st->n_slices * 4, sizeof *wo);
+    sim_buffers b;
+    memset(&b, 0, sizeof b);
+    int rc = 1;
+    if (!media || !layers || !wo) {
+        snprintf(err, errcap, "out of memory");
+        goto done;
+    }
+    lsqt_device_tables(a, &scene, media, layers);
+    scene.n_wi = st->n_wi;
+    scene.seed_lo = (lsqt_u32)st->seed;
+    scene.seed_hi = (lsqt_u32)(st->seed >> 32);
+    for (int s = 0; s < st->n_slices; s++) {
+        wo[4 * s] = (float)sin(st->theta_o[s]);
+        wo[4 * s + 2] = (float)cos(st->theta_o[s]);
+    }
+    cl_mem_flags ro = CL_MEM_READ_ONLY, rw = CL_MEM_READ_WRITE;
+    cl_uint flags0 = 0;
+    b.scene = make_buffer(cx, ro, sizeof scene, &scene, &e);
+    b.media = make_buffer(cx, ro, ((size_t)n + 1) * sizeof *media, media, &e);
+    b.layers = make_buffer(cx, ro, (size_t)n * sizeof *layers, layers, &e);
+    b.wo = make_buffer(cx, ro, (size_t)st->n_slices * 4 * sizeof *wo, wo, &e);
+    b.wi = make_buffer(cx, ro, (size_t)st->n_slices * (size_t)st->n_wi * 4 * sizeof(float), st->wi, &e);
+    b.nee = make_buffer(cx, rw, lsqt_state_nee_count(st) * 8, st->nee, &e);
+    b.scalars = make_buffer(cx, rw, lsqt_state_scalar_count(st) * 8, st->scalars, &e);
+    b.hist = make_buffer(cx, rw, lsqt_state_hist_count(st) * 8, st->hist, &e);
+    b.flags = make_buffer(cx, rw, sizeof flags0, &flags0, &e);
+    if (e != CL_SUCCESS) {
+        snprintf(err, errcap, "cannot allocate device buffers: %s (%d)", lsqt_cl_error_name(e), (int)e);
+        goto done;
+    }
+    cl_mem *args[] = {&b.scene, &b.media, &b.layers, &b.wo, &b.wi};
+    for (cl_uint i = 0; i < 5; i++) e |= clSetKernelArg(k, i, sizeof(cl_mem), args[i]);
+    e |= clSetKernelArg(k, 8, sizeof(cl_mem), &b.nee);
+    e |= clSetKernelArg(k, 9, sizeof(cl_mem), &b.scalars);
+    e |= clSetKernelArg(k, 10, sizeof(cl_mem), &b.hist);
+    e |= clSetKernelArg(k, 11, sizeof(cl_mem), &b.flags);
+
+    size_t ls = o->local_size ? o->local_size : 64, kmax = 0;
+    clGetKernelWorkGroupInfo(k, cx->dev.id, CL_KERNEL_WORK_GROUP_SIZE, sizeof kmax, &kmax, NULL);
+    if (kmax && ls > kmax) ls = kmax;
+
+    /* Launches cover whole chunks; their size adapts so each takes about 0.3 s, which
+     * keeps the progress bar and Ctrl-C responsive without starving the device. */
+    const uint64_t first = st->paths, target = st->paths + add_paths;
+    uint64_t pos = first, chunks_per_launch = 8;
+    const double t0 = lsqt_now();
+    while (pos < target && e == CL_SUCCESS) {
+        cl_ulong chunk0 = pos / LSQT_CHUNK;
+        cl_ulong end = (chunk0 + chunks_per_launch) * LSQT_CHUNK;
+        if (end > target) end = target;
+        cl_ulong nchunks = (end - 1) / LSQT_CHUNK - chunk0 + 1, begin = pos;
+        e |= clSetKernelArg(k, 5, sizeof begin, &begin);
+        e |= clSetKernelArg(k, 6, sizeof end, &end);
+        e |= clSetKernelArg(k, 7, sizeof chunk0, &chunk0);
+        size_t global[2] = {(size_t)nchunks * ls, (size_t)st->n_slices}, local[2] = {ls, 1};
+        double t = lsqt_now();
+        if (e == CL_SUCCESS) e = clEnqueueNDRangeKernel(cx->queue, k, 2, NULL, global, local, 0, NULL, NULL);
+        if (e == CL_SUCCESS) e = clFinish(cx->queue);
+        if (e != CL_SUCCESS) break;
+        double dt = lsqt_now() - t;
+        pos = end;
+        double grow = dt > 0 ? 0.3 / dt : 4.0;
+        grow = grow > 4.0 ? 4.0 : grow < 0.5 ? 0.5 : grow;
+        chunks_per_launch = (uint64_t)((double)chunks_per_launch * grow);
+        if (chunks_per_launch < 1) chunks_per_launch = 1;
+        if (o->progress) progress_draw(pos - first, add_paths, lsqt_now() - t0, st->n_slices);
+        if ((o->stop && *o->stop) || (o->time_limit > 0 && lsqt_now() - t0 >= o->time_limit)) {
+            stats->interrupted = 1;
+            break;
+        }
+    }
+    if (o->progress) fprintf(stderr, "\n");
+    if (e != CL_SUCCESS) {
+        snprintf(err, errcap, "kernel launch failed: %s (%d)", lsqt_cl_error_name(e), (int)e);
+        goto done;
+    }
+    e |= clEnqueueReadBuffer(cx->queue, b.nee, CL_TRUE, 0, lsqt_state_nee_count(st) * 8, st->nee, 0, NULL, NULL);
+    e |= clEnqueueReadBuffer(cx->queue, b.scalars, CL_TRUE, 0, lsqt_state_scalar_count(st) * 8, st->scalars, 0, NULL, NULL);
+    e |= clEnqueueReadBuffer(cx->queue, b.hist, CL_TRUE, 0, lsqt_state_hist_count(st) * 8, st->hist, 0, NULL, NULL);
+    e |= clEnqueueReadBuffer(cx->queue, b.flags, CL_TRUE, 0, sizeof flags0, &flags0, 0, NULL, NULL);
+    if (e != CL_SUCCESS) {
+        snprintf(err, errcap, "cannot read the tallies back: %s (%d)", lsqt_cl_error_name(e), (int)e);
+        goto done;
+    }
+    stats->paths_added = pos - first;
+    stats->seconds = lsqt_now() - t0;
+    st->paths = pos;
+    st->flags |= flags0;
+    st->seconds += stats->seconds;
+    rc = 0;
+done:
+    buffers_release(&b);
+    free(media);
+    free(layers);
+    free(wo);
+    clReleaseKernel(k);
+    clReleaseProgram(prog);
+    return rc;
+}

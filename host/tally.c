@@ -1,0 +1,82 @@
+#include "lsqt/tally.h"
+
+#include <math.h>
+#include <stdlib.h>
+
+#include "lsqt/util.h"
+
+lsqt_est lsqt_batch_estimate(const uint64_t *sums, size_t stride, uint64_t total_paths, double scale)
+{
+    lsqt_est r = {0.0, 0.0};
+    if (total_paths == 0) return r;
+    double total = 0.0;
+    for (int b = 0; b < LSQT_BATCHES; b++) total += (double)sums[(size_t)b * stride];
+    double mean = total / scale / (double)total_paths;
+    /* Batches of unequal size: var(mean) = B/(B-1) sum (S_b - n_b mean)^2 / N^2 over the
+     * B batches that hold paths. */
+    double ss = 0.0;
+    int used = 0;
+    for (int b = 0; b < LSQT_BATCHES; b++) {
+        uint64_t nb = lsqt_batch_paths(total_paths, b);
+        if (nb == 0) continue;
+        double dev = (double)sums[(size_t)b * stride] / scale - (double)nb * mean;
+        ss += dev * dev;
+        used++;
+    }
+    r.mean = mean;
+    r.err = used > 1 ? sqrt(ss * used / (used - 1)) / (double)total_paths : INFINITY;
+    return r;
+}
+
+lsqt_slice_est *lsqt_estimates(const lsqt_state *st)
+{
+    lsqt_slice_est *out = calloc((size_t)st->n_slices, sizeof *out);
+    if (!out) return NULL;
+    const size_t nw = (size_t)st->n_wi;
+    for (int s = 0; s < st->n_slices; s++) {
+        lsqt_slice_est *e = &out[s];
+        e->theta_o = st->theta_o[s];
+        e->paths = st->paths;
+        const uint64_t *sc = st->scalars + (size_t)s * LSQT_BATCHES * LSQT_T_COUNT;
+        e->R = lsqt_batch_estimate(sc + LSQT_T_R, LSQT_T_COUNT, st->paths, LSQT_FIX_SCALE);
+        e->T = lsqt_batch_estimate(sc + LSQT_T_T, LSQT_T_COUNT, st->paths, LSQT_FIX_SCALE);
+        e->delta_T = lsqt_batch_estimate(sc + LSQT_T_DELTA_T, LSQT_T_COUNT, st->paths, LSQT_FIX_SCALE);
+        for (int b = 0; b < LSQT_BATCHES; b++) e->cut += sc[(size_t)b * LSQT_T_COUNT + LSQT_T_CUT];
+        e->f = calloc(nw, sizeof *e->f);
+        e->hist_f = calloc(LSQT_HIST_BINS, sizeof *e->hist_f);
+        if (!e->f || !e->hist_f) {
+            lsqt_estimates_free(out, st->n_slices);
+            return NULL;
+        }
+        const uint64_t *nee = st->nee + (size_t)s * LSQT_BATCHES * nw;
+        for (size_t k = 0; k < nw; k++) {
+            lsqt_est c = lsqt_batch_estimate(nee + k, nw, st->paths, LSQT_FIX_SCALE);
+            double cz = fabs((double)st->wi[((size_t)s * nw + k) * 4 + 2]);
+            e->f[k].mean = c.mean / cz; /* RAW wants the BSDF without the cosine */
+            e->f[k].err = c.err / cz;
+            if (!isfinite(e->f[k].mean)) {
+                e->n_nonfinite++;
+            } else if (e->f[k].mean > 0) {
+                double rel = e->f[k].err / e->f[k].mean;
+                if (rel > e->max_rel_err) e->max_rel_err = rel;
+            }
+        }
+        /* Bin averages: weight in bin / (paths * solid angle of the bin). */
+        const double bin_sr = (1.0 / LSQT_HIST_NMU) * (LSQT_PI / LSQT_HIST_NPHI) * 2.0; /* y folded */
+        for (int i = 0; i < LSQT_HIST_BINS; i++)
+            e->hist_f[i] = st->paths ? (double)st->hist[(size_t)s * LSQT_HIST_BINS + i] / LSQT_FIX_SCALE /
+                                           ((double)st->paths * bin_sr)
+                                     : 0.0;
+    }
+    return out;
+}
+
+void lsqt_estimates_free(lsqt_slice_est *e, int n_slices)
+{
+    if (!e) return;
+    for (int s = 0; s < n_slices; s++) {
+        free(e[s].f);
+        free(e[s].hist_f);
+    }
+    free(e);
+}

@@ -1,0 +1,93 @@
+/* The parsed, validated and pruned layered assembly (SPEC §3): plain C structs that the
+ * parser fills and every later stage (device tables, LSS, reports) reads. */
+#ifndef LSQT_ASSEMBLY_H
+#define LSQT_ASSEMBLY_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#include "lsqt/model_kinds.h"
+
+typedef struct lsqt_phase {
+    int kind;          /* enum lsqt_phase_kind */
+    double g;          /* HG */
+    double g0, g1, b;  /* two-lobe HG: (1-b) HG(g0) + b HG(g1) */
+    double rho;        /* Rayleigh depolarisation factor */
+    double apara, aperp; /* SGGX */
+    int sggx_diffuse;  /* SGGX type: 0 Specular, 1 Diffuse */
+} lsqt_phase;
+
+typedef struct lsqt_medium {
+    double eta, mua, mus;
+    lsqt_phase phase;  /* kind NONE when mus == 0 */
+    int line;          /* 1-based source line */
+} lsqt_medium;
+
+typedef struct lsqt_layer {
+    double z;
+    int kind;          /* enum lsqt_bsdf_kind */
+    double fR, fT;     /* Lambertian, microsurface Lambertian, Oren-Nayar (fR) */
+    double alpha;      /* microsurface roughness */
+    double kR, kT;     /* microsurface dielectric Fresnel scales */
+    double sigma;      /* Oren-Nayar, radians */
+    int iter_count;    /* resolved (auto already applied) */
+    int multiple_scattering; /* 0/1 */
+    int line;
+} lsqt_layer;
+
+typedef struct lsqt_assembly {
+    int n_layers;          /* after pruning, >= 1 */
+    lsqt_layer *layers;    /* n_layers, top to bottom */
+    lsqt_medium *media;    /* n_layers + 1, top to bottom */
+    int n_pruned_layers;   /* layers removed as unreachable */
+} lsqt_assembly;
+
+/* Diagnostics. The parser never prints: it fills this, the caller decides. */
+#define LSQT_DIAG_MAX_NOTES 32
+typedef struct lsqt_diag {
+    char error[1024];      /* "LINE:COL? ..." empty when no error */
+    int error_line;        /* 0 when no error or not line-specific */
+    int n_notes;
+    char notes[LSQT_DIAG_MAX_NOTES][256];
+} lsqt_diag;
+
+/* Parse and validate LSQT text (need not be NUL terminated). `name` is used in messages
+ * ("file.lsqt:3: ..."). Returns 0 on success; on error returns 2 and fills diag->error,
+ * leaving *out empty. Applies all rules of SPEC §3 including pruning (with notes). */
+int lsqt_parse(const char *text, size_t len, const char *name, lsqt_assembly *out,
+               lsqt_diag *diag);
+
+void lsqt_assembly_free(lsqt_assembly *a);
+
+/* Canonical text of the assembly: one line per medium/layer, seed model names, every
+ * key written with %.17g, so that equal assemblies give equal text. Returns the length
+ * it needs (excluding NUL); writes at most cap bytes including the NUL. */
+size_t lsqt_assembly_canonical(const lsqt_assembly *a, char *buf, size_t cap);
+
+/* 64-bit FNV-1a of the canonical text. */
+uint64_t lsqt_assembly_hash(const lsqt_assembly *a);
+
+/* OpenCL build options that enable only the models used: "-DLSQT_HAS_PHASE_HG=1 ...".
+ * Returns the length needed, like lsqt_assembly_canonical. */
+size_t lsqt_assembly_build_options(const lsqt_assembly *a, char *buf, size_t cap);
+
+/* 1 when light can reach the bottom medium (some transmission possible). */
+int lsqt_assembly_transmits(const lsqt_assembly *a);
+
+/* 1 unless the layer transmits nothing (Lambertian or microsurface Lambertian with
+ * fT = 0, microsurface dielectric with kT = 0, Oren-Nayar, conductive): light never
+ * passes it, so what lies below is pruned. */
+int lsqt_layer_transmits(const lsqt_layer *l);
+
+/* Seed names of the models, for messages. */
+const char *lsqt_bsdf_name(int kind);
+const char *lsqt_phase_name(int kind);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

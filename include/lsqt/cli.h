@@ -1,0 +1,53 @@
+/* Command-line flags of lsqt-cl (SPEC §8). */
+#ifndef LSQT_CLI_H
+#define LSQT_CLI_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define LSQT_MAX_WO 1024
+
+typedef struct lsqt_cli {
+    const char *input;        /* file or "-" */
+    uint64_t paths;           /* -p, per slice */
+    int wo_count, wi_count;   /* -wo, -wi */
+    double wo_angles[LSQT_MAX_WO]; /* --wo-angles, radians */
+    int n_wo_angles;
+    int rx;                   /* -rx */
+    double rp;                /* -rp */
+    int restart;              /* -R */
+    uint64_t seed;            /* -s */
+    int seed_given;
+    int threads;              /* -t, 0 = all */
+    const char *output;       /* -o RAW path */
+    int only_hemispherical;   /* -H */
+    const char *device;       /* -d */
+    int list_devices;
+    int use_double;
+    double time_limit;        /* seconds, 0 = none */
+    const char *lss;          /* --lss */
+    const char *json;         /* --json */
+    int quiet, verbose;
+    int help;
+    int sampling_given;       /* a flag that fixes the sampling (-wo, -wi, -s, ...) was given */
+} lsqt_cli;
+
+/* Returns 0, or 2 with err naming the flag and what it expects. */
+int lsqt_cli_parse(int argc, char **argv, lsqt_cli *c, char *err, size_t errcap);
+
+void lsqt_cli_help(FILE *f);
+
+/* Strict number parsing: the whole token must be a finite number. */
+int lsqt_parse_double(const char *s, double *out);
+/* A count: a finite number with an integral value in [lo, hi] ("1e7" is fine). */
+int lsqt_parse_count(const char *s, double lo, double hi, uint64_t *out);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

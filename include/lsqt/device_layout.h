@@ -1,0 +1,73 @@
+/* Layouts shared by the host and the OpenCL kernels: the device tables of one assembly
+ * and the tally buffers. This file is compiled both as C11 and as OpenCL C 1.2 (it is
+ * prepended to the kernel sources), so it holds only 4-byte scalar fields: the layout is
+ * then the same on every device and host without packing pragmas. */
+#ifndef LSQT_DEVICE_LAYOUT_H
+#define LSQT_DEVICE_LAYOUT_H
+
+#ifdef __OPENCL_C_VERSION__
+typedef int lsqt_i32;
+typedef uint lsqt_u32;
+#else
+#include <stdint.h>
+typedef int32_t lsqt_i32;
+typedef uint32_t lsqt_u32;
+#endif
+
+/* Paths are grouped in chunks of LSQT_CHUNK consecutive path indices; chunk c belongs to
+ * batch c % LSQT_BATCHES. Both numbers are part of what a result means (the LSS stores
+ * them), so that any split of the path range gives the same integer tallies. */
+#define LSQT_CHUNK 256
+#define LSQT_BATCHES 32
+
+/* Tallies are 64-bit unsigned fixed point: value * 2^LSQT_FIX_BITS, rounded. */
+#define LSQT_FIX_BITS 30
+#define LSQT_FIX_SCALE 1073741824.0
+
+/* Per-(slice, batch) scalar tallies, after the n_wi point-estimate sums. */
+#define LSQT_T_R 0        /* weight leaving upward */
+#define LSQT_T_T 1        /* weight leaving downward */
+#define LSQT_T_DELTA_T 2  /* part of T that never scattered (forward delta) */
+#define LSQT_T_CUT 3      /* paths stopped by the safety cap (count, not fixed point) */
+#define LSQT_T_COUNT 4
+
+/* Exit histogram: per hemisphere LSQT_HIST_NMU bins in |cos theta| times LSQT_HIST_NPHI in
+ * phi folded to [0, pi] (equal solid angle). Upper hemisphere first. */
+#define LSQT_HIST_NMU 32
+#define LSQT_HIST_NPHI 16
+#define LSQT_HIST_BINS (2 * LSQT_HIST_NMU * LSQT_HIST_NPHI)
+
+/* Status flags the kernels may raise (bitwise OR into one word). */
+#define LSQT_FLAG_OVERFLOW 1u   /* a fixed-point tally would have wrapped */
+#define LSQT_FLAG_NONFINITE 2u  /* a non-finite contribution was dropped */
+
+/* Safety cap against infinite loops (not a bias control: Russian roulette ends paths). */
+#define LSQT_MAX_EVENTS 1000000
+
+typedef struct lsqt_dev_medium {
+    float eta, mua, mus, mut; /* mut = mua + mus */
+    float thickness;          /* 0 for the top and bottom media */
+    float tau_above;          /* optical thickness of interior media above this one */
+    float tau_below;          /* ... and below it */
+    lsqt_i32 phase_kind;      /* enum lsqt_phase_kind, NONE when mus == 0 */
+    float pp[4];              /* phase parameters: HG {g} */
+} lsqt_dev_medium;
+
+typedef struct lsqt_dev_layer {
+    lsqt_i32 kind;            /* enum lsqt_bsdf_kind */
+    lsqt_i32 iter_count;
+    lsqt_i32 multiple_scattering;
+    lsqt_i32 pad;
+    float p[8];               /* BSDF parameters: Lambertian {fR, fT} */
+} lsqt_dev_layer;
+
+typedef struct lsqt_dev_scene {
+    lsqt_i32 n_layers;
+    lsqt_i32 n_wi;            /* point-estimate directions per slice */
+    lsqt_i32 top_nonnull;     /* index of the topmost non-null layer, -1 if none */
+    lsqt_i32 bottom_nonnull;  /* index of the bottommost non-null layer, -1 if none */
+    lsqt_u32 seed_lo, seed_hi;
+    lsqt_i32 pad0, pad1;
+} lsqt_dev_scene;
+
+#endif

@@ -1,0 +1,33 @@
+/* LSS: the progressive state file (SPEC §7). Versioned little-endian binary:
+ *   "LSQTLSS\0", u32 version, u32 chunk, batches, fix_bits, hist_nmu, hist_nphi, t_count,
+ *   u64 seed, u64 assembly hash, u32 double, transmits, flags, f64 seconds,
+ *   u32 n_slices, n_wi, u64 paths, u32 text length, canonical assembly text,
+ *   per slice: f64 theta_o, u64 paths, n_wi x f32 (x, y, z),
+ *              [batch][n_wi] u64 point-estimate sums, [batch][t_count] u64 scalars,
+ *              hist_bins u64,
+ *   u32 CRC-32 of everything before it. */
+#ifndef LSQT_LSS_H
+#define LSQT_LSS_H
+
+#include <stddef.h>
+
+#include "lsqt/state.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define LSQT_LSS_VERSION 1u
+
+/* Writes atomically (temporary file + rename). Returns 0 or -1. */
+int lsqt_lss_write(const char *path, const lsqt_state *st, char *err, size_t errcap);
+
+/* Reads and checks everything (sizes, layout constants, CRC). Returns 0, or -1 with err
+ * saying what is wrong; never accepts a truncated or corrupt file. */
+int lsqt_lss_read(const char *path, lsqt_state *st, char *err, size_t errcap);
+int lsqt_lss_parse(const unsigned char *data, size_t len, lsqt_state *st, char *err, size_t errcap);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,27 @@
+/* RAW text for DIRSIG5's raw2sqt, as the original layered-sqt writes it (SPEC §7). */
+#ifndef LSQT_RAW_H
+#define LSQT_RAW_H
+
+#include <stddef.h>
+
+#include "lsqt/state.h"
+#include "lsqt/tally.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+enum lsqt_raw_mode {
+    LSQT_RAW_ALL = 0,      /* RAWBS with transmission, else RAWBH */
+    LSQT_RAW_REFLECT = 1,  /* upper hemisphere only, RAWBH */
+    LSQT_RAW_TRANSMIT = 2  /* lower hemisphere mirrored up (z -> -z), RAWBH */
+};
+
+/* Writes atomically. *skipped counts non-finite estimates left out. Returns 0 or -1. */
+int lsqt_raw_write(const char *path, const lsqt_state *st, const lsqt_slice_est *est, int mode,
+                   int *skipped, char *err, size_t errcap);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

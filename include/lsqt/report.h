@@ -1,0 +1,31 @@
+/* The human summary and the machine-readable JSON summary of a run. */
+#ifndef LSQT_REPORT_H
+#define LSQT_REPORT_H
+
+#include <stdio.h>
+
+#include "lsqt/state.h"
+#include "lsqt/tally.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct lsqt_run_info {
+    const char *device;
+    double seconds;          /* this run */
+    double paths_per_second; /* this run, all slices together */
+    unsigned long long paths_added;
+} lsqt_run_info;
+
+void lsqt_report_summary(FILE *f, const lsqt_state *st, const lsqt_slice_est *est,
+                         const lsqt_run_info *ri);
+
+/* Returns 0 or -1 (err filled). Written atomically. */
+int lsqt_report_json(const char *path, const lsqt_state *st, const lsqt_slice_est *est,
+                     const lsqt_run_info *ri, char *err, size_t errcap);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

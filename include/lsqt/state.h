@@ -1,0 +1,48 @@
+/* The state of a simulation: what it is of (assembly text and hash, seed, directions)
+ * and the integer tallies so far. It is exactly what the LSS file stores, so a run can
+ * be resumed, split or merged without changing a single bit of the result. */
+#ifndef LSQT_STATE_H
+#define LSQT_STATE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "lsqt/device_layout.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct lsqt_state {
+    char *canonical;        /* canonical assembly text */
+    uint64_t hash;          /* lsqt_assembly_hash */
+    uint64_t seed;
+    int use_double;         /* precision the tallies were made with */
+    int transmits;          /* 1: directions on the sphere, RAW is RAWBS */
+    int n_slices, n_wi;
+    double *theta_o;        /* n_slices, radians, wo = (sin, 0, cos) */
+    float *wi;              /* n_slices * n_wi * 4 (x, y, z, 0), unit, y >= 0 */
+    uint64_t paths;         /* paths done per slice (every slice the same) */
+    uint64_t *nee;          /* [slice][LSQT_BATCHES][n_wi] fixed point */
+    uint64_t *scalars;      /* [slice][LSQT_BATCHES][LSQT_T_COUNT] */
+    uint64_t *hist;         /* [slice][LSQT_HIST_BINS] fixed point */
+    uint32_t flags;         /* LSQT_FLAG_* raised so far */
+    double seconds;         /* device time spent so far */
+} lsqt_state;
+
+/* Allocates zeroed tallies for the given shape; copies canonical. Returns 0 or -1. */
+int lsqt_state_init(lsqt_state *st, const char *canonical, uint64_t hash, uint64_t seed,
+                    int n_slices, int n_wi, int transmits);
+void lsqt_state_free(lsqt_state *st);
+
+size_t lsqt_state_nee_count(const lsqt_state *st);
+size_t lsqt_state_scalar_count(const lsqt_state *st);
+size_t lsqt_state_hist_count(const lsqt_state *st);
+
+/* Paths of [0, total) that fall in batch b (chunk c belongs to batch c % LSQT_BATCHES). */
+uint64_t lsqt_batch_paths(uint64_t total, int b);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

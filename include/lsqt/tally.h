@@ -1,0 +1,38 @@
+/* Host reduction: integer tallies to estimates with standard errors (batch means). */
+#ifndef LSQT_TALLY_H
+#define LSQT_TALLY_H
+
+#include "lsqt/state.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct lsqt_est {
+    double mean; /* per path */
+    double err;  /* one standard error of the mean */
+} lsqt_est;
+
+typedef struct lsqt_slice_est {
+    double theta_o;
+    uint64_t paths;
+    lsqt_est R, T, delta_T;
+    uint64_t cut;        /* paths stopped by the safety cap */
+    lsqt_est *f;         /* n_wi: non-cosine-weighted BSDF (1/sr) at each wi */
+    double max_rel_err;  /* largest err/mean over the finite, positive f */
+    int n_nonfinite;     /* f values that are not finite (never written to RAW) */
+    double *hist_f;      /* LSQT_HIST_BINS bin-average cosine-weighted BSDF per bin */
+} lsqt_slice_est;
+
+/* Estimates of every slice (array of st->n_slices, free with lsqt_estimates_free). */
+lsqt_slice_est *lsqt_estimates(const lsqt_state *st);
+void lsqt_estimates_free(lsqt_slice_est *e, int n_slices);
+
+/* Ratio estimator over the LSQT_BATCHES batches: sums[b * stride] holds batch b's
+ * fixed-point (or count when scale is 1) sum. */
+lsqt_est lsqt_batch_estimate(const uint64_t *sums, size_t stride, uint64_t total_paths, double scale);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

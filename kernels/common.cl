@@ -1,0 +1,29 @@
+/* Precision and small math shared by every kernel file. `real` is float by default and
+ * double when the host builds with -DLSQT_DOUBLE=1 (only on devices with fp64). */
+#ifdef LSQT_DOUBLE
+#pragma OPENCL EXTENSION cl_khr_fp64 : enable
+typedef double real;
+typedef double3 real3;
+#define R(x) (x)
+#define convert_real convert_double
+#else
+typedef float real;
+typedef float3 real3;
+#define R(x) (x##f)
+#define convert_real convert_float
+#endif
+
+#define LSQT_PI R(3.14159265358979323846)
+#define LSQT_INV_PI R(0.31830988618379067154)
+#define LSQT_INV_4PI R(0.07957747154594766788)
+
+/* Russian roulette: a path whose weight falls below this survives with probability
+ * weight / LSQT_RR_WEIGHT and then carries exactly LSQT_RR_WEIGHT (unbiased). */
+#define LSQT_RR_WEIGHT R(0.25)
+
+inline real3 make_real3(real x, real y, real z) { return (real3)(x, y, z); }
+
+inline real sqr(real x) { return x * x; }
+
+/* sqrt that never returns NaN for round-off negatives */
+inline real safe_sqrt(real x) { return sqrt(fmax(x, R(0.0))); }

@@ -1,0 +1,39 @@
+/* Kernels used only by the tests: they run the same model and RNG code as the walk. */
+
+/* Philox known-answer check: one counter/key/rounds per work-item. */
+__kernel void harness_philox(__global const uint *ctr, __global const uint *key,
+                             __global const int *rounds, __global uint *out)
+{
+    int i = (int)get_global_id(0);
+    uint4 c = (uint4)(ctr[4 * i], ctr[4 * i + 1], ctr[4 * i + 2], ctr[4 * i + 3]);
+    uint2 k = (uint2)(key[2 * i], key[2 * i + 1]);
+    uint4 r = philox4x32_rounds(c, k, rounds[i]);
+    out[4 * i] = r.x; out[4 * i + 1] = r.y; out[4 * i + 2] = r.z; out[4 * i + 3] = r.w;
+}
+
+/* Samples one direction per work-item from a layer's BSDF (layer 0 of `layers`) or a
+ * medium's phase function (medium 0 of `media`) for fixed wo; out = (x, y, z, weight). */
+__kernel void harness_sample(__global const lsqt_dev_layer *layers,
+                             __global const lsqt_dev_medium *media, int use_phase,
+                             float wox, float woy, float woz, uint seed, __global float *out)
+{
+    uint i = (uint)get_global_id(0);
+    rng_t rng = rng_init(seed, 0u, 0u, i, 7u);
+    real3 wo = normalize(make_real3(wox, woy, woz)), wi = make_real3(R(0.0), R(0.0), R(1.0));
+    real w = use_phase ? phase_sample(media, wo, &rng, &wi) : bsdf_sample(layers, wo, &rng, &wi);
+    out[4 * i] = (float)wi.x; out[4 * i + 1] = (float)wi.y; out[4 * i + 2] = (float)wi.z;
+    out[4 * i + 3] = (float)w;
+}
+
+/* Evaluates f (or p) and pdf at given directions for fixed wo: out = (f, pdf). */
+__kernel void harness_eval(__global const lsqt_dev_layer *layers,
+                           __global const lsqt_dev_medium *media, int use_phase,
+                           float wox, float woy, float woz, __global const float *wi,
+                           __global float *out)
+{
+    int i = (int)get_global_id(0);
+    real3 wo = normalize(make_real3(wox, woy, woz));
+    real3 d = make_real3(wi[4 * i], wi[4 * i + 1], wi[4 * i + 2]);
+    out[2 * i] = (float)(use_phase ? phase_eval(media, wo, d) : bsdf_eval(layers, wo, d));
+    out[2 * i + 1] = (float)(use_phase ? phase_pdf(media, wo, d) : bsdf_pdf(layers, wo, d));
+}

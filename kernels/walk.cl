@@ -1,0 +1,202 @@
+/* The path loop: the only place that knows about layers and media together.
+ *
+ * Indexing: media 0..n, layers 0..n-1, layer L lies between media L (above) and L+1
+ * (below). Media 0 and n are the clear outside; a path that enters medium 0 going up has
+ * left the stack (reflection), one that enters medium n going down has too (transmission).
+ * Inside an interior medium the position is the height h above its bottom boundary, so a
+ * thin medium far from z = 0 is as exact as one near it. */
+#ifndef LSQT_NWI
+#define LSQT_NWI 1
+#endif
+
+/* Work-group accumulators: the point estimates first, then the scalar tallies. */
+#define ACC_N (LSQT_NWI + LSQT_T_COUNT)
+
+typedef struct {
+    __constant lsqt_dev_scene *scene;
+    __global const lsqt_dev_medium *media;
+    __global const lsqt_dev_layer *layers;
+    __global const float *wi;          /* this slice's n_wi directions, 4 floats each */
+    volatile __local uint *acc_lo;
+    volatile __local uint *acc_hi;
+    volatile __global uint *flags;
+} walk_ctx;
+
+inline void acc_add(const walk_ctx *c, int k, real v)
+{
+    if (v != R(0.0)) local_add64(&c->acc_lo[k], &c->acc_hi[k], to_fixed(v, c->flags), c->flags);
+}
+
+inline real transmittance(real tau, real cos_abs)
+{
+    return tau > R(0.0) ? exp(-tau / cos_abs) : R(1.0);
+}
+
+inline real3 wi_dir(const walk_ctx *c, int k)
+{
+    return make_real3(c->wi[4 * k], c->wi[4 * k + 1], c->wi[4 * k + 2]);
+}
+
+/* Next-event estimates from a vertex on layer li reached along d with weight w: towards
+ * upward directions if it is the topmost non-null layer, downward if the bottommost. */
+inline void nee_layer(const walk_ctx *c, int li, real3 d, real w)
+{
+    __global const lsqt_dev_layer *l = &c->layers[li];
+    real3 wo = -d;
+    if (li == c->scene->top_nonnull) {
+        __global const lsqt_dev_medium *m = &c->media[li];
+        real tau = m->tau_above + m->mut * m->thickness;
+        for (int k = 0; k < LSQT_NWI; k++) {
+            real3 wi = wi_dir(c, k);
+            if (wi.z > R(0.0)) acc_add(c, k, w * bsdf_eval(l, wo, wi) * transmittance(tau, wi.z));
+        }
+    }
+    if (li == c->scene->bottom_nonnull) {
+        __global const lsqt_dev_medium *m = &c->media[li + 1];
+        real tau = m->tau_below + m->mut * m->thickness;
+        for (int k = 0; k < LSQT_NWI; k++) {
+            real3 wi = wi_dir(c, k);
+            if (wi.z < R(0.0)) acc_add(c, k, w * bsdf_eval(l, wo, wi) * transmittance(tau, -wi.z));
+        }
+    }
+}
+
+/* Next-event estimates from a scattering vertex at height h in interior medium mi. */
+inline void nee_medium(const walk_ctx *c, int mi, real h, real3 d, real w)
+{
+    __global const lsqt_dev_medium *m = &c->media[mi];
+    int top = c->scene->top_nonnull, bottom = c->scene->bottom_nonnull;
+    bool up = top < 0 || mi <= top, down = bottom < 0 || mi > bottom;
+    real tau_up = m->tau_above + m->mut * (m->thickness - h);
+    real tau_down = m->tau_below + m->mut * h;
+    for (int k = 0; k < LSQT_NWI; k++) {
+        real3 wi = wi_dir(c, k);
+        if ((wi.z > R(0.0) && up) || (wi.z < R(0.0) && down)) {
+            real tr = wi.z > R(0.0) ? transmittance(tau_up, wi.z) : transmittance(tau_down, -wi.z);
+            acc_add(c, k, w * phase_eval(m, -d, wi) * tr);
+        }
+    }
+}
+
+/* Equal-solid-angle bin of an exit direction: |cos theta| x phi folded to [0, pi]. */
+inline int hist_bin(real3 d)
+{
+    int hemi = d.z > R(0.0) ? 0 : 1;
+    real mu = fabs(d.z);
+    real phi = atan2(fabs(d.y), d.x); /* [0, pi] */
+    int bm = min((int)(mu * LSQT_HIST_NMU), LSQT_HIST_NMU - 1);
+    int bp = min((int)(phi * (LSQT_HIST_NPHI / LSQT_PI)), LSQT_HIST_NPHI - 1);
+    return (hemi * LSQT_HIST_NMU + bm) * LSQT_HIST_NPHI + bp;
+}
+
+/* Russian roulette; returns 0 when the path ends. */
+inline int roulette(real *w, rng_t *rng)
+{
+    if (*w >= LSQT_RR_WEIGHT) return 1;
+    if (rng_uniform(rng) * LSQT_RR_WEIGHT >= *w) return 0;
+    *w = LSQT_RR_WEIGHT;
+    return 1;
+}
+
+inline void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulong *hist)
+{
+    const int n = c->scene->n_layers;
+    real3 d = -wo;
+    real w = R(1.0), h = R(0.0);
+    int scattered = 0, at_layer = 1, layer = 0, medium = 0;
+    for (int events = 0;; events++) {
+        if (events >= LSQT_MAX_EVENTS) {
+            local_add64(&c->acc_lo[LSQT_NWI + LSQT_T_CUT], &c->acc_hi[LSQT_NWI + LSQT_T_CUT], 1, c->flags);
+            return;
+        }
+        if (at_layer) {
+            __global const lsqt_dev_layer *l = &c->layers[layer];
+            if (l->kind != LSQT_BSDF_NULL) {
+                nee_layer(c, layer, d, w);
+                real3 wi;
+                w *= bsdf_sample(l, -d, rng, &wi);
+                scattered = 1;
+                if (!(w > R(0.0)) || !roulette(&w, rng)) return;
+                d = wi;
+            }
+            at_layer = 0;
+            if (d.z < R(0.0)) {
+                medium = layer + 1;
+                h = c->media[medium].thickness;
+            } else {
+                medium = layer;
+                h = R(0.0);
+            }
+            if ((medium == 0 && d.z > R(0.0)) || (medium == n && d.z < R(0.0))) {
+                int up = d.z > R(0.0);
+                acc_add(c, LSQT_NWI + (up ? LSQT_T_R : LSQT_T_T), w);
+                if (scattered) {
+                    global_add64(&hist[hist_bin(d)], to_fixed(w, c->flags), c->flags);
+                } else {
+                    acc_add(c, LSQT_NWI + LSQT_T_DELTA_T, w);
+                }
+                return;
+            }
+            continue;
+        }
+        /* Inside interior medium `medium` at height h, travelling along d. */
+        __global const lsqt_dev_medium *m = &c->media[medium];
+        real to_boundary = d.z < R(0.0) ? h / -d.z : (m->thickness - h) / d.z;
+        if (m->mut > R(0.0)) {
+            real s = -log(R(1.0) - rng_uniform(rng)) / (real)m->mut;
+            if (s < to_boundary) {
+                h = clamp(h + s * d.z, R(0.0), (real)m->thickness);
+                w *= (real)m->mus / (real)m->mut;
+                scattered = 1;
+                if (!(w > R(0.0))) return;
+                nee_medium(c, medium, h, d, w);
+                real3 wi;
+                w *= phase_sample(m, -d, rng, &wi);
+                if (!(w > R(0.0)) || !roulette(&w, rng)) return;
+                d = wi;
+                continue;
+            }
+        }
+        at_layer = 1;
+        layer = d.z < R(0.0) ? medium : medium - 1;
+    }
+}
+
+/* One work-group per (chunk of LSQT_CHUNK paths, slice): global size
+ * (n_chunks * local size, n_slices). It runs the paths of its chunk that fall in
+ * [path_begin, path_end), sums in local memory and adds once per chunk to the batch. */
+__kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
+                        __global const lsqt_dev_medium *media,
+                        __global const lsqt_dev_layer *layers,
+                        __global const float *wo_dirs,
+                        __global const float *wi_dirs,
+                        ulong path_begin, ulong path_end, ulong chunk_first,
+                        __global ulong *nee, __global ulong *scalars, __global ulong *hist,
+                        volatile __global uint *flags)
+{
+    __local uint acc_lo[ACC_N], acc_hi[ACC_N];
+    const int lid = (int)get_local_id(0), lsz = (int)get_local_size(0);
+    const uint slice = (uint)get_global_id(1);
+    const ulong chunk = chunk_first + get_group_id(0);
+    const ulong begin = max(chunk * LSQT_CHUNK, path_begin);
+    const ulong end = min((chunk + 1) * LSQT_CHUNK, path_end);
+    const int batch = (int)(chunk % LSQT_BATCHES);
+
+    for (int k = lid; k < ACC_N; k += lsz) acc_lo[k] = acc_hi[k] = 0;
+    barrier(CLK_LOCAL_MEM_FENCE);
+
+    walk_ctx c = {scene, media, layers, wi_dirs + 4 * LSQT_NWI * slice, acc_lo, acc_hi, flags};
+    real3 wo = make_real3(wo_dirs[4 * slice], wo_dirs[4 * slice + 1], wo_dirs[4 * slice + 2]);
+    for (ulong p = begin + (ulong)lid; p < end; p += (ulong)lsz) {
+        rng_t rng = rng_init(scene->seed_lo, scene->seed_hi, slice, p, RNG_PURPOSE_WALK);
+        run_path(&c, wo, &rng, hist + (ulong)slice * LSQT_HIST_BINS);
+    }
+    barrier(CLK_LOCAL_MEM_FENCE);
+
+    ulong base = (ulong)slice * LSQT_BATCHES + (ulong)batch;
+    for (int k = lid; k < ACC_N; k += lsz) {
+        ulong v = ((ulong)acc_hi[k] << 32) | (ulong)acc_lo[k];
+        if (k < LSQT_NWI) global_add64(&nee[base * LSQT_NWI + k], v, flags);
+        else global_add64(&scalars[base * LSQT_T_COUNT + (k - LSQT_NWI)], v, flags);
+    }
+}

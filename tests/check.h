@@ -1,0 +1,42 @@
+/* Minimal test helpers: every CHECK that fails prints where and why; a test program
+ * returns check_finish(), non-zero when anything failed. */
+#ifndef LSQT_TESTS_CHECK_H
+#define LSQT_TESTS_CHECK_H
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+static int check_failures = 0;
+static int check_count = 0;
+
+#define CHECK(cond, ...)                                                         \
+    do {                                                                         \
+        check_count++;                                                           \
+        if (!(cond)) {                                                           \
+            check_failures++;                                                    \
+            fprintf(stderr, "%s:%d: CHECK failed: %s: ", __FILE__, __LINE__, #cond); \
+            fprintf(stderr, __VA_ARGS__);                                        \
+            fprintf(stderr, "\n");                                               \
+        }                                                                        \
+    } while (0)
+
+/* |a - b| <= tol * |b| */
+#define CHECK_REL(a, b, tol)                                                     \
+    CHECK(fabs((double)(a) - (double)(b)) <= (tol) * fabs((double)(b)),          \
+          "%.10g vs %.10g (rel tol %g)", (double)(a), (double)(b), (double)(tol))
+
+/* |estimate - expected| <= k * sigma, with sigma > 0 required */
+#define CHECK_Z(est, expected, sigma, k)                                         \
+    CHECK((sigma) > 0 && fabs((double)(est) - (double)(expected)) <= (k) * (sigma), \
+          "%.8g vs %.8g: z = %.3f (sigma %.3g, allowed %g)", (double)(est),       \
+          (double)(expected), ((double)(est) - (double)(expected)) / (double)(sigma), \
+          (double)(sigma), (double)(k))
+
+static int check_finish(const char *name)
+{
+    printf("%s: %d checks, %d failed\n", name, check_count, check_failures);
+    return check_failures ? 1 : 0;
+}
+
+#endif
