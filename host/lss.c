@@ -72,7 +72,6 @@ int lsqt_lss_write(const char *path, const lsqt_state *st, char *err, size_t err
     put_u32(&w, (uint32_t)st->use_double);
     put_u32(&w, (uint32_t)st->transmits);
     put_u32(&w, st->flags);
-    put_f64(&w, st->seconds);
     put_u32(&w, (uint32_t)st->n_slices);
     put_u32(&w, (uint32_t)st->n_wi);
     put_u64(&w, st->paths);
@@ -179,7 +178,6 @@ int lsqt_lss_parse(const unsigned char *data, size_t len, lsqt_state *st, char *
         }
     uint64_t seed = get_u64(&r), hash = get_u64(&r);
     uint32_t use_double = get_u32(&r), transmits = get_u32(&r), flags = get_u32(&r);
-    double seconds = get_f64(&r);
     uint32_t n_slices = get_u32(&r), n_wi = get_u32(&r);
     uint64_t paths = get_u64(&r);
     uint32_t tl = get_u32(&r);
@@ -210,7 +208,6 @@ int lsqt_lss_parse(const unsigned char *data, size_t len, lsqt_state *st, char *
     }
     st->use_double = (int)use_double;
     st->flags = flags;
-    st->seconds = seconds;
     st->paths = paths;
     const size_t nw = n_wi;
     for (size_t s = 0; s < n_slices; s++) {

@@ -1,11 +1,12 @@
 /* LSS: the progressive state file (SPEC §7). Versioned little-endian binary:
  *   "LSQTLSS\0", u32 version, u32 chunk, batches, fix_bits, hist_nmu, hist_nphi, t_count,
- *   u64 seed, u64 assembly hash, u32 double, transmits, flags, f64 seconds,
+ *   u64 seed, u64 assembly hash, u32 double, transmits, flags,
  *   u32 n_slices, n_wi, u64 paths, u32 text length, canonical assembly text,
  *   per slice: f64 theta_o, u64 paths, n_wi x f32 (x, y, z),
  *              [batch][n_wi] u64 point-estimate sums, [batch][t_count] u64 scalars,
  *              hist_bins u64,
- *   u32 CRC-32 of everything before it. */
+ *   u32 CRC-32 of everything before it.
+ * Nothing that depends on timing is stored, so equal work gives byte-identical files. */
 #ifndef LSQT_LSS_H
 #define LSQT_LSS_H
 

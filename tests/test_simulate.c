@@ -1,0 +1,134 @@
+/* End-to-end physics of the walk on the device, against closed forms (SPEC §9). */
+#include "cl_fixture.h"
+
+#define PI 3.14159265358979323846
+
+/* Reflectance from the point estimates: the directions are an equal-area midpoint
+ * lattice on the half hemisphere (area pi), mirrored in y, so each stands for 2 pi / n sr
+ * of the upper hemisphere (times 2 when the set covers the sphere). */
+static double nee_albedo(const lsqt_state *st, const lsqt_slice_est *e, int s, int upper)
+{
+    double sum = 0.0, w = (st->transmits ? 4.0 : 2.0) * PI / st->n_wi;
+    for (int k = 0; k < st->n_wi; k++) {
+        double z = st->wi[((size_t)s * (size_t)st->n_wi + (size_t)k) * 4 + 2];
+        if ((z > 0) == upper) sum += e[s].f[k].mean * (z > 0 ? z : -z) * w;
+    }
+    return sum;
+}
+
+static void test_lambertian(void)
+{
+    const double deg[] = {0, 30, 60, 89.9};
+    lsqt_state st;
+    lsqt_slice_est *e = fixture_run("Medium\nLayer z=0 LambertianBsdf fR=0.6 fT=0\nMedium\n", 4, deg, 80, 2000, 1, &st);
+    CHECK(!st.transmits, "a Lambertian with fT=0 must not transmit");
+    for (int s = 0; s < 4; s++) {
+        for (int k = 0; k < st.n_wi; k++) CHECK_REL(e[s].f[k].mean, 0.6 / PI, 1e-5);
+        CHECK(fabs(e[s].R.mean - 0.6) <= 3 * e[s].R.err + 1e-7, /* fR is a float on the device */ "slice %d: R = %.9g +- %.3g", s, e[s].R.mean, e[s].R.err);
+        CHECK(e[s].T.mean == 0.0, "slice %d: T = %g", s, e[s].T.mean);
+    }
+    CHECK(st.flags == 0, "flags %u", st.flags);
+    lsqt_estimates_free(e, 4);
+    lsqt_state_free(&st);
+}
+
+static void test_slab(void)
+{
+    const double deg[] = {0, 45, 80};
+    lsqt_state st;
+    lsqt_slice_est *e = fixture_run("Medium\nLayer z=1 NullBsdf\nMedium mus=1 HenyeyGreensteinPhase g=0\n"
+                                    "Layer z=0 NullBsdf\nMedium\n",
+                                    3, deg, 64, 20000, 2, &st);
+    CHECK(st.transmits, "a null slab transmits");
+    for (int s = 0; s < 3; s++) {
+        double sig = sqrt(e[s].R.err * e[s].R.err + e[s].T.err * e[s].T.err);
+        CHECK(fabs(e[s].R.mean + e[s].T.mean - 1.0) <= 3 * sig + 1e-9, "slice %d: R + T = %.9g", s,
+              e[s].R.mean + e[s].T.mean);
+        CHECK(e[s].R.err > 0 && e[s].R.mean > 0.2 && e[s].R.mean < 0.8, "slice %d: R = %g +- %g", s, e[s].R.mean,
+              e[s].R.err);
+        /* The unscattered part is exactly exp(-tau / cos). */
+        double dt = exp(-1.0 / cos(deg[s] * PI / 180));
+        CHECK_Z(e[s].delta_T.mean, dt, e[s].delta_T.err, 4.0);
+        /* Point estimates and the analog exits agree: integral of f cos over the upper
+         * hemisphere is R (quadrature on 32 upper points: allow 5%). */
+        double rn = nee_albedo(&st, e, s, 1);
+        CHECK(fabs(rn - e[s].R.mean) <= 0.05 * e[s].R.mean, "slice %d: NEE albedo %.5g vs R %.5g", s, rn,
+              e[s].R.mean);
+    }
+    lsqt_estimates_free(e, 3);
+    lsqt_state_free(&st);
+
+    /* With absorption energy is lost, by far more than the noise. */
+    e = fixture_run("Medium\nLayer z=1 NullBsdf\nMedium mua=0.5 mus=1 HenyeyGreensteinPhase g=0.5\n"
+                    "Layer z=0 NullBsdf\nMedium\n",
+                    1, deg, 32, 20000, 3, &st);
+    double sig = sqrt(e[0].R.err * e[0].R.err + e[0].T.err * e[0].T.err);
+    CHECK(e[0].R.mean + e[0].T.mean < 1.0 - 10 * sig, "absorbing slab: R + T = %.6g +- %.2g",
+          e[0].R.mean + e[0].T.mean, sig);
+    lsqt_estimates_free(e, 1);
+    lsqt_state_free(&st);
+}
+
+static void test_adding(void)
+{
+    /* Two Lambertian layers in vacuum: R = R1 + T1^2 R2 / (1 - R1 R2) for any incidence. */
+    const double deg[] = {0, 50, 85};
+    const double R1 = 0.3, T1 = 0.5, R2 = 0.6, expect = R1 + T1 * T1 * R2 / (1 - R1 * R2);
+    lsqt_state st;
+    lsqt_slice_est *e = fixture_run("Medium\nLayer z=1 LambertianBsdf fR=0.3 fT=0.5\nMedium\n"
+                                    "Layer z=0 LambertianBsdf fR=0.6\nMedium\n",
+                                    3, deg, 48, 20000, 4, &st);
+    for (int s = 0; s < 3; s++) {
+        CHECK_Z(e[s].R.mean, expect, e[s].R.err, 3.0);
+        CHECK(e[s].T.mean == 0.0, "T = %g", e[s].T.mean);
+        double rn = nee_albedo(&st, e, s, 1);
+        CHECK(fabs(rn - expect) <= 0.02 * expect, "slice %d: NEE albedo %.5g vs %.5g", s, rn, expect);
+    }
+    lsqt_estimates_free(e, 3);
+    lsqt_state_free(&st);
+}
+
+/* The same paths whatever the split into runs and the work-group size. */
+static void test_reproducible(void)
+{
+    const char *text = "Medium\nLayer z=1 NullBsdf\nMedium mus=2 mua=0.1 HenyeyGreensteinPhase g=0.3\n"
+                       "Layer z=0 LambertianBsdf fR=0.5 fT=0.2\nMedium\n";
+    const double deg[] = {10, 70};
+    lsqt_state one, split;
+    lsqt_slice_est *e1 = fixture_run(text, 2, deg, 16, 5000, 9, &one);
+    lsqt_slice_est *e2 = fixture_run(text, 2, deg, 16, 1234, 9, &split);
+    lsqt_assembly a;
+    lsqt_diag d;
+    memset(&d, 0, sizeof d);
+    lsqt_parse(text, strlen(text), "t", &a, &d);
+    lsqt_sim_opts o = {0, 0.0, 32, NULL};
+    lsqt_sim_stats stats;
+    char err[512];
+    CHECK(lsqt_simulate(&fixture_cx, &a, &split, 5000 - 1234, &o, &stats, err, sizeof err) == 0, "%s", err);
+    CHECK(split.paths == one.paths, "%llu paths", (unsigned long long)split.paths);
+    CHECK(memcmp(one.nee, split.nee, lsqt_state_nee_count(&one) * 8) == 0, "point-estimate tallies differ");
+    CHECK(memcmp(one.scalars, split.scalars, lsqt_state_scalar_count(&one) * 8) == 0, "R/T tallies differ");
+    CHECK(memcmp(one.hist, split.hist, lsqt_state_hist_count(&one) * 8) == 0, "histograms differ");
+    /* ... and another seed gives other paths. */
+    lsqt_state other;
+    lsqt_slice_est *e3 = fixture_run(text, 2, deg, 16, 5000, 10, &other);
+    CHECK(memcmp(one.scalars, other.scalars, lsqt_state_scalar_count(&one) * 8) != 0, "seed has no effect");
+    lsqt_assembly_free(&a);
+    lsqt_estimates_free(e1, 2);
+    lsqt_estimates_free(e2, 2);
+    lsqt_estimates_free(e3, 2);
+    lsqt_state_free(&one);
+    lsqt_state_free(&split);
+    lsqt_state_free(&other);
+}
+
+int main(void)
+{
+    fixture_open();
+    test_lambertian();
+    test_slab();
+    test_adding();
+    test_reproducible();
+    lsqt_context_release(&fixture_cx);
+    return check_finish("test_simulate");
+}
