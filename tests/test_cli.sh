@@ -1,0 +1,144 @@
+#!/usr/bin/env bash
+# Command-line behaviour of lsqt-cl: help, flag and input errors (exit 2, nothing
+# written), outputs and their names, continuation, determinism, stdin, missing device.
+# usage: test_cli.sh LSQT_CL EXAMPLES_DIR
+set -u
+BIN=$1
+EX=$2
+T=$(mktemp -d)
+trap 'rm -rf "$T"' EXIT
+cd "$T"
+pass=0
+fail=0
+ok() { pass=$((pass + 1)); }
+bad() { fail=$((fail + 1)); echo "FAIL: $*" >&2; }
+
+# expect STATUS SUBSTRING -- command...: exit status and a substring of stdout+stderr
+expect() {
+  local want=$1 text=$2
+  shift 3
+  local out rc
+  out=$("$@" 2>&1)
+  rc=$?
+  if [ "$rc" != "$want" ]; then bad "[$*] exit $rc, expected $want: $out"; return; fi
+  if [ -n "$text" ] && ! grep -qF -- "$text" <<<"$out"; then bad "[$*] output lacks '$text': $out"; return; fi
+  ok
+}
+
+cp "$EX/tutorial/Lambertian.lsqt" L.lsqt
+
+# Help.
+expect 0 "usage: lsqt-cl" -- "$BIN"
+expect 0 "--path-count" -- "$BIN" -h
+expect 0 "--list-devices" -- "$BIN" --help
+
+# Flag errors: exit 2 and nothing written.
+while IFS='|' read -r args text; do
+  [ -z "$args" ] && continue
+  # shellcheck disable=SC2086
+  expect 2 "$text" -- "$BIN" $args L.lsqt
+  if ls L.lsqt.* >/dev/null 2>&1; then bad "[$args] wrote output"; rm -f L.lsqt.*; fi
+done <<'TABLE'
+-p 0|bad value '0' for -p
+-p 1.5|bad value '1.5' for -p
+-p 1e7x|bad value '1e7x' for -p
+-p nan|bad value 'nan' for -p
+-wo 3|bad value '3' for -wo: expected an integer in 4-1024
+-wo=1025|bad value '1025' for -wo
+-wi 15|bad value '15' for -wi: expected an integer in 16-1024
+-wi=2000|bad value '2000' for -wi
+-rx 9|bad value '9' for -rx
+-rp 0|bad value '0' for -rp
+-s -1|bad value '-1' for -s
+-t 0|bad value '0' for -t
+--time-limit -3|bad value '-3' for --time-limit
+--wo-angles=10,95|bad value '10,95' for --wo-angles
+--bogus|unknown option '--bogus'
+-R=1|-R takes no value
+TABLE
+expect 2 "needs a value" -- "$BIN" L.lsqt -p
+expect 2 "more than one input file" -- "$BIN" L.lsqt L.lsqt
+expect 2 "no OpenCL device matches 'nosuchdevice'" -- "$BIN" -d nosuchdevice L.lsqt
+expect 2 "cannot open 'missing.lsqt'" -- "$BIN" missing.lsqt
+
+# Input errors: message with file, line and token; exit 2; nothing written.
+while IFS='|' read -r input text; do
+  [ -z "$input" ] && continue
+  printf "$input" > bad.lsqt
+  expect 2 "$text" -- "$BIN" bad.lsqt
+  if ls bad.lsqt.* >/dev/null 2>&1; then bad "[$input] wrote output"; rm -f bad.lsqt.*; fi
+done <<'TABLE'
+|bad.lsqt
+Medium\n|bad.lsqt:
+Medium\nLayer z=0 LambertianBsdf fR=0.6 fT=0.6\nMedium\n|bad.lsqt:2:
+Medium\nLayer z=0 LambertianBsdf fR=0.5x\nMedium\n|0.5x
+Medium\nLayer z=0 LambertianBsdf fR=nan\nMedium\n|nan
+Medium foo=1\nLayer z=0 LambertianBsdf\nMedium\n|bad.lsqt:1:
+Medium eta=0.5\nLayer z=0 LambertianBsdf\nMedium\n|bad.lsqt:1:
+Medium mus=1\nLayer z=0 LambertianBsdf\nMedium\n|bad.lsqt:1:
+Medium\nLayer LambertianBsdf\nMedium\n|bad.lsqt:2:
+Medium\nLayer z=0 FancyBsdf\nMedium\n|FancyBsdf
+Medium\nLayer z=0 LambertianBsdf fR=0.5 fR=0.5\nMedium\n|fR
+Medium\nLayer z=0 NullBsdf\nMedium\nLayer z=1 LambertianBsdf\nMedium\n|bad.lsqt:4:
+Medium\nLayer z=0 MicrosurfaceLambertianBrdf iter_count=0\nMedium\n|iter_count
+Medium\nLayer z=0 MicrosurfaceDielectricBsdf use_multiple_scattering=yes\nMedium\n|use_multiple_scattering
+Medium\nLayer z=0 NullBsdf\nMedium mus=1 HenyeyGreensteinPhase g=1\nLayer z=-1 NullBsdf\nMedium\n|bad.lsqt:3:
+TABLE
+
+# The tutorial example: RAW header, line count, 0.6/pi everywhere, and an LSS.
+expect 0 "R +- 1 s.e." -- "$BIN" -p 2000 -wo 4 -wi 16 L.lsqt
+if [ -f L.lsqt.raw ] && [ -f L.lsqt.lss ]; then ok; else bad "no L.lsqt.raw / L.lsqt.lss"; fi
+[ "$(head -c 20 L.lsqt.raw)" = "RAWBH10A Layered-SQT" ] && ok || bad "RAW header: $(head -1 L.lsqt.raw)"
+[ "$(sed -n 2p L.lsqt.raw)" = "1 0.5" ] && ok || bad "RAW band line"
+[ "$(sed -n 3p L.lsqt.raw | awk '{print $1, NF}')" = "4 5" ] && ok || bad "RAW slice line: $(sed -n 3p L.lsqt.raw)"
+[ "$(wc -l < L.lsqt.raw)" = "$((3 + 4 * 16 * 2))" ] && ok || bad "RAW has $(wc -l < L.lsqt.raw) lines"
+awk 'NR > 3 { d = $5 / (0.6 / 3.14159265358979) - 1; if (d > 1e-5 || d < -1e-5) bad++ } END { exit bad > 0 }' L.lsqt.raw \
+  && ok || bad "RAW values are not 0.6/pi"
+
+# Continuation adds paths; the split run equals the single run byte for byte.
+expect 0 "continuing L.lsqt.lss (2000 paths per slice so far)" -- "$BIN" -p 3000 L.lsqt
+"$BIN" -q -R -p 5000 -wo 4 -wi 16 -o once.raw --lss once.lss L.lsqt && ok || bad "single run"
+cmp -s once.raw L.lsqt.raw && ok || bad "split run RAW differs from single run"
+cmp -s once.lss L.lsqt.lss && ok || bad "split run LSS differs from single run"
+"$BIN" -q -R -p 5000 -wo 4 -wi 16 -o again.raw --lss again.lss L.lsqt && cmp -s once.raw again.raw && ok \
+  || bad "same seed and -p give different RAW"
+
+# An LSS of another assembly, or a damaged one, is an error that leaves it untouched.
+cp L.lsqt.lss keep.lss
+printf 'Medium\nLayer z=0 LambertianBsdf fR=0.5\nMedium\n' > L.lsqt
+expect 2 "use -R" -- "$BIN" L.lsqt
+cmp -s keep.lss L.lsqt.lss && ok || bad "LSS changed after a refused run"
+head -c 1000 keep.lss > L.lsqt.lss
+expect 2 "corrupt or truncated" -- "$BIN" L.lsqt
+[ "$(wc -c < L.lsqt.lss)" = 1000 ] && ok || bad "damaged LSS was replaced"
+expect 0 "wrote L.lsqt.raw" -- "$BIN" -R -p 1000 L.lsqt
+
+# stdin: RAW defaults to Layered.raw, no LSS unless --lss; -wi=N and -wi N both work.
+cat "$EX/tutorial/Lambertian.lsqt" | "$BIN" -q -p 500 -wo 4 -wi=20 - && [ -f Layered.raw ] && ok || bad "stdin run"
+ls ./*.lss 2>/dev/null | grep -q -v -e L.lsqt.lss -e once.lss -e again.lss -e keep.lss && bad "stdin wrote an LSS" || ok
+[ "$(wc -l < Layered.raw)" = "$((3 + 4 * 20 * 2))" ] && ok || bad "-wi=20 not honoured"
+
+# -p 1e3 means 1000 paths (the original read it as 1); JSON summary fields.
+"$BIN" -q -R -p 1e3 -wo 4 -wi 16 --json s.json L.lsqt && grep -q '"paths": 1000,' s.json && ok || bad "-p 1e3: $(cat s.json)"
+for key in device double seed seconds paths_per_second slices theta_o R_err T_err delta_T max_rel_err; do
+  grep -q "\"$key\"" s.json && ok || bad "JSON lacks $key"
+done
+
+# Transmission: RAWBS, with lower-hemisphere directions; -H splits into two files.
+printf 'Medium\nLayer z=0 LambertianBsdf fR=0.3 fT=0.5\nMedium\n' > t.lsqt
+"$BIN" -q -p 1000 -wo 4 -wi 16 t.lsqt && [ "$(head -c 5 t.lsqt.raw)" = "RAWBS" ] && ok || bad "transmitting RAW is not RAWBS"
+awk 'NR > 3 && $4 < 0 { n++ } END { exit !(n > 0) }' t.lsqt.raw && ok || bad "no transmission lines"
+"$BIN" -q -R -H -p 1000 -wo 4 -wi 16 -o h t.lsqt && [ -f h.R.raw ] && [ -f h.T.raw ] && ok || bad "-H files"
+awk 'NR > 3 && $4 < 0 { n++ } END { exit n > 0 }' h.T.raw && ok || bad "-H transmission not mirrored up"
+
+# Models the kernels do not run yet are refused clearly (exit 1), not simulated wrongly.
+printf 'Medium\nLayer z=0 OrenNayarDiffuseBrdf\nMedium\n' > on.lsqt
+expect 1 "not simulated by this version yet" -- "$BIN" on.lsqt
+
+# No OpenCL platform at all: exit 3 and say how to install PoCL.
+mkdir -p novendors
+expect 3 "pocl-opencl-icd" -- env OCL_ICD_VENDORS="$T/novendors" "$BIN" L.lsqt
+expect 0 "" -- "$BIN" --list-devices
+
+echo "test_cli: $pass passed, $fail failed"
+[ "$fail" = 0 ]

@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# Installs what lsqt-cl needs to build and test on Debian 12 (as root, or through sudo):
+# a C compiler, CMake, the OpenCL headers and ICD loader, PoCL's CPU device, and clang
+# with its sanitizer/fuzzer runtimes. Installs nothing when everything is present.
+set -euo pipefail
+PKGS=(build-essential cmake pkg-config ocl-icd-opencl-dev opencl-headers opencl-c-headers
+      ocl-icd-libopencl1 pocl-opencl-icd clinfo clang libclang-rt-14-dev)
+missing=()
+for p in "${PKGS[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  exit 0
+fi
+echo "setup: installing ${missing[*]}"
+SUDO=""
+if [ "$(id -u)" != 0 ]; then
+  command -v sudo >/dev/null || { echo "setup: run as root (apt-get needs it)" >&2; exit 1; }
+  SUDO=sudo
+fi
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
