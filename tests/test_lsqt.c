@@ -78,7 +78,7 @@ static const bad_case bad_cases[] = {
     { MEDIUM1("eta=0"), 1, "value out of range at 'eta=0'" },
     { MEDIUM1("eta=0.5"), 1, "eta below 1 at 'eta=0.5'; expected eta >= 1 (eta < 1 is "
       "allowed only for the metal below a MicrosurfaceConductiveBrdf)" },
-    { "Medium\nLayer z=0 Lambertian fT=0.5\nMedium eta=0.5\n", 3, "eta below 1 at 'eta=0.5'" },
+    { "Medium\nLayer z=0 Lambertian fR=0.5 fT=0.5\nMedium eta=0.5\n", 3, "eta below 1 at 'eta=0.5'" },
     { MEDIUM1("mua=-1"), 1, "value out of range at 'mua=-1'; expected mua=<number> in [0, 1e+12]" },
     { MEDIUM1("mus=1e13 HenyeyGreenstein"), 1, "value out of range at 'mus=1e13'" },
     /* strict numbers */
@@ -100,7 +100,7 @@ static const bad_case bad_cases[] = {
     { MEDIUM1("eta=1.00000000000000000000000000000000000000000000000000000000000000000000000000"
               "000000000000000000000000000000000000000000000000000000000000000000000000000000"
               "0000000000000"),
-      1, "number too long at 'eta=1.000000000000000000000000000000000000...'" },
+      1, "number too long at 'eta=1.000000" },
     /* top, bottom and scattering media */
     { "Medium mua=1\nLayer z=0 Null\nMedium\n", 1, "the top medium absorbs at 'mua=1'; expected "
       "mua=0 (the top and bottom media must neither absorb nor scatter, except the metal below "
@@ -108,7 +108,7 @@ static const bad_case bad_cases[] = {
     { "Medium mus=1 HenyeyGreenstein\nLayer z=0 Null\nMedium\n", 1,
       "the top medium scatters at 'mus=1'; expected mus=0" },
     { "Medium\nLayer z=0 Null\nMedium mua=0.1\n", 3, "the bottom medium absorbs at 'mua=0.1'" },
-    { "Medium\nLayer z=0 Lambertian fT=0.5\nMedium mus=1 Rayleigh\n", 3,
+    { "Medium\nLayer z=0 Lambertian fR=0 fT=0.5\nMedium mus=1 Rayleigh\n", 3,
       "the bottom medium scatters at 'mus=1'" },
     { MEDIUM3("mus=1"), 3, "scattering medium without a phase model at 'mus=1'; expected a "
       "phase model after the Medium keys when mus > 0: one of " PHASES },
@@ -291,6 +291,10 @@ static void test_garbage(void)
     CHECK(lsqt_parse("Foo", 3, NULL, &a, &d) == 2 && strncmp(d.error, "<input>:1:", 10) == 0,
           "%s", d.error);
     CHECK(lsqt_parse(NULL, 0, NAME, &a, &d) == 2 && strstr(d.error, "no layers"), "%s", d.error);
+    CHECK(lsqt_parse(NULL, 5, NAME, &a, &d) == 2 && strstr(d.error, "error: no text"), "%s",
+          d.error);
+    CHECK(lsqt_parse("Medium\nLayer z=0 Null\nMedium", 26, NAME, NULL, &d) == 2 &&
+          strstr(d.error, "error: no assembly to fill"), "%s", d.error);
 }
 
 /* ---- Good inputs --------------------------------------------------------------------- */
@@ -472,7 +476,10 @@ static void test_every_key(void)
     CHECK(M[4].phase.kind == LSQT_PHASE_SGGX && M[4].phase.apara == 0.5 &&
           M[4].phase.aperp == 2 && M[4].phase.sggx_diffuse == 1, "SGGX");
     CHECK(L[4].kind == LSQT_BSDF_OREN_NAYAR && L[4].sigma == 0.8 && L[4].fR == 0, "Oren-Nayar");
-    CHECK(M[5].eta == 2, "bottom eta");
+    /* the medium below Oren-Nayar cannot be reached: vacuum */
+    CHECK(is_vacuum(&M[5]) && a.n_pruned_layers == 0, "bottom medium");
+    CHECK(has_note(&d, NAME ":10: note: OrenNayarDiffuseBrdf transmits nothing: the medium on "
+                   "line 11 cannot be reached and is modelled as vacuum"), "vacuum note missing");
     CHECK(has_note(&d, NAME ":8: note: NullBsdf between eta=1.5 and eta=1: light passes straight "
                    "on, without refraction"), "null note missing");
     lsqt_assembly_free(&a);
@@ -662,11 +669,10 @@ static void test_notes(void)
     char text[8192] = "Medium\n";
     for (int i = 0; i < 40; i++) {
         char line[64];
+        /* eta alternates 2, 1, ..., 1: every Null layer separates different eta */
         snprintf(line, sizeof line, "Layer z=%d Null\nMedium eta=%d\n", -i, i % 2 ? 1 : 2);
         strcat(text, line);
     }
-    strcat(text + strlen(text) - 6, "\n"); /* "eta=2\n" -> the bottom medium is vacuum */
-    text[strlen(text) - 1] = '\0';
     if (parse_good(text, &a, &d)) {
         CHECK(d.n_notes == LSQT_DIAG_MAX_NOTES, "%d notes", d.n_notes);
         CHECK(a.n_layers == 40, "%d layers", a.n_layers);
@@ -703,7 +709,7 @@ static void test_pruning(void)
     }
     /* a conductor keeps its metal */
     if (parse_good("Medium\nLayer z=2 Null\nMedium eta=1.5\nLayer z=1 MicrosurfaceConductive\n"
-                   "Medium eta=0.5 mua=2.5\nLayer z=0 Lambertian fT=0.5\nMedium\n"
+                   "Medium eta=0.5 mua=2.5\nLayer z=0 Lambertian fR=0.5 fT=0.5\nMedium\n"
                    "Layer z=-1 Null\nMedium\n", &a, &d)) {
         CHECK(a.n_layers == 2 && a.n_pruned_layers == 2, "%d/%d", a.n_layers, a.n_pruned_layers);
         CHECK(a.media[2].eta == 0.5 && a.media[2].mua == 2.5 && a.media[2].line == 5, "metal");
@@ -717,7 +723,7 @@ static void test_pruning(void)
         const char *bsdf;
         int pruned;
     } stops[] = {
-        { "Lambertian fT=0", 1 }, { "Lambertian fT=0.1", 0 },
+        { "Lambertian fT=0", 1 }, { "Lambertian fR=0.5 fT=0.1", 0 },
         { "MicrosurfaceLambertian", 1 }, { "MicrosurfaceLambertian fR=0.5 fT=0.1", 0 },
         { "MicrosurfaceDielectric kT=0", 1 }, { "MicrosurfaceDielectric kT=0.01", 0 },
         { "OrenNayarDiffuse", 1 }, { "MicrosurfaceConductive", 1 }, { "Null", 0 },
@@ -800,9 +806,7 @@ static void test_canonical_text(void)
 {
     lsqt_assembly a;
     lsqt_diag d;
-    if (!parse_good("Medium\nLayer z=1 Null\nMedium mus=1 HG2 b=0.5 HenyeyGreenstein2 \n"
-                    "Layer z=0 MicrosurfaceLambertian fR=0.5\nMedium\n", &a, &d) &&
-        !parse_good("Medium\nLayer z=1 Null\nMedium mus=1 HenyeyGreenstein2 b=0.5\n"
+    if (!parse_good("Medium\nLayer z=1 Null\nMedium mus=1 HenyeyGreenstein2 b=0.5\n"
                     "Layer z=0 MicrosurfaceLambertian fR=0.5 fT=0.1\nMedium\n", &a, &d))
         return;
     const char *want =
@@ -846,10 +850,6 @@ static void test_hash(void)
 {
     uint64_t base = hash_of("Medium\nLayer z=0 Lambertian fR=0.6\nMedium\n");
     CHECK(base != 0, "hash 0");
-    CHECK(base == hash_of("# c\nMedium eta=1\r\nLayer fT=0 z=0 LambertianBsdf fR=6e-1 fT=0\n"
-                          "Medium mua=0\n") ||
-          base == hash_of("# c\nMedium eta=1\r\nLayer z=0 LambertianBsdf fT=0 fR=6e-1\n"
-                          "Medium mua=0\n"), "same assembly, other text");
     CHECK(base == hash_of("# c\nMedium eta=1\r\nLayer z=0 LambertianBsdf fT=0 fR=6e-1\n"
                           "Medium mua=0\n"), "same assembly, other text");
     CHECK(base != hash_of("Medium\nLayer z=0 Lambertian fR=0.61\nMedium\n"), "fR");

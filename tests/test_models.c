@@ -1,0 +1,175 @@
+/* Every model's sampler against its own evaluation, through the harness kernels (the
+ * same code the walk runs): a chi-square goodness-of-fit test on an equal-area
+ * (cos theta, phi) grid, the sample weight equal to f / pdf, and the integral of f over
+ * the sphere equal to the model's albedo. */
+#include "cl_fixture.h"
+
+#define PI 3.14159265358979323846
+#define NU 16
+#define NPHI 16
+#define SUB 6
+#define NSAMPLES 100000
+
+static cl_program prog;
+
+typedef struct {
+    const char *name;
+    int use_phase;
+    lsqt_dev_layer layer;
+    lsqt_dev_medium medium;
+    double wo[3];
+    double albedo;
+} model_case;
+
+static void run_kernel(const char *name, const model_case *m, cl_mem extra_in, cl_mem out, size_t n)
+{
+    cl_int e = CL_SUCCESS;
+    cl_kernel k = clCreateKernel(prog, name, &e);
+    cl_mem bl = clCreateBuffer(fixture_cx.ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof m->layer,
+                               (void *)&m->layer, &e);
+    cl_mem bm = clCreateBuffer(fixture_cx.ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof m->medium,
+                               (void *)&m->medium, &e);
+    float wo[3] = {(float)m->wo[0], (float)m->wo[1], (float)m->wo[2]};
+    cl_uint seed = 12345u;
+    clSetKernelArg(k, 0, sizeof bl, &bl);
+    clSetKernelArg(k, 1, sizeof bm, &bm);
+    clSetKernelArg(k, 2, sizeof(cl_int), &m->use_phase);
+    for (int i = 0; i < 3; i++) clSetKernelArg(k, (cl_uint)(3 + i), sizeof(float), &wo[i]);
+    if (extra_in) clSetKernelArg(k, 6, sizeof extra_in, &extra_in);
+    else clSetKernelArg(k, 6, sizeof seed, &seed);
+    clSetKernelArg(k, 7, sizeof out, &out);
+    e = clEnqueueNDRangeKernel(fixture_cx.queue, k, 1, NULL, &n, NULL, 0, NULL, NULL);
+    if (e == CL_SUCCESS) e = clFinish(fixture_cx.queue);
+    CHECK(e == CL_SUCCESS, "%s: %s failed: %d", m->name, name, (int)e);
+    clReleaseMemObject(bl);
+    clReleaseMemObject(bm);
+    clReleaseKernel(k);
+}
+
+static int cell_of(double x, double y, double z)
+{
+    int iu = (int)((z + 1.0) * 0.5 * NU);
+    double phi = atan2(y, x);
+    if (phi < 0) phi += 2 * PI;
+    int ip = (int)(phi / (2 * PI) * NPHI);
+    iu = iu < 0 ? 0 : iu >= NU ? NU - 1 : iu;
+    ip = ip < 0 ? 0 : ip >= NPHI ? NPHI - 1 : ip;
+    return iu * NPHI + ip;
+}
+
+/* Upper tail of chi-square with k dof (Wilson-Hilferty). */
+static double chi2_tail(double x, double k)
+{
+    double z = (pow(x / k, 1.0 / 3.0) - (1 - 2 / (9 * k))) / sqrt(2 / (9 * k));
+    return 0.5 * erfc(z / sqrt(2.0));
+}
+
+static void test_model(const model_case *m)
+{
+    cl_int e = CL_SUCCESS;
+    /* Evaluate f and pdf on SUB x SUB midpoints of every cell. */
+    const size_t ng = (size_t)NU * SUB * NPHI * SUB;
+    float *grid = malloc(ng * 4 * sizeof *grid), *fp = malloc(ng * 2 * sizeof *fp);
+    for (size_t iu = 0; iu < (size_t)NU * SUB; iu++)
+        for (size_t ip = 0; ip < (size_t)NPHI * SUB; ip++) {
+            double z = -1.0 + 2.0 * (iu + 0.5) / (NU * SUB), phi = 2 * PI * (ip + 0.5) / (NPHI * SUB);
+            double s = sqrt(1 - z * z);
+            float *g = grid + 4 * (iu * NPHI * SUB + ip);
+            g[0] = (float)(s * cos(phi));
+            g[1] = (float)(s * sin(phi));
+            g[2] = (float)z;
+            g[3] = 0;
+        }
+    cl_mem bg = clCreateBuffer(fixture_cx.ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, ng * 16, grid, &e);
+    cl_mem bf = clCreateBuffer(fixture_cx.ctx, CL_MEM_WRITE_ONLY, ng * 8, NULL, &e);
+    run_kernel("harness_eval", m, bg, bf, ng);
+    clEnqueueReadBuffer(fixture_cx.queue, bf, CL_TRUE, 0, ng * 8, fp, 0, NULL, NULL);
+    double expected[NU * NPHI] = {0}, f_int = 0.0, pdf_int = 0.0, dA = 4 * PI / (double)ng;
+    for (size_t i = 0; i < ng; i++) {
+        int c = cell_of(grid[4 * i], grid[4 * i + 1], grid[4 * i + 2]);
+        expected[c] += fp[2 * i + 1] * dA * NSAMPLES;
+        f_int += fp[2 * i] * dA;
+        pdf_int += fp[2 * i + 1] * dA;
+    }
+    CHECK(fabs(f_int - m->albedo) < 0.01 * m->albedo + 1e-6, "%s: integral of f = %.5f, albedo %.5f", m->name,
+          f_int, m->albedo);
+    CHECK(fabs(pdf_int - 1.0) < 0.01, "%s: integral of pdf = %.5f", m->name, pdf_int);
+
+    /* Sample, bin, and compare weights with f / pdf at the sampled directions. */
+    float *smp = malloc((size_t)NSAMPLES * 4 * sizeof *smp), *fs = malloc((size_t)NSAMPLES * 2 * sizeof *fs);
+    cl_mem bs = clCreateBuffer(fixture_cx.ctx, CL_MEM_READ_WRITE, (size_t)NSAMPLES * 16, NULL, &e);
+    cl_mem bfs = clCreateBuffer(fixture_cx.ctx, CL_MEM_WRITE_ONLY, (size_t)NSAMPLES * 8, NULL, &e);
+    run_kernel("harness_sample", m, NULL, bs, NSAMPLES);
+    run_kernel("harness_eval", m, bs, bfs, NSAMPLES);
+    clEnqueueReadBuffer(fixture_cx.queue, bs, CL_TRUE, 0, (size_t)NSAMPLES * 16, smp, 0, NULL, NULL);
+    clEnqueueReadBuffer(fixture_cx.queue, bfs, CL_TRUE, 0, (size_t)NSAMPLES * 8, fs, 0, NULL, NULL);
+    double observed[NU * NPHI] = {0};
+    int bad_weight = 0, bad_dir = 0;
+    for (int i = 0; i < NSAMPLES; i++) {
+        const float *s = smp + 4 * i;
+        double len = sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
+        if (!(fabs(len - 1) < 1e-4)) bad_dir++;
+        double ratio = fs[2 * i + 1] > 0 ? fs[2 * i] / fs[2 * i + 1] : 0;
+        if (!(fabs(s[3] - ratio) <= 1e-4 * ratio + 1e-6)) bad_weight++;
+        observed[cell_of(s[0], s[1], s[2])] += 1;
+    }
+    CHECK(bad_dir == 0, "%s: %d samples are not unit vectors", m->name, bad_dir);
+    CHECK(bad_weight == 0, "%s: %d sample weights differ from f/pdf", m->name, bad_weight);
+    /* Pool cells with small expectations, then chi-square. */
+    double chi2 = 0, pool_e = 0, pool_o = 0;
+    int dof = -1;
+    for (int c = 0; c < NU * NPHI; c++) {
+        if (expected[c] < 20) {
+            pool_e += expected[c];
+            pool_o += observed[c];
+            continue;
+        }
+        chi2 += (observed[c] - expected[c]) * (observed[c] - expected[c]) / expected[c];
+        dof++;
+    }
+    if (pool_e > 0) {
+        chi2 += (pool_o - pool_e) * (pool_o - pool_e) / pool_e;
+        dof++;
+    }
+    double p = dof > 0 ? chi2_tail(chi2, dof) : 0;
+    CHECK(dof > 5 && p > 1e-3, "%s: chi2 = %.1f with %d dof, p = %.3g", m->name, chi2, dof, p);
+    printf("%-28s integral %.5f  chi2 %.1f / %d dof  p = %.3f\n", m->name, f_int, chi2, dof, p);
+    clReleaseMemObject(bg);
+    clReleaseMemObject(bf);
+    clReleaseMemObject(bs);
+    clReleaseMemObject(bfs);
+    free(grid);
+    free(fp);
+    free(smp);
+    free(fs);
+}
+
+int main(void)
+{
+    fixture_open();
+    char err[1024], *log = NULL;
+    prog = lsqt_program_build(&fixture_cx, "-cl-std=CL1.2 -DLSQT_HAS_BSDF_LAMBERTIAN=1 -DLSQT_HAS_PHASE_HG=1", &log,
+                              err, sizeof err);
+    CHECK(prog != NULL, "%s\n%s", err, log ? log : "");
+    free(log);
+    if (!prog) return check_finish("test_models");
+    const double hg_g[] = {0.0, 0.3, -0.6, 0.85};
+    for (int i = 0; i < 4; i++) {
+        model_case m = {"HenyeyGreenstein", 1, {0}, {0, 0, 0, 0, 0, 0, 0, 0, {0}}, {0.3, -0.2, 0.9327379}, 1.0};
+        m.medium.phase_kind = LSQT_PHASE_HG;
+        m.medium.pp[0] = (float)hg_g[i];
+        test_model(&m);
+    }
+    const double lam[][2] = {{0.6, 0.0}, {0.3, 0.5}, {0.0, 1.0}};
+    const double wos[][3] = {{0.0, 0.0, 1.0}, {0.6, 0.0, -0.8}, {0.99, 0.0, 0.14106736}};
+    for (int i = 0; i < 3; i++) {
+        model_case m = {"Lambertian", 0, {0}, {0, 0, 0, 0, 0, 0, 0, 0, {0}}, {wos[i][0], wos[i][1], wos[i][2]}, lam[i][0] + lam[i][1]};
+        m.layer.kind = LSQT_BSDF_LAMBERTIAN;
+        m.layer.p[0] = (float)lam[i][0];
+        m.layer.p[1] = (float)lam[i][1];
+        test_model(&m);
+    }
+    clReleaseProgram(prog);
+    lsqt_context_release(&fixture_cx);
+    return check_finish("test_models");
+}
