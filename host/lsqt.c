@@ -359,25 +359,19 @@ static size_t skip_digits(span s, size_t i)
     return i;
 }
 
-/* Strict decimal number: [+-] digits [. digits] [e [+-] digits], the whole token, finite.
- * The grammar is checked here because strtod also takes "inf", "nan" and hex floats; the
- * '.' is handed to strtod as the locale's decimal point so a caller's setlocale cannot
- * change what parses. Returns NULL or why the token is not a number. */
-static const char *parse_number(span s, double *v)
+/* [+-] digits [. digits] [e [+-] digits], with at least one mantissa digit. Checked
+ * here because strtod also takes "inf", "nan" and hex floats. */
+static int is_decimal(span s)
 {
-    size_t i = 0, mantissa;
+    size_t i = 0;
     if (i < s.n && (s.p[i] == '+' || s.p[i] == '-'))
         i++;
-    size_t start = i;
-    i = skip_digits(s, i);
-    mantissa = i - start;
-    if (i < s.n && s.p[i] == '.') {
-        size_t frac = i + 1;
-        i = skip_digits(s, frac);
-        mantissa += i - frac;
-    }
-    if (mantissa == 0)
-        return "not a number";
+    size_t int_end = skip_digits(s, i), frac_end = int_end;
+    if (int_end < s.n && s.p[int_end] == '.')
+        frac_end = skip_digits(s, int_end + 1);
+    if (int_end == i && frac_end <= int_end + 1)
+        return 0;
+    i = frac_end;
     if (i < s.n && (s.p[i] == 'e' || s.p[i] == 'E')) {
         i++;
         if (i < s.n && (s.p[i] == '+' || s.p[i] == '-'))
@@ -385,20 +379,27 @@ static const char *parse_number(span s, double *v)
         size_t exp_start = i;
         i = skip_digits(s, i);
         if (i == exp_start)
-            return "not a number";
+            return 0;
     }
-    if (i != s.n)
-        return "not a number";
+    return i == s.n;
+}
 
+/* Strict number: the whole token a finite decimal. The '.' reaches strtod as the
+ * locale's decimal point, so a caller's setlocale cannot change what parses. Returns
+ * NULL or why the token is not a number. */
+static const char *parse_number(span s, double *v)
+{
+    if (!is_decimal(s))
+        return "not a number";
     char buf[160];
     const char *point = localeconv()->decimal_point;
-    if (s.n + strlen(point) >= sizeof buf)
+    size_t point_len = strlen(point), o = 0;
+    if (s.n + point_len >= sizeof buf) /* one point at most, by the grammar */
         return "number too long";
-    size_t o = 0;
-    for (i = 0; i < s.n; i++) {
+    for (size_t i = 0; i < s.n; i++) {
         if (s.p[i] == '.') {
-            memcpy(buf + o, point, strlen(point));
-            o += strlen(point);
+            memcpy(buf + o, point, point_len);
+            o += point_len;
         } else {
             buf[o++] = s.p[i];
         }
@@ -526,9 +527,9 @@ static int check_chars(parser *P, span tok)
 
 static int wrong_head(parser *P, const line_state *ls)
 {
-    int medium = ls->desc == &lsqt_medium_line;
     const char *want = ls->desc->head->name;
-    const char *other = medium ? "Layer" : "Medium";
+    const char *other = ls->desc == &lsqt_medium_line ? lsqt_layer_line.head->name
+                                                      : lsqt_medium_line.head->name;
     char what[64];
     if (span_is(ls->head, other))
         snprintf(what, sizeof what, "a %s line where a %s line belongs", other, want);

@@ -22,10 +22,12 @@ inline ulong to_fixed(real v, volatile __global uint *flags)
         atomic_or(flags, LSQT_FLAG_OVERFLOW);
         v = LSQT_FIX_MAX_VALUE;
     }
+    /* v >= 0: truncating v * scale + 1/2 rounds to nearest (convert_ulong_rte is a slow
+     * library call on some devices). */
 #ifdef LSQT_DOUBLE
-    return convert_ulong_rte(v * LSQT_FIX_SCALE);
+    return (ulong)(v * LSQT_FIX_SCALE + 0.5);
 #else
-    return convert_ulong_rte(v * (float)LSQT_FIX_SCALE);
+    return (ulong)(v * (float)LSQT_FIX_SCALE + 0.5f);
 #endif
 }
 

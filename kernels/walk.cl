@@ -9,7 +9,9 @@
 #define LSQT_NWI 1
 #endif
 
-/* Work-group accumulators: the point estimates first, then the scalar tallies. */
+/* Work-group accumulators: the point estimates first, then the scalar tallies. Point
+ * estimates are first summed per work-item in private integers (no atomics on the hot
+ * path; integer sums keep the result independent of order). */
 #define ACC_N (LSQT_NWI + LSQT_T_COUNT)
 
 typedef struct {
@@ -17,7 +19,8 @@ typedef struct {
     __global const lsqt_dev_medium *media;
     __global const lsqt_dev_layer *layers;
     __global const float *wi;          /* this slice's n_wi directions, 4 floats each */
-    volatile __local uint *acc_lo;
+    ulong *nee;                        /* this work-item's point-estimate sums (private) */
+    volatile __local uint *acc_lo;     /* the work-group's scalar tallies */
     volatile __local uint *acc_hi;
     volatile __global uint *flags;
 } walk_ctx;
@@ -25,6 +28,17 @@ typedef struct {
 inline void acc_add(const walk_ctx *c, int k, real v)
 {
     if (v != R(0.0)) local_add64(&c->acc_lo[k], &c->acc_hi[k], to_fixed(v, c->flags), c->flags);
+}
+
+/* Contributions are below 2^50 (to_fixed clamps), so a private sum would need 2^14 of
+ * them at the maximum to wrap; the check costs one compare. */
+inline void nee_add(const walk_ctx *c, int k, real v)
+{
+    if (v != R(0.0)) {
+        ulong q = to_fixed(v, c->flags), old = c->nee[k];
+        c->nee[k] = old + q;
+        if (old + q < old) atomic_or(c->flags, LSQT_FLAG_OVERFLOW);
+    }
 }
 
 inline real transmittance(real tau, real cos_abs)
@@ -48,7 +62,7 @@ inline void nee_layer(const walk_ctx *c, int li, real3 d, real w)
         real tau = m->tau_above + m->mut * m->thickness;
         for (int k = 0; k < LSQT_NWI; k++) {
             real3 wi = wi_dir(c, k);
-            if (wi.z > R(0.0)) acc_add(c, k, w * bsdf_eval(l, wo, wi) * transmittance(tau, wi.z));
+            if (wi.z > R(0.0)) nee_add(c, k, w * bsdf_eval(l, wo, wi) * transmittance(tau, wi.z));
         }
     }
     if (li == c->scene->bottom_nonnull) {
@@ -56,7 +70,7 @@ inline void nee_layer(const walk_ctx *c, int li, real3 d, real w)
         real tau = m->tau_below + m->mut * m->thickness;
         for (int k = 0; k < LSQT_NWI; k++) {
             real3 wi = wi_dir(c, k);
-            if (wi.z < R(0.0)) acc_add(c, k, w * bsdf_eval(l, wo, wi) * transmittance(tau, -wi.z));
+            if (wi.z < R(0.0)) nee_add(c, k, w * bsdf_eval(l, wo, wi) * transmittance(tau, -wi.z));
         }
     }
 }
@@ -73,7 +87,7 @@ inline void nee_medium(const walk_ctx *c, int mi, real h, real3 d, real w)
         real3 wi = wi_dir(c, k);
         if ((wi.z > R(0.0) && up) || (wi.z < R(0.0) && down)) {
             real tr = wi.z > R(0.0) ? transmittance(tau_up, wi.z) : transmittance(tau_down, -wi.z);
-            acc_add(c, k, w * phase_eval(m, -d, wi) * tr);
+            nee_add(c, k, w * phase_eval(m, -d, wi) * tr);
         }
     }
 }
@@ -185,12 +199,16 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
     for (int k = lid; k < ACC_N; k += lsz) acc_lo[k] = acc_hi[k] = 0;
     barrier(CLK_LOCAL_MEM_FENCE);
 
-    walk_ctx c = {scene, media, layers, wi_dirs + 4 * LSQT_NWI * slice, acc_lo, acc_hi, flags};
+    ulong nee_priv[LSQT_NWI];
+    for (int k = 0; k < LSQT_NWI; k++) nee_priv[k] = 0;
+    walk_ctx c = {scene, media, layers, wi_dirs + 4 * LSQT_NWI * slice, nee_priv, acc_lo, acc_hi, flags};
     real3 wo = make_real3(wo_dirs[4 * slice], wo_dirs[4 * slice + 1], wo_dirs[4 * slice + 2]);
     for (ulong p = begin + (ulong)lid; p < end; p += (ulong)lsz) {
         rng_t rng = rng_init(scene->seed_lo, scene->seed_hi, slice, p, RNG_PURPOSE_WALK);
         run_path(&c, wo, &rng, hist + (ulong)slice * LSQT_HIST_BINS);
     }
+    for (int k = 0; k < LSQT_NWI; k++)
+        if (nee_priv[k]) local_add64(&acc_lo[k], &acc_hi[k], nee_priv[k], flags);
     barrier(CLK_LOCAL_MEM_FENCE);
 
     ulong base = (ulong)slice * LSQT_BATCHES + (ulong)batch;
