@@ -1,14 +1,31 @@
 #!/usr/bin/env bash
-# Builds the sanitizer and fuzzing variants with clang, runs the parser unit tests under
-# ASan+UBSan, then fuzzes the LSQT parser for SECONDS (default 60) from the seed corpus.
+# Builds the sanitizer and fuzzing variants with clang, runs the OpenCL-free unit tests
+# (parser, LSS) under ASan+UBSan, then fuzzes the LSQT parser and the LSS reader for
+# SECONDS in all (default 60), starting from the seed corpora.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
-SECONDS_BUDGET=${1:-60}
+BUDGET=${1:-60}
 CC=clang cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=Debug -DLSQT_FUZZ=ON -DLSQT_SANITIZE=ON \
   -DLSQT_WERROR=ON >/dev/null
-cmake --build build-fuzz -j "$(nproc)" --target fuzz_lsqt test_lsqt
-UBSAN_OPTIONS=halt_on_error=1 ./build-fuzz/tests/test_lsqt
+cmake --build build-fuzz -j "$(nproc)" --target fuzz_lsqt fuzz_lss test_lsqt test_lss
+export UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1
+(cd build-fuzz/tests && ./test_lsqt >/dev/null && ./test_lss)
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-cp tools/fuzz/corpus/* "$work/"
-./build-fuzz/fuzz_lsqt -max_total_time="$SECONDS_BUDGET" -print_final_stats=1 "$work" 2>&1 | tail -n 5
+mkdir -p "$work/lsqt" "$work/lss"
+cp tools/fuzz/corpus/* "$work/lsqt/"
+# A real LSS as the reader's seed (the release build from tools/test.sh writes it).
+if [ -x build/lsqt-cl ]; then
+  build/lsqt-cl -q -R -p 256 -wo 4 -wi 16 --lss "$work/lss/seed.lss" -o "$work/seed.raw" \
+    examples/tutorial/Lambertian.lsqt || true
+fi
+for target in lsqt lss; do
+  echo "fuzzing $target for $((BUDGET / 2)) s"
+  if ! ./build-fuzz/fuzz_$target -max_total_time=$((BUDGET / 2)) -print_final_stats=1 \
+      -artifact_prefix="$work/" "$work/$target" >"$work/$target.log" 2>&1; then
+    tail -n 40 "$work/$target.log"
+    echo "fuzz_$target found a crash" >&2
+    exit 1
+  fi
+  grep -E "stat::number_of_executed_units|stat::new_units_added" "$work/$target.log"
+done

@@ -1,0 +1,73 @@
+/* LSS round trip, and refusal of every kind of damage (no OpenCL needed). */
+#include <stdlib.h>
+
+#include "check.h"
+#include "lsqt/lss.h"
+#include "lsqt/util.h"
+
+static void fill(lsqt_state *st)
+{
+    lsqt_state_init(st, "Medium eta=1\nLayer z=0 LambertianBsdf fR=0.6 fT=0\nMedium eta=1\n", 0x1234abcdULL, 42, 3,
+                    16, 1);
+    st->paths = 123456;
+    st->flags = 2;
+    for (int s = 0; s < 3; s++) st->theta_o[s] = 0.1 * s;
+    for (size_t i = 0; i < (size_t)3 * 16 * 4; i++) st->wi[i] = (i % 4 == 3) ? 0.0f : (float)i * 0.01f;
+    for (size_t i = 0; i < lsqt_state_nee_count(st); i++) st->nee[i] = i * 0x9E3779B97F4A7C15ULL;
+    for (size_t i = 0; i < lsqt_state_scalar_count(st); i++) st->scalars[i] = i * 77;
+    for (size_t i = 0; i < lsqt_state_hist_count(st); i++) st->hist[i] = i ^ 0xFFFF;
+}
+
+int main(void)
+{
+    lsqt_state a, b;
+    char err[512];
+    fill(&a);
+    const char *path = "test_lss.tmp.lss";
+    CHECK(lsqt_lss_write(path, &a, err, sizeof err) == 0, "%s", err);
+    CHECK(lsqt_lss_read(path, &b, err, sizeof err) == 0, "%s", err);
+    CHECK(strcmp(a.canonical, b.canonical) == 0, "canonical text differs");
+    CHECK(a.hash == b.hash && a.seed == b.seed && a.paths == b.paths && a.flags == b.flags, "header differs");
+    CHECK(a.n_slices == b.n_slices && a.n_wi == b.n_wi && a.transmits == b.transmits, "shape differs");
+    CHECK(memcmp(a.theta_o, b.theta_o, 3 * sizeof(double)) == 0, "theta_o differs");
+    CHECK(memcmp(a.wi, b.wi, (size_t)3 * 16 * 4 * sizeof(float)) == 0, "wi differs");
+    CHECK(memcmp(a.nee, b.nee, lsqt_state_nee_count(&a) * 8) == 0, "nee differs");
+    CHECK(memcmp(a.scalars, b.scalars, lsqt_state_scalar_count(&a) * 8) == 0, "scalars differ");
+    CHECK(memcmp(a.hist, b.hist, lsqt_state_hist_count(&a) * 8) == 0, "hist differs");
+    lsqt_state_free(&b);
+
+    /* Writing the same state twice gives the same bytes. */
+    size_t n1 = 0, n2 = 0;
+    char *f1 = lsqt_read_file(path, &n1, err, sizeof err);
+    CHECK(lsqt_lss_write(path, &a, err, sizeof err) == 0, "%s", err);
+    char *f2 = lsqt_read_file(path, &n2, err, sizeof err);
+    CHECK(f1 && f2 && n1 == n2 && memcmp(f1, f2, n1) == 0, "two writes differ");
+
+    /* Every truncation and every single-bit flip (sampled) is refused. */
+    int accepted = 0;
+    for (size_t cut = 0; cut < n1; cut += (cut < 256 ? 1 : 97)) {
+        if (lsqt_lss_parse((const unsigned char *)f1, cut, &b, err, sizeof err) == 0) {
+            accepted++;
+            lsqt_state_free(&b);
+        }
+    }
+    CHECK(accepted == 0, "%d truncations accepted", accepted);
+    for (size_t i = 0; i < n1; i += (i < 512 ? 1 : 61)) {
+        f1[i] ^= (char)(1 << (i % 8));
+        if (lsqt_lss_parse((const unsigned char *)f1, n1, &b, err, sizeof err) == 0) {
+            accepted++;
+            lsqt_state_free(&b);
+        }
+        f1[i] ^= (char)(1 << (i % 8));
+    }
+    CHECK(accepted == 0, "%d bit flips accepted", accepted);
+    CHECK(lsqt_lss_parse((const unsigned char *)f1, n1, &b, err, sizeof err) == 0, "intact copy refused: %s", err);
+    lsqt_state_free(&b);
+    CHECK(lsqt_lss_read("no-such-file.lss", &b, err, sizeof err) != 0 && strstr(err, "no-such-file.lss"),
+          "missing file: %s", err);
+    free(f1);
+    free(f2);
+    remove(path);
+    lsqt_state_free(&a);
+    return check_finish("test_lss");
+}
