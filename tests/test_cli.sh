@@ -140,5 +140,19 @@ mkdir -p novendors
 expect 3 "pocl-opencl-icd" -- env OCL_ICD_VENDORS="$T/novendors" "$BIN" L.lsqt
 expect 0 "" -- "$BIN" --list-devices
 
+# -t limits PoCL's threads and changes nothing in the result.
+"$BIN" -q -R -t 1 -p 5000 -wo 4 -wi 16 -o t1.raw --lss t1.lss "$EX/tutorial/Lambertian.lsqt" && cmp -s t1.raw once.raw \
+  && ok || bad "-t 1 gives another RAW"
+
+# Ctrl-C: the current launch finishes, LSS and RAW are written, exit status is non-zero.
+"$BIN" -q -R -p 1e12 -wo 4 -wi 16 --lss int.lss -o int.raw "$EX/slab.lsqt" &
+pid=$!
+sleep 2
+kill -INT $pid
+wait $pid
+rc=$?
+[ "$rc" = 1 ] && [ -s int.lss ] && [ -s int.raw ] && ok || bad "Ctrl-C: exit $rc, files: $(ls int.* 2>&1)"
+expect 0 "continuing int.lss" -- "$BIN" -p 1000 --lss int.lss -o int2.raw "$EX/slab.lsqt"
+
 echo "test_cli: $pass passed, $fail failed"
 [ "$fail" = 0 ]
