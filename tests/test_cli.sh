@@ -135,6 +135,12 @@ awk 'NR > 3 && $4 < 0 { n++ } END { exit n > 0 }' h.T.raw && ok || bad "-H trans
 printf 'Medium\nLayer z=0 OrenNayarDiffuseBrdf\nMedium\n' > on.lsqt
 expect 1 "not simulated by this version yet" -- "$BIN" on.lsqt
 
+# A kernel that fails to compile: exit 1 with the compiler's build log.
+mkdir -p broken && cp -r "$EX/../kernels" "$EX/../include" broken/
+echo "this is not OpenCL C;" >> broken/kernels/walk.cl
+expect 1 "OpenCL build log" -- env LSQT_KERNEL_DIR="$T/broken" "$BIN" -p 100 L.lsqt
+expect 1 "the OpenCL kernels failed to build" -- env LSQT_KERNEL_DIR="$T/broken" "$BIN" -p 100 L.lsqt
+
 # No OpenCL platform at all: exit 3 and say how to install PoCL.
 mkdir -p novendors
 expect 3 "pocl-opencl-icd" -- env OCL_ICD_VENDORS="$T/novendors" "$BIN" L.lsqt
