@@ -172,10 +172,12 @@ int lsqt_simulate(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint
     lsqt_dev_medium *media = calloc((size_t)n + 1, sizeof *media);
     lsqt_dev_layer *layers = calloc((size_t)n, sizeof *layers);
     float *wo = calloc((size_t)st->n_slices * 4, sizeof *wo);
+    const size_t pad = LSQT_PAD4((size_t)st->n_wi);
+    float *wi = calloc((size_t)st->n_slices * 3 * pad, sizeof *wi);
     sim_buffers b;
     memset(&b, 0, sizeof b);
     int rc = 1;
-    if (!media || !layers || !wo) {
+    if (!media || !layers || !wo || !wi) {
         snprintf(err, errcap, "out of memory");
         goto done;
     }
@@ -186,6 +188,10 @@ int lsqt_simulate(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint
     for (int s = 0; s < st->n_slices; s++) {
         wo[4 * s] = (float)sin(st->theta_o[s]);
         wo[4 * s + 2] = (float)cos(st->theta_o[s]);
+        /* Incident directions as coordinate arrays, zero-padded to fours. */
+        for (size_t i = 0; i < (size_t)st->n_wi; i++)
+            for (size_t j = 0; j < 3; j++)
+                wi[((size_t)s * 3 + j) * pad + i] = st->wi[((size_t)s * (size_t)st->n_wi + i) * 4 + j];
     }
     cl_mem_flags ro = CL_MEM_READ_ONLY, rw = CL_MEM_READ_WRITE;
     cl_uint flags0 = 0;
@@ -193,7 +199,7 @@ int lsqt_simulate(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint
     b.media = make_buffer(cx, ro, ((size_t)n + 1) * sizeof *media, media, &e);
     b.layers = make_buffer(cx, ro, (size_t)n * sizeof *layers, layers, &e);
     b.wo = make_buffer(cx, ro, (size_t)st->n_slices * 4 * sizeof *wo, wo, &e);
-    b.wi = make_buffer(cx, ro, (size_t)st->n_slices * (size_t)st->n_wi * 4 * sizeof(float), st->wi, &e);
+    b.wi = make_buffer(cx, ro, (size_t)st->n_slices * 3 * LSQT_PAD4((size_t)st->n_wi) * sizeof(float), wi, &e);
     b.nee = make_buffer(cx, rw, lsqt_state_nee_count(st) * 8, st->nee, &e);
     b.scalars = make_buffer(cx, rw, lsqt_state_scalar_count(st) * 8, st->scalars, &e);
     b.hist = make_buffer(cx, rw, lsqt_state_hist_count(st) * 8, st->hist, &e);
@@ -267,6 +273,7 @@ done:
     free(media);
     free(layers);
     free(wo);
+    free(wi);
     clReleaseKernel(k);
     clReleaseProgram(prog);
     return rc;

@@ -4,11 +4,17 @@
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 typedef double real;
 typedef double3 real3;
+typedef double4 real4;
+typedef long4 mask4; /* what comparing two real4 gives */
+#define convert_real4 convert_double4
 #define R(x) (x)
 #define convert_real convert_double
 #else
 typedef float real;
 typedef float3 real3;
+typedef float4 real4;
+typedef int4 mask4;
+#define convert_real4 convert_float4
 #define R(x) (x##f)
 #define convert_real convert_float
 #endif
@@ -22,6 +28,18 @@ typedef float3 real3;
 #define LSQT_RR_WEIGHT R(0.25)
 
 inline real3 make_real3(real x, real y, real z) { return (real3)(x, y, z); }
+
+/* Four directions at once, as three coordinate vectors: next-event estimation evaluates
+ * a model at every incident direction, so models evaluate in fours (SIMD on CPUs). */
+typedef struct {
+    real4 x, y, z;
+} dir4;
+
+inline dir4 dir4_broadcast(real3 d)
+{
+    dir4 r = {(real4)(d.x), (real4)(d.y), (real4)(d.z)};
+    return r;
+}
 
 inline real sqr(real x) { return x * x; }
 

@@ -2,14 +2,21 @@
  * uses are compiled in (the host passes -DLSQT_HAS_<MODEL>=1), so a scene pays for
  * nothing it does not contain. */
 
-inline real bsdf_eval(__global const lsqt_dev_layer *l, real3 wo, real3 wi)
+/* Evaluation takes four directions at once (next-event estimation's inner loop); the
+ * single-direction form used by the test harness is lane x of the same code. */
+inline real4 bsdf_eval4(__global const lsqt_dev_layer *l, real3 wo, dir4 wi)
 {
     switch (l->kind) {
 #ifdef LSQT_HAS_BSDF_LAMBERTIAN
-    case LSQT_BSDF_LAMBERTIAN: return lambertian_eval(l, wo, wi);
+    case LSQT_BSDF_LAMBERTIAN: return lambertian_eval4(l, wo, wi);
 #endif
-    default: return R(0.0);
+    default: return (real4)(R(0.0));
     }
+}
+
+inline real bsdf_eval(__global const lsqt_dev_layer *l, real3 wo, real3 wi)
+{
+    return bsdf_eval4(l, wo, dir4_broadcast(wi)).x;
 }
 
 /* Samples wi given wo; returns the weight f / pdf, 0 when the path is absorbed. */
@@ -34,14 +41,19 @@ inline real bsdf_pdf(__global const lsqt_dev_layer *l, real3 wo, real3 wi)
     }
 }
 
-inline real phase_eval(__global const lsqt_dev_medium *m, real3 wo, real3 wi)
+inline real4 phase_eval4(__global const lsqt_dev_medium *m, real3 wo, dir4 wi)
 {
     switch (m->phase_kind) {
 #ifdef LSQT_HAS_PHASE_HG
-    case LSQT_PHASE_HG: return hg_eval(m->pp[0], wo, wi);
+    case LSQT_PHASE_HG: return hg_eval4(m->pp[0], wo, wi);
 #endif
-    default: return R(0.0);
+    default: return (real4)(R(0.0));
     }
+}
+
+inline real phase_eval(__global const lsqt_dev_medium *m, real3 wo, real3 wi)
+{
+    return phase_eval4(m, wo, dir4_broadcast(wi)).x;
 }
 
 inline real phase_pdf(__global const lsqt_dev_medium *m, real3 wo, real3 wi)

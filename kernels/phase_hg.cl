@@ -2,14 +2,14 @@
  * towards where the path came from, wi where it goes, so the scattering angle has
  * cosine -dot(wo, wi) (the seed's 1 + g^2 + 2 g wo.wi). */
 
-inline real hg_eval(real g, real3 wo, real3 wi)
+inline real4 hg_eval4(real g, real3 wo, dir4 wi)
 {
-    real cos_t = -dot(wo, wi);
-    real denom = R(1.0) + g * g - R(2.0) * g * cos_t;
-    return LSQT_INV_4PI * (R(1.0) - g * g) / (denom * safe_sqrt(denom));
+    real4 cos_t = -(wo.x * wi.x + wo.y * wi.y + wo.z * wi.z);
+    real4 denom = R(1.0) + g * g - R(2.0) * g * cos_t;
+    return LSQT_INV_4PI * (R(1.0) - g * g) / (denom * sqrt(fmax(denom, R(0.0))));
 }
 
-inline real hg_pdf(real g, real3 wo, real3 wi) { return hg_eval(g, wo, wi); }
+inline real hg_pdf(real g, real3 wo, real3 wi) { return hg_eval4(g, wo, dir4_broadcast(wi)).x; }
 
 /* Samples wi exactly proportional to the phase function: the weight eval/pdf is 1. */
 inline real3 hg_sample(real g, real3 wo, real u1, real u2)

@@ -31,6 +31,27 @@ inline ulong to_fixed(real v, volatile __global uint *flags)
 #endif
 }
 
+/* Four values at once; non-finite or negative lanes raise a flag and count as 0. */
+inline ulong4 to_fixed4(real4 v, volatile __global uint *flags)
+{
+    mask4 bad = isnan(v) | isinf(v) | (v < R(0.0));
+    if (any(bad)) {
+        atomic_or(flags, LSQT_FLAG_NONFINITE);
+        v = select(v, (real4)(R(0.0)), bad);
+    }
+    if (any(v > LSQT_FIX_MAX_VALUE)) {
+        atomic_or(flags, LSQT_FLAG_OVERFLOW);
+        v = fmin(v, LSQT_FIX_MAX_VALUE);
+    }
+    /* Values are below 2^51, so the signed conversion (one instruction per lane on x86,
+     * where the unsigned one branches) is exact. */
+#ifdef LSQT_DOUBLE
+    return as_ulong4(convert_long4(v * LSQT_FIX_SCALE + 0.5));
+#else
+    return as_ulong4(convert_long4(v * (float)LSQT_FIX_SCALE + 0.5f));
+#endif
+}
+
 /* Adds v to a 64-bit word held as two 32-bit local words (lo, hi). */
 inline void local_add64(volatile __local uint *lo, volatile __local uint *hi, ulong v,
                         volatile __global uint *flags)

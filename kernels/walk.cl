@@ -9,18 +9,20 @@
 #define LSQT_NWI 1
 #endif
 
-/* Work-group accumulators: the point estimates first, then the scalar tallies. Point
- * estimates are first summed per work-item in private integers (no atomics on the hot
- * path; integer sums keep the result independent of order). */
+#define LSQT_NWI_PAD LSQT_PAD4(LSQT_NWI)
+
+/* Work-group accumulators of the scalar tallies. Point estimates are summed per
+ * work-item in private integers first (no atomics on the hot path), then once per
+ * work-item into the work-group's; integer sums keep the result independent of order. */
 #define ACC_N (LSQT_NWI + LSQT_T_COUNT)
 
 typedef struct {
     __constant lsqt_dev_scene *scene;
     __global const lsqt_dev_medium *media;
     __global const lsqt_dev_layer *layers;
-    __global const float *wi;          /* this slice's n_wi directions, 4 floats each */
+    __global const float *wi;          /* this slice's directions: x[pad], y[pad], z[pad] */
     ulong *nee;                        /* this work-item's point-estimate sums (private) */
-    volatile __local uint *acc_lo;     /* the work-group's scalar tallies */
+    volatile __local uint *acc_lo;     /* the work-group's tallies */
     volatile __local uint *acc_hi;
     volatile __global uint *flags;
 } walk_ctx;
@@ -30,48 +32,43 @@ inline void acc_add(const walk_ctx *c, int k, real v)
     if (v != R(0.0)) local_add64(&c->acc_lo[k], &c->acc_hi[k], to_fixed(v, c->flags), c->flags);
 }
 
-/* Contributions are below 2^50 (to_fixed clamps), so a private sum would need 2^14 of
- * them at the maximum to wrap; the check costs one compare. */
-inline void nee_add(const walk_ctx *c, int k, real v)
+inline dir4 wi_dir4(const walk_ctx *c, int k)
 {
-    if (v != R(0.0)) {
-        ulong q = to_fixed(v, c->flags), old = c->nee[k];
-        c->nee[k] = old + q;
-        if (old + q < old) atomic_or(c->flags, LSQT_FLAG_OVERFLOW);
-    }
+    dir4 d = {convert_real4(vload4(0, c->wi + k)), convert_real4(vload4(0, c->wi + LSQT_NWI_PAD + k)),
+              convert_real4(vload4(0, c->wi + 2 * LSQT_NWI_PAD + k))};
+    return d;
 }
 
-inline real transmittance(real tau, real cos_abs)
+/* Adds, to directions k..k+3, model values f times the transmittance of the media the
+ * light crosses on its way out (optical thickness tau_up above, tau_down below), only
+ * where leaving that way is allowed. Contributions are below 2^50 (to_fixed4 clamps), so
+ * a private sum needs 2^14 of them at the maximum to wrap; the check costs one compare. */
+inline void nee_add4(const walk_ctx *c, int k, real4 f, real4 z, real tau_up, real tau_down, int up, int down)
 {
-    return tau > R(0.0) ? exp(-tau / cos_abs) : R(1.0);
-}
-
-inline real3 wi_dir(const walk_ctx *c, int k)
-{
-    return make_real3(c->wi[4 * k], c->wi[4 * k + 1], c->wi[4 * k + 2]);
+    real4 t = (real4)(R(1.0));
+    if (tau_up > R(0.0) || tau_down > R(0.0))
+        t = exp(-select((real4)(tau_down), (real4)(tau_up), z > R(0.0)) / fabs(z));
+    mask4 ok = ((z > R(0.0)) & (mask4)(up ? -1 : 0)) | ((z < R(0.0)) & (mask4)(down ? -1 : 0));
+    if (!any(ok)) return;
+    ulong4 q = to_fixed4(select((real4)(R(0.0)), f * t, ok), c->flags);
+    ulong4 old = vload4(0, c->nee + k), sum = old + q;
+    if (any(sum < old)) atomic_or(c->flags, LSQT_FLAG_OVERFLOW);
+    vstore4(sum, 0, c->nee + k);
 }
 
 /* Next-event estimates from a vertex on layer li reached along d with weight w: towards
  * upward directions if it is the topmost non-null layer, downward if the bottommost. */
 inline void nee_layer(const walk_ctx *c, int li, real3 d, real w)
 {
+    const int up = li == c->scene->top_nonnull, down = li == c->scene->bottom_nonnull;
+    if (!up && !down) return;
     __global const lsqt_dev_layer *l = &c->layers[li];
-    real3 wo = -d;
-    if (li == c->scene->top_nonnull) {
-        __global const lsqt_dev_medium *m = &c->media[li];
-        real tau = m->tau_above + m->mut * m->thickness;
-        for (int k = 0; k < LSQT_NWI; k++) {
-            real3 wi = wi_dir(c, k);
-            if (wi.z > R(0.0)) nee_add(c, k, w * bsdf_eval(l, wo, wi) * transmittance(tau, wi.z));
-        }
-    }
-    if (li == c->scene->bottom_nonnull) {
-        __global const lsqt_dev_medium *m = &c->media[li + 1];
-        real tau = m->tau_below + m->mut * m->thickness;
-        for (int k = 0; k < LSQT_NWI; k++) {
-            real3 wi = wi_dir(c, k);
-            if (wi.z < R(0.0)) nee_add(c, k, w * bsdf_eval(l, wo, wi) * transmittance(tau, -wi.z));
-        }
+    __global const lsqt_dev_medium *above = &c->media[li], *below = &c->media[li + 1];
+    real tau_up = above->tau_above + above->mut * above->thickness;
+    real tau_down = below->tau_below + below->mut * below->thickness;
+    for (int k = 0; k < LSQT_NWI_PAD; k += 4) {
+        dir4 wi = wi_dir4(c, k);
+        nee_add4(c, k, w * bsdf_eval4(l, -d, wi), wi.z, tau_up, tau_down, up, down);
     }
 }
 
@@ -79,16 +76,13 @@ inline void nee_layer(const walk_ctx *c, int li, real3 d, real w)
 inline void nee_medium(const walk_ctx *c, int mi, real h, real3 d, real w)
 {
     __global const lsqt_dev_medium *m = &c->media[mi];
-    int top = c->scene->top_nonnull, bottom = c->scene->bottom_nonnull;
-    bool up = top < 0 || mi <= top, down = bottom < 0 || mi > bottom;
+    const int top = c->scene->top_nonnull, bottom = c->scene->bottom_nonnull;
+    const int up = top < 0 || mi <= top, down = bottom < 0 || mi > bottom;
     real tau_up = m->tau_above + m->mut * (m->thickness - h);
     real tau_down = m->tau_below + m->mut * h;
-    for (int k = 0; k < LSQT_NWI; k++) {
-        real3 wi = wi_dir(c, k);
-        if ((wi.z > R(0.0) && up) || (wi.z < R(0.0) && down)) {
-            real tr = wi.z > R(0.0) ? transmittance(tau_up, wi.z) : transmittance(tau_down, -wi.z);
-            nee_add(c, k, w * phase_eval(m, -d, wi) * tr);
-        }
+    for (int k = 0; k < LSQT_NWI_PAD; k += 4) {
+        dir4 wi = wi_dir4(c, k);
+        nee_add4(c, k, w * phase_eval4(m, -d, wi), wi.z, tau_up, tau_down, up, down);
     }
 }
 
@@ -199,9 +193,9 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
     for (int k = lid; k < ACC_N; k += lsz) acc_lo[k] = acc_hi[k] = 0;
     barrier(CLK_LOCAL_MEM_FENCE);
 
-    ulong nee_priv[LSQT_NWI];
-    for (int k = 0; k < LSQT_NWI; k++) nee_priv[k] = 0;
-    walk_ctx c = {scene, media, layers, wi_dirs + 4 * LSQT_NWI * slice, nee_priv, acc_lo, acc_hi, flags};
+    ulong nee_priv[LSQT_NWI_PAD];
+    for (int k = 0; k < LSQT_NWI_PAD; k++) nee_priv[k] = 0;
+    walk_ctx c = {scene, media, layers, wi_dirs + 3 * LSQT_NWI_PAD * slice, nee_priv, acc_lo, acc_hi, flags};
     real3 wo = make_real3(wo_dirs[4 * slice], wo_dirs[4 * slice + 1], wo_dirs[4 * slice + 2]);
     for (ulong p = begin + (ulong)lid; p < end; p += (ulong)lsz) {
         rng_t rng = rng_init(scene->seed_lo, scene->seed_hi, slice, p, RNG_PURPOSE_WALK);

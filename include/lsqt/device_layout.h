@@ -20,6 +20,10 @@ typedef uint32_t lsqt_u32;
 #define LSQT_CHUNK 256
 #define LSQT_BATCHES 32
 
+/* Incident directions go to the device as three coordinate arrays (x, y, z) per slice,
+ * each padded to a multiple of 4 with zero vectors, which contribute nothing. */
+#define LSQT_PAD4(n) (((n) + 3) / 4 * 4)
+
 /* Tallies are 64-bit unsigned fixed point: value * 2^LSQT_FIX_BITS, rounded. */
 #define LSQT_FIX_BITS 30
 #define LSQT_FIX_SCALE 1073741824.0
