@@ -102,13 +102,14 @@ int main(int argc, char **argv)
     if (!c.input) return fail(2, "no input file given (use - for stdin; see --help)%s%s", "", "");
 
     /* Input -> assembly. */
+    const int from_stdin = strcmp(c.input, "-") == 0;
     size_t len = 0;
     char *text = lsqt_read_file(c.input, &len, err, sizeof err);
     if (!text) return fail(2, "%s%s", err, "");
     lsqt_assembly a;
     lsqt_diag diag;
     memset(&diag, 0, sizeof diag);
-    int prc = lsqt_parse(text, len, strcmp(c.input, "-") == 0 ? "<stdin>" : c.input, &a, &diag);
+    int prc = lsqt_parse(text, len, from_stdin ? "<stdin>" : c.input, &a, &diag);
     free(text);
     if (!c.quiet)
         for (int i = 0; i < diag.n_notes; i++) fprintf(stderr, "%s\n", diag.notes[i]);
@@ -119,13 +120,13 @@ int main(int argc, char **argv)
     int line = 0;
     const char *model = lsqt_unsupported_model(&a, &line);
     if (model) {
-        fprintf(stderr, "lsqt-cl: error: line %d: %s is parsed but not simulated by this version yet\n", line, model);
+        fprintf(stderr, "%s:%d: error: %s is parsed but not simulated by this version of lsqt-cl yet\n",
+                from_stdin ? "<stdin>" : c.input, line, model);
         lsqt_assembly_free(&a);
         return 1;
     }
 
     /* Output names. */
-    const int from_stdin = strcmp(c.input, "-") == 0;
     char raw_path[4200], lss_buf[4200];
     snprintf(raw_path, sizeof raw_path, "%s", c.output ? c.output : from_stdin ? "Layered.raw" : "");
     if (!c.output && !from_stdin) snprintf(raw_path, sizeof raw_path, "%s.raw", c.input);

@@ -133,7 +133,7 @@ awk 'NR > 3 && $4 < 0 { n++ } END { exit n > 0 }' h.T.raw && ok || bad "-H trans
 
 # Models the kernels do not run yet are refused clearly (exit 1), not simulated wrongly.
 printf 'Medium\nLayer z=0 OrenNayarDiffuseBrdf\nMedium\n' > on.lsqt
-expect 1 "not simulated by this version yet" -- "$BIN" on.lsqt
+expect 1 "on.lsqt:2: error: OrenNayarDiffuseBrdf is parsed but not simulated" -- "$BIN" on.lsqt
 
 # A kernel that fails to compile: exit 1 with the compiler's build log.
 mkdir -p broken && cp -r "$EX/../kernels" "$EX/../include" broken/
