@@ -176,7 +176,7 @@ int main(int argc, char **argv)
     if (c.verbose) fprintf(stderr, "device: %s [%s]\n", cx.dev.name, cx.dev.platform_name);
 
     signal(SIGINT, on_sigint);
-    lsqt_sim_opts so = {isatty(STDERR_FILENO) && !c.quiet, c.time_limit, 0, &g_stop};
+    lsqt_sim_opts so = {isatty(STDERR_FILENO) && !c.quiet, c.time_limit, 0, &g_stop, NULL};
     lsqt_sim_stats stats;
     rc = lsqt_simulate(&cx, &a, &st, c.paths, &so, &stats, err, sizeof err);
     if (rc) {

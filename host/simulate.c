@@ -151,6 +151,10 @@ int lsqt_simulate(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint
     }
     char opt[1024];
     if (build_options(cx, a, st, opt, sizeof opt, err, errcap)) return 1;
+    if (o->extra_options && strlen(opt) + strlen(o->extra_options) + 2 < sizeof opt) {
+        strcat(opt, " ");
+        strcat(opt, o->extra_options);
+    }
     char *log = NULL;
     cl_program prog = lsqt_program_build(cx, opt, &log, err, errcap);
     if (!prog) {

@@ -19,6 +19,7 @@ typedef struct lsqt_sim_opts {
     double time_limit;            /* seconds, 0 = none */
     size_t local_size;            /* work-group size, 0 = automatic */
     volatile sig_atomic_t *stop;  /* set asynchronously (Ctrl-C): stop after this launch */
+    const char *extra_options;    /* appended to the kernel build options (tests, tuning) */
 } lsqt_sim_opts;
 
 typedef struct lsqt_sim_stats {
