@@ -56,16 +56,27 @@ inline void nee_add4(const walk_ctx *c, int k, real4 f, real4 z, real tau_up, re
     vstore4(sum, 0, c->nee + k);
 }
 
+/* A contribution below 2^-31 rounds to 0 in fixed point. Weights are at most 1 and
+ * values at most 2^20 (to_fixed clamps), so light that must cross more than this optical
+ * thickness (exp(-40) < 2^-51) cannot change a tally: skipping it is exact, and saves
+ * the work at the deep vertices of optically thick media. */
+#define LSQT_NEE_TAU_MAX R(40.0)
+
+inline int nee_visible(real tau_up, real tau_down, int up, int down)
+{
+    return (up && tau_up < LSQT_NEE_TAU_MAX) || (down && tau_down < LSQT_NEE_TAU_MAX);
+}
+
 /* Next-event estimates from a vertex on layer li reached along d with weight w: towards
  * upward directions if it is the topmost non-null layer, downward if the bottommost. */
 inline void nee_layer(const walk_ctx *c, int li, real3 d, real w)
 {
     const int up = li == c->scene->top_nonnull, down = li == c->scene->bottom_nonnull;
-    if (!up && !down) return;
     __global const lsqt_dev_layer *l = &c->layers[li];
     __global const lsqt_dev_medium *above = &c->media[li], *below = &c->media[li + 1];
     real tau_up = above->tau_above + above->mut * above->thickness;
     real tau_down = below->tau_below + below->mut * below->thickness;
+    if (!nee_visible(tau_up, tau_down, up, down)) return;
     for (int k = 0; k < LSQT_NWI_PAD; k += 4) {
         dir4 wi = wi_dir4(c, k);
         nee_add4(c, k, w * bsdf_eval4(l, -d, wi), wi.z, tau_up, tau_down, up, down);
@@ -80,21 +91,23 @@ inline void nee_medium(const walk_ctx *c, int mi, real h, real3 d, real w)
     const int up = top < 0 || mi <= top, down = bottom < 0 || mi > bottom;
     real tau_up = m->tau_above + m->mut * (m->thickness - h);
     real tau_down = m->tau_below + m->mut * h;
+    if (!nee_visible(tau_up, tau_down, up, down)) return;
     for (int k = 0; k < LSQT_NWI_PAD; k += 4) {
         dir4 wi = wi_dir4(c, k);
         nee_add4(c, k, w * phase_eval4(m, -d, wi), wi.z, tau_up, tau_down, up, down);
     }
 }
 
-/* Equal-solid-angle bin of an exit direction: |cos theta| x phi folded to [0, pi]. */
-inline int hist_bin(real3 d)
+/* Equal-solid-angle bin of an exit direction: |cos theta| x phi folded to [0, pi]. The
+ * hemisphere is the side the path left by (d.z may round to 0); the clamps keep even a
+ * NaN direction inside the table. */
+inline int hist_bin(real3 d, int up)
 {
-    int hemi = d.z > R(0.0) ? 0 : 1;
     real mu = fabs(d.z);
     real phi = atan2(fabs(d.y), d.x); /* [0, pi] */
-    int bm = min((int)(mu * LSQT_HIST_NMU), LSQT_HIST_NMU - 1);
-    int bp = min((int)(phi * (LSQT_HIST_NPHI / LSQT_PI)), LSQT_HIST_NPHI - 1);
-    return (hemi * LSQT_HIST_NMU + bm) * LSQT_HIST_NPHI + bp;
+    int bm = clamp((int)(mu * LSQT_HIST_NMU), 0, LSQT_HIST_NMU - 1);
+    int bp = clamp((int)(phi * (LSQT_HIST_NPHI / LSQT_PI)), 0, LSQT_HIST_NPHI - 1);
+    return ((up ? 0 : 1) * LSQT_HIST_NMU + bm) * LSQT_HIST_NPHI + bp;
 }
 
 /* Russian roulette; returns 0 when the path ends. */
@@ -135,11 +148,14 @@ inline void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulong *hi
                 medium = layer;
                 h = R(0.0);
             }
-            if ((medium == 0 && d.z > R(0.0)) || (medium == n && d.z < R(0.0))) {
-                int up = d.z > R(0.0);
+            /* Medium 0 is entered only going up and medium n only going down ("down" is
+             * d.z < 0 everywhere, so even a direction that rounds to horizontal, or a NaN,
+             * moves consistently and leaves). */
+            if (medium == 0 || medium == n) {
+                int up = medium == 0;
                 acc_add(c, LSQT_NWI + (up ? LSQT_T_R : LSQT_T_T), w);
                 if (scattered) {
-                    global_add64(&hist[hist_bin(d)], to_fixed(w, c->flags), c->flags);
+                    global_add64(&hist[hist_bin(d, up)], to_fixed(w, c->flags), c->flags);
                 } else {
                     acc_add(c, LSQT_NWI + LSQT_T_DELTA_T, w);
                 }

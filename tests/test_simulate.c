@@ -138,6 +138,51 @@ static void test_reproducible(void)
     lsqt_state_free(&other);
 }
 
+/* SPEC section 9 extremes: grazing theta_o, thin and thick layers far from z = 0,
+ * g near +-1, optically thick media: never NaN, Inf or negative, never more than 1, and
+ * no path cut by the safety cap. (Optical thickness 1e4 is in tools/validate: its
+ * lossless paths need ~1e4 events on average, too slow for a unit test.) */
+static void test_extremes(void)
+{
+    const char *cases[] = {
+        "Medium\nLayer z=1000001 NullBsdf\nMedium mus=1e-4 HenyeyGreensteinPhase g=0.999\nLayer z=1 NullBsdf\n"
+        "Medium\nLayer z=0 LambertianBsdf fR=1\nMedium\n",
+        "Medium\nLayer z=1000000.000001 NullBsdf\nMedium mus=1e4 mua=1e3 HenyeyGreensteinPhase g=-0.999\n"
+        "Layer z=1e6 LambertianBsdf fR=0 fT=1\nMedium\n",
+        "Medium\nLayer z=1 NullBsdf\nMedium mus=1e3 HenyeyGreensteinPhase g=0.9\nLayer z=0 NullBsdf\nMedium\n",
+        "Medium\nLayer z=0 LambertianBsdf fR=0 fT=0\nMedium\n",
+    };
+    const double deg[] = {0, 89.9};
+    for (int i = 0; i < 4; i++) {
+        lsqt_state st;
+        lsqt_slice_est *e = fixture_run(cases[i], 2, deg, 16, 1000, 5, &st);
+        for (int s = 0; s < 2; s++) {
+            double sig = sqrt(e[s].R.err * e[s].R.err + e[s].T.err * e[s].T.err);
+            CHECK(isfinite(e[s].R.mean) && isfinite(e[s].T.mean) && e[s].R.mean >= 0 && e[s].T.mean >= 0,
+                  "case %d slice %d: R %g T %g", i, s, e[s].R.mean, e[s].T.mean);
+            CHECK(e[s].R.mean + e[s].T.mean <= 1.0 + 3 * sig + 1e-7, "case %d slice %d: R + T = %.9g", i, s,
+                  e[s].R.mean + e[s].T.mean);
+            CHECK(e[s].n_nonfinite == 0, "case %d: %d non-finite estimates", i, e[s].n_nonfinite);
+            CHECK(e[s].cut == 0, "case %d: %llu paths cut", i, (unsigned long long)e[s].cut);
+            for (int k = 0; k < st.n_wi; k++)
+                CHECK(e[s].f[k].mean >= 0 && isfinite(e[s].f[k].mean), "case %d: f[%d] = %g", i, k, e[s].f[k].mean);
+        }
+        CHECK(st.flags == 0, "case %d: flags %u", i, st.flags);
+        if (i == 3) CHECK(e[0].R.mean == 0 && e[0].T.mean == 0, "black layer: R %g T %g", e[0].R.mean, e[0].T.mean);
+        lsqt_estimates_free(e, 2);
+        lsqt_state_free(&st);
+    }
+    /* mus -> 0 is a clear medium: everything passes as the forward delta. */
+    lsqt_state st;
+    lsqt_slice_est *e = fixture_run("Medium\nLayer z=1 NullBsdf\nMedium mus=1e-9 HenyeyGreensteinPhase\n"
+                                    "Layer z=0 NullBsdf\nMedium\n",
+                                    2, deg, 16, 1000, 6, &st);
+    CHECK(fabs(e[0].delta_T.mean - 1.0) < 1e-6 && fabs(e[1].T.mean - 1.0) < 1e-6, "delta_T %.9g, T %.9g",
+          e[0].delta_T.mean, e[1].T.mean);
+    lsqt_estimates_free(e, 2);
+    lsqt_state_free(&st);
+}
+
 int main(void)
 {
     fixture_open();
@@ -145,6 +190,7 @@ int main(void)
     test_slab();
     test_adding();
     test_reproducible();
+    test_extremes();
     lsqt_context_release(&fixture_cx);
     return check_finish("test_simulate");
 }

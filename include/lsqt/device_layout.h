@@ -45,8 +45,10 @@ typedef uint32_t lsqt_u32;
 #define LSQT_FLAG_OVERFLOW 1u   /* a fixed-point tally would have wrapped */
 #define LSQT_FLAG_NONFINITE 2u  /* a non-finite contribution was dropped */
 
-/* Safety cap against infinite loops (not a bias control: Russian roulette ends paths). */
-#define LSQT_MAX_EVENTS 1000000
+/* Safety cap against infinite loops, not a bias control (Russian roulette ends paths):
+ * in a lossless slab of optical thickness tau a path takes ~tau^2 events to cross, so
+ * the cap sits far above that for tau = 1e4. Paths it stops are counted and reported. */
+#define LSQT_MAX_EVENTS 1000000000
 
 typedef struct lsqt_dev_medium {
     float eta, mua, mus, mut; /* mut = mua + mus */
