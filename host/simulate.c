@@ -270,7 +270,6 @@ int lsqt_simulate(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint
     stats->seconds = lsqt_now() - t0;
     st->paths = pos;
     st->flags |= flags0;
-    st->seconds += stats->seconds;
     rc = 0;
 done:
     buffers_release(&b);

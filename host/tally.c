@@ -43,8 +43,7 @@ lsqt_slice_est *lsqt_estimates(const lsqt_state *st)
         e->delta_T = lsqt_batch_estimate(sc + LSQT_T_DELTA_T, LSQT_T_COUNT, st->paths, LSQT_FIX_SCALE);
         for (int b = 0; b < LSQT_BATCHES; b++) e->cut += sc[(size_t)b * LSQT_T_COUNT + LSQT_T_CUT];
         e->f = calloc(nw, sizeof *e->f);
-        e->hist_f = calloc(LSQT_HIST_BINS, sizeof *e->hist_f);
-        if (!e->f || !e->hist_f) {
+        if (!e->f) {
             lsqt_estimates_free(out, st->n_slices);
             return NULL;
         }
@@ -61,12 +60,6 @@ lsqt_slice_est *lsqt_estimates(const lsqt_state *st)
                 if (rel > e->max_rel_err) e->max_rel_err = rel;
             }
         }
-        /* Bin averages: weight in bin / (paths * solid angle of the bin). */
-        const double bin_sr = (1.0 / LSQT_HIST_NMU) * (LSQT_PI / LSQT_HIST_NPHI) * 2.0; /* y folded */
-        for (int i = 0; i < LSQT_HIST_BINS; i++)
-            e->hist_f[i] = st->paths ? (double)st->hist[(size_t)s * LSQT_HIST_BINS + i] / LSQT_FIX_SCALE /
-                                           ((double)st->paths * bin_sr)
-                                     : 0.0;
     }
     return out;
 }
@@ -76,7 +69,6 @@ void lsqt_estimates_free(lsqt_slice_est *e, int n_slices)
     if (!e) return;
     for (int s = 0; s < n_slices; s++) {
         free(e[s].f);
-        free(e[s].hist_f);
     }
     free(e);
 }

@@ -16,16 +16,50 @@ static double nee_albedo(const lsqt_state *st, const lsqt_slice_est *e, int s, i
     return sum;
 }
 
+/* Sum of fixed-point tallies over batches (or bins) of one slice. */
+static uint64_t sum_u64(const uint64_t *p, size_t n, size_t stride)
+{
+    uint64_t t = 0;
+    for (size_t i = 0; i < n; i++) t += p[i * stride];
+    return t;
+}
+
+/* Every scattered exit lands in one histogram bin with the same fixed-point weight as
+ * its R or T tally: the integer sums must agree exactly. */
+static void check_hist_total(const lsqt_state *st, int s)
+{
+    const uint64_t *sc = st->scalars + (size_t)s * LSQT_BATCHES * LSQT_T_COUNT;
+    uint64_t exits = sum_u64(sc + LSQT_T_R, LSQT_BATCHES, LSQT_T_COUNT) +
+                     sum_u64(sc + LSQT_T_T, LSQT_BATCHES, LSQT_T_COUNT) -
+                     sum_u64(sc + LSQT_T_DELTA_T, LSQT_BATCHES, LSQT_T_COUNT);
+    uint64_t binned = sum_u64(st->hist + (size_t)s * LSQT_HIST_BINS, LSQT_HIST_BINS, 1);
+    CHECK(exits == binned, "slice %d: histogram holds %llu, exits %llu", s, (unsigned long long)binned,
+          (unsigned long long)exits);
+}
+
 static void test_lambertian(void)
 {
     const double deg[] = {0, 30, 60, 89.9};
     lsqt_state st;
-    lsqt_slice_est *e = fixture_run("Medium\nLayer z=0 LambertianBsdf fR=0.6 fT=0\nMedium\n", 4, deg, 80, 2000, 1, &st);
+    lsqt_slice_est *e = fixture_run("Medium\nLayer z=0 LambertianBsdf fR=0.6 fT=0\nMedium\n", 4, deg, 80, 20000, 1, &st);
     CHECK(!st.transmits, "a Lambertian with fT=0 must not transmit");
     for (int s = 0; s < 4; s++) {
         for (int k = 0; k < st.n_wi; k++) CHECK_REL(e[s].f[k].mean, 0.6 / PI, 1e-5);
         CHECK(fabs(e[s].R.mean - 0.6) <= 3 * e[s].R.err + 1e-7, /* fR is a float on the device */ "slice %d: R = %.9g +- %.3g", s, e[s].R.mean, e[s].R.err);
         CHECK(e[s].T.mean == 0.0, "slice %d: T = %g", s, e[s].T.mean);
+        check_hist_total(&st, s);
+        /* Exits are cosine distributed: row i of the |cos| grid holds (2i+1)/N^2 of them.
+         * Every path weighs exactly fR, so weight / fR counts paths (chi-square). */
+        const uint64_t *h = st.hist + (size_t)s * LSQT_HIST_BINS;
+        const double unit = 0.6 * LSQT_FIX_SCALE, n = (double)st.paths;
+        double chi2 = 0.0;
+        for (int i = 0; i < LSQT_HIST_NMU; i++) {
+            double got = (double)sum_u64(h + (size_t)i * LSQT_HIST_NPHI, LSQT_HIST_NPHI, 1) / unit;
+            double want = n * (2.0 * i + 1.0) / (LSQT_HIST_NMU * LSQT_HIST_NMU);
+            chi2 += (got - want) * (got - want) / want;
+        }
+        /* 31 dof: P(chi2 > 70) < 1e-4 */
+        CHECK(chi2 < 70.0, "slice %d: exit cosines chi2 = %.1f over %d rows", s, chi2, LSQT_HIST_NMU);
     }
     CHECK(st.flags == 0, "flags %u", st.flags);
     lsqt_estimates_free(e, 4);
@@ -51,6 +85,7 @@ static void test_slab(void)
         /* The unscattered part is exactly exp(-tau / cos). */
         double dt = exp(-1.0 / cos(deg[s] * PI / 180));
         CHECK_Z(e[s].delta_T.mean, dt, e[s].delta_T.err, 4.0);
+        check_hist_total(&st, s);
         /* Point estimates and the analog exits agree: integral of f cos over the upper
          * hemisphere is R (quadrature on 32 upper points: allow 5%). */
         double rn = nee_albedo(&st, e, s, 1);

@@ -27,7 +27,6 @@ typedef struct lsqt_state {
     uint64_t *scalars;      /* [slice][LSQT_BATCHES][LSQT_T_COUNT] */
     uint64_t *hist;         /* [slice][LSQT_HIST_BINS] fixed point */
     uint32_t flags;         /* LSQT_FLAG_* raised so far */
-    double seconds;         /* device time spent so far */
 } lsqt_state;
 
 /* Allocates zeroed tallies for the given shape; copies canonical. Returns 0 or -1. */

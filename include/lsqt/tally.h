@@ -21,7 +21,6 @@ typedef struct lsqt_slice_est {
     lsqt_est *f;         /* n_wi: non-cosine-weighted BSDF (1/sr) at each wi */
     double max_rel_err;  /* largest err/mean over the finite, positive f */
     int n_nonfinite;     /* f values that are not finite (never written to RAW) */
-    double *hist_f;      /* LSQT_HIST_BINS bin-average cosine-weighted BSDF per bin */
 } lsqt_slice_est;
 
 /* Estimates of every slice (array of st->n_slices, free with lsqt_estimates_free). */
