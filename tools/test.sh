@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
-# Sets up and builds with warnings as errors; runs the parser and LSS tests under
-# ASan+UBSan and fuzzes the LSQT parser and LSS reader briefly (LSQT_FUZZ_SECONDS, default
-# 60); then runs every test with ctest on the default OpenCL device (PoCL's CPU device on
-# a machine without a GPU). Extra arguments go to ctest.
+# Sets up and builds with warnings as errors; runs the whole suite under ASan+UBSan and
+# fuzzes the LSQT parser and LSS reader briefly (LSQT_FUZZ_SECONDS, default 60); then runs
+# every test with ctest on the default OpenCL device (PoCL's CPU device on a machine
+# without a GPU) in the release build. Extra arguments go to that ctest.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash tools/setup.sh

@@ -1,15 +1,16 @@
 #!/usr/bin/env bash
-# Builds the sanitizer and fuzzing variants with clang, runs the OpenCL-free unit tests
-# (parser, LSS) under ASan+UBSan, then fuzzes the LSQT parser and the LSS reader for
-# SECONDS in all (default 60), starting from the seed corpora.
+# Builds everything with clang under AddressSanitizer + UBSan (and the libFuzzer targets),
+# runs the whole ctest suite in that build (OpenCL tests included, on the default
+# device), then fuzzes the LSQT parser and the LSS reader for SECONDS in all (default
+# 60), starting from the seed corpora.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 BUDGET=${1:-60}
 CC=clang cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=Debug -DLSQT_FUZZ=ON -DLSQT_SANITIZE=ON \
   -DLSQT_WERROR=ON >/dev/null
-cmake --build build-fuzz -j "$(nproc)" --target fuzz_lsqt fuzz_lss test_lsqt test_lss
+cmake --build build-fuzz -j "$(nproc)"
 export UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1
-(cd build-fuzz/tests && ./test_lsqt >/dev/null && ./test_lss)
+(cd build-fuzz && ctest --output-on-failure -j 2)
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 mkdir -p "$work/lsqt" "$work/lss"
