@@ -12,25 +12,6 @@
  * local sums far from 2^64). */
 #define LSQT_FIX_MAX_VALUE R(1048576.0)
 
-inline ulong to_fixed(real v, volatile __global uint *flags)
-{
-    if (!(v >= R(0.0)) || isinf(v)) { /* NaN, negative or Inf */
-        atomic_or(flags, LSQT_FLAG_NONFINITE);
-        return 0;
-    }
-    if (v > LSQT_FIX_MAX_VALUE) {
-        atomic_or(flags, LSQT_FLAG_OVERFLOW);
-        v = LSQT_FIX_MAX_VALUE;
-    }
-    /* v >= 0: truncating v * scale + 1/2 rounds to nearest (convert_ulong_rte is a slow
-     * library call on some devices). */
-#ifdef LSQT_DOUBLE
-    return (ulong)(v * LSQT_FIX_SCALE + 0.5);
-#else
-    return (ulong)(v * (float)LSQT_FIX_SCALE + 0.5f);
-#endif
-}
-
 /* Four values at once; non-finite or negative lanes raise a flag and count as 0. */
 inline ulong4 to_fixed4(real4 v, volatile __global uint *flags)
 {
@@ -50,6 +31,12 @@ inline ulong4 to_fixed4(real4 v, volatile __global uint *flags)
 #else
     return as_ulong4(convert_long4(v * (float)LSQT_FIX_SCALE + 0.5f));
 #endif
+}
+
+/* One value: lane x of the same conversion. */
+inline ulong to_fixed(real v, volatile __global uint *flags)
+{
+    return to_fixed4((real4)(v), flags).x;
 }
 
 /* Adds v to a 64-bit word held as two 32-bit local words (lo, hi). */
