@@ -27,6 +27,20 @@ int lsqt_parse_count(const char *s, double lo, double hi, uint64_t *out)
     return 0;
 }
 
+int lsqt_parse_u64(const char *s, uint64_t *out)
+{
+    if (!s || !*s) return -1;
+    uint64_t v = 0;
+    for (const char *p = s; *p; p++) {
+        if (*p < '0' || *p > '9') return -1;
+        unsigned d = (unsigned)(*p - '0');
+        if (v > (UINT64_MAX - d) / 10) return -1; /* above 2^64 - 1 */
+        v = v * 10 + d;
+    }
+    *out = v;
+    return 0;
+}
+
 void lsqt_cli_help(FILE *f)
 {
     fputs("usage: lsqt-cl [OPTIONS] FILE|-\n"
@@ -41,10 +55,11 @@ void lsqt_cli_help(FILE *f)
           "  -rx, --rrss-oversampling N  RRSS oversampling, 2-8 (default 4; RRSS not yet used)\n"
           "  -rp, --rrss-path-frac F     RRSS path fraction, (0,1] (default 0.8; not yet used)\n"
           "  -R, --restart               ignore an existing LSS and start over\n"
-          "  -s, --seed N                random seed, a non-negative integer (default 0)\n"
+          "  -s, --seed N                random seed, an integer in 0 to 2^64-1 (default 0)\n"
           "  -t, --thread-count N        threads of a CPU (PoCL) device (default: all)\n"
-          "  -o, --output PATH           RAW file (default FILE.raw, Layered.raw for stdin)\n"
+          "  -o, --output PATH           RAW file (default FILE.raw, Layered.raw for stdin; - is stdout)\n"
           "  -H, --only-hemispherical    write OUT.R.raw and OUT.T.raw (transmission mirrored up)\n"
+          "                              instead, named by replacing OUT's final .raw\n"
           "  -d, --device D              OpenCL device: index, name substring, cpu or gpu\n"
           "      --list-devices          list OpenCL devices and exit\n"
           "      --double                compute in double precision (device needs fp64)\n"
@@ -52,9 +67,12 @@ void lsqt_cli_help(FILE *f)
           "      --lss PATH              LSS file (default FILE.lss; none for stdin)\n"
           "      --json PATH             machine-readable summary\n"
           "  -q, --quiet                 print errors only\n"
-          "  -v, --verbose               print more (kernel build options, notes)\n"
+          "  -v, --verbose               print more (device, kernel build options, launches)\n"
           "  -h, --help                  this text\n"
           "Flags take their value as the next argument or after '=' (-wi 300, -wi=300).\n"
+          "Outputs: a regular file is replaced atomically (through a symlink, its target is);\n"
+          "a device, FIFO or socket is written in place (-o /dev/null discards). An LSS path\n"
+          "that is not a regular file is never read: use -R to write a fresh state into it.\n"
           "Exit status: 0 success, 1 failure, 2 bad input or flags, 3 no usable OpenCL device.\n",
           f);
 }
@@ -109,7 +127,7 @@ static int apply(const struct flag *fl, const char *name, const char *v, lsqt_cl
     case F_WI: if (lsqt_parse_count(v, 16, 1024, &n)) expect = "an integer in 16-1024"; else c->wi_count = (int)n; c->sampling_given = 1; break;
     case F_RX: if (lsqt_parse_count(v, 2, 8, &n)) expect = "an integer in 2-8"; else c->rx = (int)n; c->sampling_given = 1; break;
     case F_RP: if (lsqt_parse_double(v, &d) || !(d > 0 && d <= 1)) expect = "a number in (0, 1]"; else c->rp = d; c->sampling_given = 1; break;
-    case F_SEED: if (lsqt_parse_count(v, 0, 1.8e19, &c->seed)) expect = "a non-negative integer"; c->seed_given = c->sampling_given = 1; break;
+    case F_SEED: if (lsqt_parse_u64(v, &c->seed)) expect = "an integer in 0-18446744073709551615 (decimal digits)"; c->seed_given = c->sampling_given = 1; break;
     case F_THREADS: if (lsqt_parse_count(v, 1, 4096, &n)) expect = "an integer in 1-4096"; else c->threads = (int)n; break;
     case F_TIME: if (lsqt_parse_double(v, &d) || !(d > 0)) expect = "a positive number of seconds"; else c->time_limit = d; break;
     case F_OUTPUT: if (!*v) expect = "a file name"; c->output = v; break;

@@ -170,6 +170,25 @@ int lsqt_context_create(lsqt_context *cx, const char *spec, char *err, size_t er
     return 0;
 }
 
+int lsqt_device_check(const lsqt_device_info *d, int use_double, char *err, size_t errcap)
+{
+    if (use_double && !d->has_fp64) {
+        snprintf(err, errcap,
+                 "no usable OpenCL device for this request: double precision needs cl_khr_fp64, which "
+                 "%s [%s] lacks (drop --double, or pick another device with -d; see --list-devices)",
+                 d->name, d->platform_name);
+        return 3;
+    }
+    if (!d->has_int64_atomics && !d->little_endian) {
+        snprintf(err, errcap,
+                 "no usable OpenCL device for this request: %s [%s] has neither 64-bit atomics nor "
+                 "little-endian words, which the tallies need",
+                 d->name, d->platform_name);
+        return 3;
+    }
+    return 0;
+}
+
 void lsqt_context_release(lsqt_context *cx)
 {
     if (cx->queue) clReleaseCommandQueue(cx->queue);

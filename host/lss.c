@@ -94,11 +94,11 @@ int lsqt_lss_write(const char *path, const lsqt_state *st, char *err, size_t err
         snprintf(err, errcap, "out of memory writing '%s'", path);
         return -1;
     }
-    lsqt_atomic_file af;
-    int rc = lsqt_atomic_open(&af, path, err, errcap);
+    lsqt_out af;
+    int rc = lsqt_out_open(&af, path, err, errcap);
     if (rc == 0) {
         fwrite(w.p, 1, w.n, af.f);
-        rc = lsqt_atomic_commit(&af, err, errcap);
+        rc = lsqt_out_commit(&af, err, errcap);
     }
     free(w.p);
     return rc;

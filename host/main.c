@@ -49,35 +49,115 @@ static int new_state(lsqt_state *st, const lsqt_cli *c, const lsqt_assembly *a, 
     return 0;
 }
 
-static int write_outputs(const lsqt_cli *c, const char *lss_path, const char *raw_path,
-                         const lsqt_state *st, const lsqt_slice_est *est, const lsqt_run_info *ri)
+/* The files a run writes. RAW is one file, or with -H two (R and T; no T when nothing is
+ * transmitted). */
+enum { OUT_RAW, OUT_RAW_T, OUT_LSS, OUT_JSON, OUT_COUNT };
+typedef struct outputs {
+    const char *path[OUT_COUNT]; /* NULL: not written */
+    char raw[LSQT_PATH_CAP + 16], raw_t[LSQT_PATH_CAP + 16], lss[LSQT_PATH_CAP + 16];
+} outputs;
+
+/* -H names: OUT with its final ".raw" replaced by ".R.raw" / ".T.raw" (appended when OUT
+ * does not end in ".raw"). */
+static void hemi_name(const char *out, const char *part, char *dst, size_t cap)
 {
-    char err[1024];
-    if (lss_path && lsqt_lss_write(lss_path, st, err, sizeof err)) return fail(1, "%s%s", err, "");
-    int skipped = 0, sk = 0;
+    size_t n = strlen(out);
+    if (n >= 4 && strcmp(out + n - 4, ".raw") == 0) n -= 4;
+    snprintf(dst, cap, "%.*s.%s.raw", (int)n, out, part);
+}
+
+/* Decides every output name and checks them against each other and the input. Returns 0
+ * or 2 (err filled). */
+static int plan_outputs(const lsqt_cli *c, int from_stdin, int transmits, outputs *o, char *err, size_t errcap)
+{
+    memset(o, 0, sizeof *o);
+    char raw[LSQT_PATH_CAP + 16];
+    if (c->output) snprintf(raw, sizeof raw, "%s", c->output);
+    else if (from_stdin) snprintf(raw, sizeof raw, "Layered.raw");
+    else snprintf(raw, sizeof raw, "%s.raw", c->input);
     if (c->only_hemispherical) {
-        char path[4300];
-        snprintf(path, sizeof path, "%s.R.raw", raw_path);
-        if (lsqt_raw_write(path, st, est, LSQT_RAW_REFLECT, &sk, err, sizeof err)) return fail(1, "%s%s", err, "");
-        snprintf(path, sizeof path, "%s.T.raw", raw_path);
-        if (lsqt_raw_write(path, st, est, LSQT_RAW_TRANSMIT, &skipped, err, sizeof err))
-            return fail(1, "%s%s", err, "");
-    } else if (lsqt_raw_write(raw_path, st, est, LSQT_RAW_ALL, &skipped, err, sizeof err)) {
-        return fail(1, "%s%s", err, "");
+        const char *what = NULL;
+        int t = strcmp(raw, "-") == 0 ? LSQT_PATH_SPECIAL : lsqt_path_type(raw, &what);
+        if (t == LSQT_PATH_SPECIAL || t == LSQT_PATH_DIRECTORY) {
+            snprintf(err, errcap, "-H writes two files named from the RAW name, and '%s' is %s%s", raw,
+                     what ? "a " : "stdout", what ? what : "");
+            return 2;
+        }
+        hemi_name(raw, "R", o->raw, sizeof o->raw);
+        o->path[OUT_RAW] = o->raw;
+        if (transmits) {
+            hemi_name(raw, "T", o->raw_t, sizeof o->raw_t);
+            o->path[OUT_RAW_T] = o->raw_t;
+        }
+    } else {
+        memcpy(o->raw, raw, sizeof raw);
+        o->path[OUT_RAW] = o->raw;
     }
-    if (c->json && lsqt_report_json(c->json, st, est, ri, err, sizeof err)) return fail(1, "%s%s", err, "");
-    if (!c->quiet) {
-        printf("wrote %s%s%s%s", raw_path, c->only_hemispherical ? ".{R,T}.raw" : "", lss_path ? ", " : "",
-               lss_path ? lss_path : "");
-        printf("%s%s\n", c->json ? ", " : "", c->json ? c->json : "");
+    if (c->lss) o->path[OUT_LSS] = c->lss;
+    else if (!from_stdin) {
+        snprintf(o->lss, sizeof o->lss, "%s.lss", c->input);
+        o->path[OUT_LSS] = o->lss;
+    }
+    o->path[OUT_JSON] = c->json;
+    /* No output may land on another one, on stdout twice, or on the input. */
+    for (int i = 0; i < OUT_COUNT; i++) {
+        if (!o->path[i]) continue;
+        for (int j = i + 1; j < OUT_COUNT; j++)
+            if (o->path[j] && lsqt_same_file(o->path[i], o->path[j])) {
+                snprintf(err, errcap, "two outputs would be written to '%s'%s", o->path[i],
+                         strcmp(o->path[i], "-") == 0 ? " (stdout)" : "");
+                return 2;
+            }
+        if (!from_stdin && strcmp(o->path[i], "-") != 0 && lsqt_same_file(o->path[i], c->input)) {
+            snprintf(err, errcap, "the output '%s' would replace the input", o->path[i]);
+            return 2;
+        }
     }
     return 0;
 }
 
+/* Writes every output; a failed one does not stop the others. Returns 0 or 1. */
+static int write_outputs(const outputs *o, const lsqt_cli *c, const lsqt_state *st, const lsqt_slice_est *est,
+                         const lsqt_run_info *ri, FILE *info)
+{
+    char err[LSQT_PATH_CAP + 512];
+    int failed = 0, wrote = 0, skipped = 0, sk = 0;
+    char done[OUT_COUNT * (LSQT_PATH_CAP + 2)];
+    done[0] = '\0';
+    for (int i = 0; i < OUT_COUNT; i++) {
+        const char *p = o->path[i];
+        if (!p) continue;
+        int rc = i == OUT_LSS    ? lsqt_lss_write(p, st, err, sizeof err)
+                 : i == OUT_JSON ? lsqt_report_json(p, st, est, ri, err, sizeof err)
+                 : i == OUT_RAW_T
+                     ? lsqt_raw_write(p, st, est, LSQT_RAW_TRANSMIT, &sk, err, sizeof err)
+                     : lsqt_raw_write(p, st, est, c->only_hemispherical ? LSQT_RAW_REFLECT : LSQT_RAW_ALL,
+                                      &skipped, err, sizeof err);
+        if (rc) {
+            fail(1, "%s%s", err, "");
+            failed++;
+            continue;
+        }
+        if (strcmp(p, "-") == 0) continue;
+        size_t n = strlen(done);
+        snprintf(done + n, sizeof done - n, "%s%s", wrote++ ? ", " : "", p);
+    }
+    if (!c->quiet && wrote) fprintf(info, "wrote %s\n", done);
+    if (!c->quiet && c->only_hemispherical && !o->path[OUT_RAW_T])
+        fprintf(info, "note: the stack transmits nothing, so -H wrote no T file\n");
+    if (failed) fprintf(stderr, "lsqt-cl: %d output%s could not be written (see above)\n", failed, failed > 1 ? "s" : "");
+    return failed ? 1 : 0;
+}
+
 int main(int argc, char **argv)
 {
+    /* Signals first: a Ctrl-C during device setup or the kernel build must not be lost,
+     * and a closed pipe is a write error to report (other outputs still get written). */
+    signal(SIGINT, on_sigint);
+    signal(SIGPIPE, SIG_IGN);
+
     lsqt_cli c;
-    char err[2048];
+    char err[LSQT_PATH_CAP + 1024];
     if (argc < 2) {
         lsqt_cli_help(stdout);
         return 0;
@@ -126,24 +206,32 @@ int main(int argc, char **argv)
         return 1;
     }
 
-    /* Output names. */
-    char raw_path[4200], lss_buf[4200];
-    snprintf(raw_path, sizeof raw_path, "%s", c.output ? c.output : from_stdin ? "Layered.raw" : "");
-    if (!c.output && !from_stdin) snprintf(raw_path, sizeof raw_path, "%s.raw", c.input);
-    const char *lss_path = c.lss;
-    if (!lss_path && !from_stdin) {
-        snprintf(lss_buf, sizeof lss_buf, "%s.lss", c.input);
-        lss_path = lss_buf;
+    outputs out;
+    int rc = plan_outputs(&c, from_stdin, lsqt_assembly_transmits(&a), &out, err, sizeof err);
+    if (rc) {
+        lsqt_assembly_free(&a);
+        return fail(rc, "%s%s", err, "");
     }
+    const char *lss_path = out.path[OUT_LSS];
+    /* With an output on stdout, everything else we print goes to stderr. */
+    int to_stdout = 0;
+    for (int i = 0; i < OUT_COUNT; i++) to_stdout |= out.path[i] && strcmp(out.path[i], "-") == 0;
+    FILE *info = to_stdout ? stderr : stdout;
 
-    /* State: continue the LSS when there is one, else start fresh. */
+    /* State: continue the LSS when there is one, else start fresh. Only a regular file is
+     * ever read as an LSS: a FIFO would block and a device holds no state. */
     size_t clen = lsqt_assembly_canonical(&a, NULL, 0);
     char *canonical = malloc(clen + 1);
     if (!canonical) return fail(1, "out of memory%s%s", "", "");
     lsqt_assembly_canonical(&a, canonical, clen + 1);
     lsqt_state st;
-    int rc = 0;
-    if (lss_path && !c.restart && lsqt_file_exists(lss_path)) {
+    const char *what = NULL;
+    int lss_type = lss_path && !c.restart && strcmp(lss_path, "-") != 0 ? lsqt_path_type(lss_path, &what)
+                                                                        : LSQT_PATH_MISSING;
+    if (lss_type == LSQT_PATH_SPECIAL) {
+        rc = fail(2, "cannot continue from '%s': it is a %s, not an LSS file (add -R to write a fresh state into it)",
+                  lss_path, what);
+    } else if (lss_type == LSQT_PATH_REGULAR) {
         if (lsqt_lss_read(lss_path, &st, err, sizeof err)) {
             rc = fail(2, "%s (use -R to start over and replace it)%s", err, "");
         } else if (st.hash != lsqt_assembly_hash(&a) || strcmp(st.canonical, canonical) != 0) {
@@ -166,17 +254,27 @@ int main(int argc, char **argv)
         return rc;
     }
 
+    /* Every output location is checked before any work, so a long run never ends in an
+     * unwritable path. */
+    for (int i = 0; i < OUT_COUNT && !rc; i++)
+        if (out.path[i] && lsqt_out_check(out.path[i], err, sizeof err)) rc = fail(1, "%s (nothing simulated)", err, "");
+
     lsqt_context cx;
-    rc = lsqt_context_create(&cx, c.device, err, sizeof err);
+    memset(&cx, 0, sizeof cx);
+    if (!rc) {
+        rc = lsqt_context_create(&cx, c.device, err, sizeof err);
+        if (!rc) rc = lsqt_device_check(&cx.dev, st.use_double, err, sizeof err);
+        if (rc) fail(rc, "%s%s", err, "");
+    }
     if (rc) {
+        lsqt_context_release(&cx);
         lsqt_state_free(&st);
         lsqt_assembly_free(&a);
-        return fail(rc, "%s%s", err, "");
+        return rc;
     }
     if (c.verbose) fprintf(stderr, "device: %s [%s]\n", cx.dev.name, cx.dev.platform_name);
 
-    signal(SIGINT, on_sigint);
-    lsqt_sim_opts so = {isatty(STDERR_FILENO) && !c.quiet, c.time_limit, 0, &g_stop, NULL};
+    lsqt_sim_opts so = {isatty(STDERR_FILENO) && !c.quiet, c.time_limit, 0, &g_stop, NULL, c.verbose};
     lsqt_sim_stats stats;
     rc = lsqt_simulate(&cx, &a, &st, c.paths, &so, &stats, err, sizeof err);
     if (rc) {
@@ -189,11 +287,11 @@ int main(int argc, char **argv)
                             stats.seconds > 0 ? (double)stats.paths_added * st.n_slices / stats.seconds : 0.0,
                             (unsigned long long)stats.paths_added};
         if (!est) rc = fail(1, "out of memory%s%s", "", "");
-        else rc = write_outputs(&c, lss_path, raw_path, &st, est, &ri);
-        if (!rc && !c.quiet) lsqt_report_summary(stdout, &st, est, &ri);
+        else rc = write_outputs(&out, &c, &st, est, &ri, info);
+        if (est && !c.quiet) lsqt_report_summary(info, &st, est, &ri);
         lsqt_estimates_free(est, st.n_slices);
-        if (!rc && stats.interrupted && g_stop) {
-            fprintf(stderr, "lsqt-cl: interrupted: wrote the paths done so far\n");
+        if (stats.interrupted && g_stop) {
+            fprintf(stderr, "lsqt-cl: interrupted: %s the paths done so far\n", rc ? "tried to write" : "wrote");
             rc = 1;
         }
     }

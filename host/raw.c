@@ -8,9 +8,9 @@
 int lsqt_raw_write(const char *path, const lsqt_state *st, const lsqt_slice_est *est, int mode,
                    int *skipped, char *err, size_t errcap)
 {
-    lsqt_atomic_file af;
+    lsqt_out af;
     *skipped = 0;
-    if (lsqt_atomic_open(&af, path, err, errcap)) return -1;
+    if (lsqt_out_open(&af, path, err, errcap)) return -1;
     FILE *f = af.f;
     int spherical = mode == LSQT_RAW_ALL && st->transmits;
     fprintf(f, "RAWB%c10A Layered-SQT\n1 0.5\n%d", spherical ? 'S' : 'H', st->n_slices);
@@ -32,5 +32,5 @@ int lsqt_raw_write(const char *path, const lsqt_state *st, const lsqt_slice_est 
             fprintf(f, "%d %.9g %.9g %.9g %.9g\n", s, x, -y, z, v);
         }
     }
-    return lsqt_atomic_commit(&af, err, errcap);
+    return lsqt_out_commit(&af, err, errcap);
 }

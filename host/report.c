@@ -42,8 +42,8 @@ static void json_num(FILE *f, double v)
 int lsqt_report_json(const char *path, const lsqt_state *st, const lsqt_slice_est *est,
                      const lsqt_run_info *ri, char *err, size_t errcap)
 {
-    lsqt_atomic_file af;
-    if (lsqt_atomic_open(&af, path, err, errcap)) return -1;
+    lsqt_out af;
+    if (lsqt_out_open(&af, path, err, errcap)) return -1;
     FILE *f = af.f;
     fprintf(f, "{\"device\": \"");
     for (const char *p = ri->device; *p; p++) {
@@ -75,5 +75,5 @@ int lsqt_report_json(const char *path, const lsqt_state *st, const lsqt_slice_es
         fprintf(f, ", \"cut_paths\": %llu}", (unsigned long long)e->cut);
     }
     fprintf(f, "\n ]}\n");
-    return lsqt_atomic_commit(&af, err, errcap);
+    return lsqt_out_commit(&af, err, errcap);
 }

@@ -109,20 +109,9 @@ static int build_options(lsqt_context *cx, const lsqt_assembly *a, const lsqt_st
         return 1;
     }
     n += (size_t)snprintf(opt + n, cap - n, " -cl-std=CL1.2 -DLSQT_NWI=%d", st->n_wi);
-    if (st->use_double) {
-        if (!cx->dev.has_fp64) {
-            snprintf(err, errcap, "--double: %s has no fp64 support (cl_khr_fp64)", cx->dev.name);
-            return 1;
-        }
-        n += (size_t)snprintf(opt + n, cap - n, " -DLSQT_DOUBLE=1");
-    }
-    if (!cx->dev.has_int64_atomics) {
-        if (!cx->dev.little_endian) {
-            snprintf(err, errcap, "%s has neither 64-bit atomics nor little-endian words", cx->dev.name);
-            return 1;
-        }
-        snprintf(opt + n, cap - n, " -DLSQT_NO_INT64_ATOMICS=1");
-    }
+    if (lsqt_device_check(&cx->dev, st->use_double, err, errcap)) return 1;
+    if (st->use_double) n += (size_t)snprintf(opt + n, cap - n, " -DLSQT_DOUBLE=1");
+    if (!cx->dev.has_int64_atomics) snprintf(opt + n, cap - n, " -DLSQT_NO_INT64_ATOMICS=1");
     return 0;
 }
 
@@ -155,6 +144,7 @@ int lsqt_simulate(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint
         strcat(opt, " ");
         strcat(opt, o->extra_options);
     }
+    if (o->verbose) fprintf(stderr, "kernel build options: %s\n", opt);
     char *log = NULL;
     cl_program prog = lsqt_program_build(cx, opt, &log, err, errcap);
     if (!prog) {
@@ -228,6 +218,10 @@ int lsqt_simulate(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint
     const uint64_t first = st->paths, target = st->paths + add_paths;
     uint64_t pos = first, chunks_per_launch = 8;
     const double t0 = lsqt_now();
+    int launches = 0;
+    if (o->verbose)
+        fprintf(stderr, "simulating %llu paths per slice x %d slices (work-group size %zu)\n",
+                (unsigned long long)add_paths, st->n_slices, ls);
     while (pos < target && e == CL_SUCCESS) {
         cl_ulong chunk0 = pos / LSQT_CHUNK;
         cl_ulong end = (chunk0 + chunks_per_launch) * LSQT_CHUNK;
@@ -243,6 +237,7 @@ int lsqt_simulate(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint
         if (e != CL_SUCCESS) break;
         double dt = lsqt_now() - t;
         pos = end;
+        launches++;
         double grow = dt > 0 ? 0.3 / dt : 4.0;
         grow = grow > 4.0 ? 4.0 : grow < 0.5 ? 0.5 : grow;
         chunks_per_launch = (uint64_t)((double)chunks_per_launch * grow);
@@ -254,6 +249,7 @@ int lsqt_simulate(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint
         }
     }
     if (o->progress) fprintf(stderr, "\n");
+    if (o->verbose) fprintf(stderr, "%d launches in %.3g s\n", launches, lsqt_now() - t0);
     if (e != CL_SUCCESS) {
         snprintf(err, errcap, "kernel launch failed: %s (%d)", lsqt_cl_error_name(e), (int)e);
         goto done;

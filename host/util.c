@@ -1,9 +1,15 @@
+/* realpath() is an XSI interface. */
+#define _XOPEN_SOURCE 700
+
 #include "lsqt/util.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/socket.h>
 #include <sys/stat.h>
+#include <sys/un.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -55,51 +61,247 @@ uint32_t lsqt_crc32(uint32_t crc, const void *data, size_t len)
     return ~crc;
 }
 
-int lsqt_atomic_open(lsqt_atomic_file *af, const char *path, char *err, size_t errcap)
+/* ---- Output files: one set of rules for every file lsqt-cl and its companions write ----
+ * "-" is stdout. A new path or an existing regular file is replaced atomically (a
+ * temporary beside it, fsync, rename), so a crash or a full disk leaves the old file
+ * whole. A symlink keeps the link: the file it points to is replaced that way, with the
+ * temporary in that file's folder. A character device, FIFO or socket is written in
+ * place and never renamed over (-o /dev/null throws the output away; a FIFO feeds its
+ * reader). A directory or a block device is refused. */
+
+static const char *kind_name(mode_t m)
 {
-    memset(af, 0, sizeof *af);
-    if (strlen(path) >= sizeof af->path) {
-        snprintf(err, errcap, "path too long: '%.64s...'", path);
+    if (S_ISREG(m)) return "regular file";
+    if (S_ISDIR(m)) return "directory";
+    if (S_ISCHR(m)) return "character device";
+    if (S_ISBLK(m)) return "block device";
+    if (S_ISFIFO(m)) return "FIFO";
+    if (S_ISSOCK(m)) return "socket";
+    return "special file";
+}
+
+/* PATH with its symlinks followed link by link; a dangling link names the file to make. */
+static int resolve_links(const char *path, char *out, size_t cap, char *err, size_t errcap)
+{
+    char cur[LSQT_PATH_CAP], link[LSQT_PATH_CAP], next[LSQT_PATH_CAP];
+    snprintf(cur, sizeof cur, "%s", path);
+    for (int hops = 0; hops < 40; hops++) {
+        struct stat sb;
+        if (lstat(cur, &sb) != 0 || !S_ISLNK(sb.st_mode)) {
+            if ((size_t)snprintf(out, cap, "%s", cur) >= cap) break;
+            return 0;
+        }
+        ssize_t n = readlink(cur, link, sizeof link - 1);
+        if (n < 0) {
+            snprintf(err, errcap, "cannot write '%s': cannot read the link '%s': %s", path, cur, strerror(errno));
+            return -1;
+        }
+        link[n] = '\0';
+        const char *slash = strrchr(cur, '/');
+        size_t w = link[0] == '/' || !slash
+                       ? (size_t)snprintf(next, sizeof next, "%s", link)
+                       : (size_t)snprintf(next, sizeof next, "%.*s/%s", (int)(slash - cur), cur, link);
+        if (w >= sizeof next) break;
+        memcpy(cur, next, w + 1);
+        if (hops == 39) {
+            snprintf(err, errcap, "cannot write '%s': too many levels of symbolic links", path);
+            return -1;
+        }
+    }
+    snprintf(err, errcap, "cannot write '%.200s...': path too long", path);
+    return -1;
+}
+
+/* "cannot write 'PATH'" plus the link's target when PATH is a link, then the reason. */
+static void out_error(const lsqt_out *o, const char *reason, char *err, size_t errcap)
+{
+    if (strcmp(o->path, o->target) != 0 && o->target[0])
+        snprintf(err, errcap, "cannot write '%s' (a link to '%s'): %s", o->path, o->target, reason);
+    else
+        snprintf(err, errcap, "cannot write '%s': %s", o->path, reason);
+}
+
+/* Decides how PATH is written; *old is its stat when it exists (exists = 1). */
+static int out_plan(lsqt_out *o, const char *path, struct stat *old, int *exists, char *err, size_t errcap)
+{
+    memset(o, 0, sizeof *o);
+    *exists = 0;
+    if (!*path) {
+        snprintf(err, errcap, "an output file name is empty");
         return -1;
     }
-    strcpy(af->path, path);
-    snprintf(af->tmp, sizeof af->tmp, "%s.tmp.%ld", path, (long)getpid());
-    af->f = fopen(af->tmp, "wb");
-    if (!af->f) {
-        snprintf(err, errcap, "cannot write '%s': %s", af->tmp, strerror(errno));
+    if (strlen(path) >= sizeof o->path) {
+        snprintf(err, errcap, "cannot write '%.200s...': path too long", path);
+        return -1;
+    }
+    strcpy(o->path, path);
+    if (strcmp(path, "-") == 0) {
+        o->how = LSQT_OUT_STDOUT;
+        strcpy(o->target, "-");
+        return 0;
+    }
+    if (resolve_links(path, o->target, sizeof o->target, err, errcap)) return -1;
+    o->how = LSQT_OUT_REPLACE;
+    if (stat(o->target, old) != 0) {
+        if (errno == ENOENT) return 0;
+        out_error(o, strerror(errno), err, errcap);
+        return -1;
+    }
+    *exists = 1;
+    if (S_ISREG(old->st_mode)) return 0;
+    if (S_ISCHR(old->st_mode) || S_ISFIFO(old->st_mode) || S_ISSOCK(old->st_mode)) {
+        o->how = LSQT_OUT_IN_PLACE;
+        return 0;
+    }
+    char why[128];
+    snprintf(why, sizeof why, "it is a %s%s", kind_name(old->st_mode),
+             S_ISBLK(old->st_mode) ? " (lsqt-cl never writes over one)" : "");
+    out_error(o, why, err, errcap);
+    return -1;
+}
+
+/* Creates the temporary beside o->target (mode as the old file's, else 0666 & ~umask). */
+static int make_temp(lsqt_out *o, const struct stat *old, int exists, char *err, size_t errcap)
+{
+    static unsigned serial;
+    for (int tries = 0; tries < 1000; tries++) {
+        if ((size_t)snprintf(o->tmp, sizeof o->tmp, "%s.tmp.%ld.%u", o->target, (long)getpid(), serial++) >=
+            sizeof o->tmp) {
+            out_error(o, "path too long", err, errcap);
+            return -1;
+        }
+        int fd = open(o->tmp, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+        if (fd >= 0) {
+            if (exists) (void)fchmod(fd, old->st_mode & 07777);
+            return fd;
+        }
+        if (errno != EEXIST) {
+            char why[512];
+            snprintf(why, sizeof why, "cannot create a file beside it: %s", strerror(errno));
+            o->tmp[0] = '\0';
+            out_error(o, why, err, errcap);
+            return -1;
+        }
+    }
+    o->tmp[0] = '\0';
+    out_error(o, "cannot find a free temporary name beside it", err, errcap);
+    return -1;
+}
+
+/* A connected stream to the Unix socket at o->target. */
+static int open_socket(lsqt_out *o, char *err, size_t errcap)
+{
+    struct sockaddr_un sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sun_family = AF_UNIX;
+    if (strlen(o->target) >= sizeof sa.sun_path) {
+        out_error(o, "socket path too long", err, errcap);
+        return -1;
+    }
+    strcpy(sa.sun_path, o->target);
+    int fd = socket(AF_UNIX, SOCK_STREAM, 0);
+    if (fd >= 0 && connect(fd, (struct sockaddr *)&sa, sizeof sa) == 0) return fd;
+    char why[512];
+    snprintf(why, sizeof why, "cannot connect to the socket: %s", strerror(errno));
+    if (fd >= 0) close(fd);
+    out_error(o, why, err, errcap);
+    return -1;
+}
+
+int lsqt_out_check(const char *path, char *err, size_t errcap)
+{
+    lsqt_out o;
+    struct stat old;
+    int exists = 0;
+    if (out_plan(&o, path, &old, &exists, err, errcap)) return -1;
+    if (o.how == LSQT_OUT_STDOUT) return 0;
+    if (o.how == LSQT_OUT_IN_PLACE) {
+        if (access(o.target, W_OK) == 0) return 0;
+        out_error(&o, strerror(errno), err, errcap);
+        return -1;
+    }
+    /* Creating the temporary is the only honest test (permissions, read-only mounts). */
+    int fd = make_temp(&o, &old, exists, err, errcap);
+    if (fd < 0) return -1;
+    close(fd);
+    unlink(o.tmp);
+    return 0;
+}
+
+int lsqt_out_open(lsqt_out *o, const char *path, char *err, size_t errcap)
+{
+    struct stat old;
+    int exists = 0;
+    if (out_plan(o, path, &old, &exists, err, errcap)) return -1;
+    if (o->how == LSQT_OUT_STDOUT) {
+        o->f = stdout;
+        return 0;
+    }
+    int fd;
+    if (o->how == LSQT_OUT_REPLACE) fd = make_temp(o, &old, exists, err, errcap);
+    else if (S_ISSOCK(old.st_mode)) fd = open_socket(o, err, errcap);
+    else {
+        fd = open(o->target, O_WRONLY | O_NOCTTY | O_CLOEXEC); /* a FIFO waits for its reader */
+        if (fd < 0) out_error(o, strerror(errno), err, errcap);
+    }
+    if (fd < 0) return -1;
+    o->f = fdopen(fd, "wb");
+    if (!o->f) {
+        out_error(o, strerror(errno), err, errcap);
+        close(fd);
+        if (o->how == LSQT_OUT_REPLACE) unlink(o->tmp);
         return -1;
     }
     return 0;
 }
 
-int lsqt_atomic_commit(lsqt_atomic_file *af, char *err, size_t errcap)
+int lsqt_out_commit(lsqt_out *o, char *err, size_t errcap)
 {
-    int bad = ferror(af->f) || fflush(af->f) != 0 || fsync(fileno(af->f)) != 0;
-    int saved = errno;
-    if (fclose(af->f) != 0 && !bad) {
+    errno = 0;
+    int bad = fflush(o->f) != 0 || ferror(o->f);
+    if (!bad && o->how == LSQT_OUT_REPLACE && fsync(fileno(o->f)) != 0) bad = 1;
+    int saved = errno ? errno : EIO;
+    if (o->how == LSQT_OUT_STDOUT) {
+        o->f = NULL;
+        if (bad) snprintf(err, errcap, "cannot write to stdout: %s", strerror(saved));
+        return bad ? -1 : 0;
+    }
+    if (fclose(o->f) != 0 && !bad) {
         bad = 1;
         saved = errno;
     }
-    af->f = NULL;
+    o->f = NULL;
     if (bad) {
-        remove(af->tmp);
-        snprintf(err, errcap, "cannot write '%s': %s", af->path, strerror(saved));
+        if (o->how == LSQT_OUT_REPLACE) unlink(o->tmp);
+        out_error(o, strerror(saved), err, errcap);
         return -1;
     }
-    if (rename(af->tmp, af->path) != 0) {
+    if (o->how == LSQT_OUT_IN_PLACE) return 0;
+    if (rename(o->tmp, o->target) != 0) {
         saved = errno;
-        remove(af->tmp);
-        snprintf(err, errcap, "cannot replace '%s': %s", af->path, strerror(saved));
+        unlink(o->tmp);
+        char why[512];
+        snprintf(why, sizeof why, "cannot rename the temporary over it: %s", strerror(saved));
+        out_error(o, why, err, errcap);
         return -1;
+    }
+    /* Make the rename itself durable (best effort: not every file system allows it). */
+    char dir[LSQT_PATH_CAP];
+    const char *slash = strrchr(o->target, '/');
+    snprintf(dir, sizeof dir, "%.*s", slash ? (int)(slash - o->target) + 1 : 1, slash ? o->target : ".");
+    int dfd = open(dir, O_RDONLY | O_CLOEXEC);
+    if (dfd >= 0) {
+        (void)fsync(dfd);
+        close(dfd);
     }
     return 0;
 }
 
-void lsqt_atomic_abort(lsqt_atomic_file *af)
+void lsqt_out_abort(lsqt_out *o)
 {
-    if (af->f) fclose(af->f);
-    af->f = NULL;
-    if (af->tmp[0]) remove(af->tmp);
+    if (o->f && o->how != LSQT_OUT_STDOUT) fclose(o->f);
+    if (o->f && o->how == LSQT_OUT_REPLACE && o->tmp[0]) unlink(o->tmp);
+    o->f = NULL;
 }
 
 double lsqt_now(void)
@@ -109,8 +311,38 @@ double lsqt_now(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-int lsqt_file_exists(const char *path)
+int lsqt_path_type(const char *path, const char **what)
 {
     struct stat sb;
-    return stat(path, &sb) == 0;
+    *what = "nothing";
+    if (stat(path, &sb) != 0) return LSQT_PATH_MISSING;
+    *what = kind_name(sb.st_mode);
+    return S_ISREG(sb.st_mode) ? LSQT_PATH_REGULAR : S_ISDIR(sb.st_mode) ? LSQT_PATH_DIRECTORY : LSQT_PATH_SPECIAL;
+}
+
+/* The folder of PATH made absolute (realpath) with PATH's last name after it. */
+static int absolute_name(const char *path, char *out, size_t cap)
+{
+    char dir[LSQT_PATH_CAP], *real;
+    const char *slash = strrchr(path, '/');
+    snprintf(dir, sizeof dir, "%.*s", slash ? (int)(slash - path) + 1 : 1, slash ? path : ".");
+    if (!(real = realpath(dir, NULL))) return -1;
+    int w = snprintf(out, cap, "%s/%s", real, slash ? slash + 1 : path);
+    free(real);
+    return w > 0 && (size_t)w < cap ? 0 : -1;
+}
+
+int lsqt_same_file(const char *a, const char *b)
+{
+    if (strcmp(a, "-") == 0 || strcmp(b, "-") == 0) return strcmp(a, b) == 0;
+    char ta[LSQT_PATH_CAP], tb[LSQT_PATH_CAP], e[64];
+    if (resolve_links(a, ta, sizeof ta, e, sizeof e) || resolve_links(b, tb, sizeof tb, e, sizeof e))
+        return strcmp(a, b) == 0;
+    struct stat sa, sb;
+    int ha = stat(ta, &sa) == 0, hb = stat(tb, &sb) == 0;
+    if (ha && hb) return S_ISREG(sa.st_mode) && sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+    if (ha || hb) return 0;
+    char fa[2 * LSQT_PATH_CAP], fb[2 * LSQT_PATH_CAP];
+    if (absolute_name(ta, fa, sizeof fa) || absolute_name(tb, fb, sizeof fb)) return strcmp(ta, tb) == 0;
+    return strcmp(fa, fb) == 0;
 }

@@ -50,6 +50,8 @@ done <<'TABLE'
 -rx 9|bad value '9' for -rx
 -rp 0|bad value '0' for -rp
 -s -1|bad value '-1' for -s
+-s 18446744073709551616|bad value '18446744073709551616' for -s: expected an integer in 0-18446744073709551615
+-s 1e3|bad value '1e3' for -s
 -t 0|bad value '0' for -t
 --time-limit -3|bad value '-3' for --time-limit
 --wo-angles=10,95|bad value '10,95' for --wo-angles
@@ -124,12 +126,34 @@ for key in device double seed seconds paths_per_second slices theta_o R_err T_er
   grep -q "\"$key\"" s.json && ok || bad "JSON lacks $key"
 done
 
-# Transmission: RAWBS, with lower-hemisphere directions; -H splits into two files.
+# Transmission: RAWBS, with lower-hemisphere directions; -H splits into two files named
+# by replacing the final .raw (appending when there is none), T mirrored up.
 printf 'Medium\nLayer z=0 LambertianBsdf fR=0.3 fT=0.5\nMedium\n' > t.lsqt
 "$BIN" -q -p 1000 -wo 4 -wi 16 t.lsqt && [ "$(head -c 5 t.lsqt.raw)" = "RAWBS" ] && ok || bad "transmitting RAW is not RAWBS"
 awk 'NR > 3 && $4 < 0 { n++ } END { exit !(n > 0) }' t.lsqt.raw && ok || bad "no transmission lines"
 "$BIN" -q -R -H -p 1000 -wo 4 -wi 16 -o h t.lsqt && [ -f h.R.raw ] && [ -f h.T.raw ] && ok || bad "-H files"
 awk 'NR > 3 && $4 < 0 { n++ } END { exit n > 0 }' h.T.raw && ok || bad "-H transmission not mirrored up"
+[ "$(head -c 5 h.T.raw)" = "RAWBH" ] && [ "$(awk 'NR > 3' h.T.raw | wc -l)" = $((4 * 8 * 2)) ] && ok \
+  || bad "-H T file: $(head -1 h.T.raw), $(awk 'NR > 3' h.T.raw | wc -l) lines"
+"$BIN" -q -R -H -p 1000 -wo 4 -wi 16 -o out.raw t.lsqt && [ -f out.R.raw ] && [ -f out.T.raw ] && [ ! -e out.raw.R.raw ] \
+  && ok || bad "-H -o out.raw: $(ls out*)"
+"$BIN" -q -R -H -p 1000 -wo 4 -wi 16 t.lsqt && [ -f t.lsqt.R.raw ] && [ -f t.lsqt.T.raw ] && ok || bad "-H default names"
+# Nothing transmitted: no T file, and the run says so.
+expect 0 "the stack transmits nothing, so -H wrote no T file" -- "$BIN" -R -H -p 1000 -wo 4 -wi 16 -o r.raw L.lsqt
+[ -f r.R.raw ] && [ ! -e r.T.raw ] && ok || bad "-H on a reflector: $(ls r.*)"
+
+# Seeds are exact 64-bit integers: 2^53 and 2^53 + 1 are different runs, 2^64 - 1 is fine,
+# and the JSON prints the seed as given.
+"$BIN" -q -R -p 600 -wo 4 -wi 16 -s 9007199254740992 --lss s0.lss -o s0.raw "$EX/slab.lsqt" && \
+"$BIN" -q -R -p 600 -wo 4 -wi 16 -s 9007199254740993 --lss s1.lss -o s1.raw --json s1.json "$EX/slab.lsqt" && ok || bad "seed runs"
+cmp -s s0.raw s1.raw && bad "seeds 2^53 and 2^53+1 give the same RAW" || ok
+grep -q '"seed": 9007199254740993,' s1.json && ok || bad "JSON seed: $(grep -o '"seed": [0-9]*' s1.json)"
+"$BIN" -q -R -p 300 -wo 4 -wi 16 -s 18446744073709551615 --json smax.json -o smax.raw --lss smax.lss L.lsqt \
+  && grep -q '"seed": 18446744073709551615,' smax.json && ok || bad "seed 2^64-1"
+
+# -v prints the device and the kernel build options, as the help says.
+expect 0 "kernel build options: " -- "$BIN" -v -R -p 300 -wo 4 -wi 16 -o v.raw --lss v.lss L.lsqt
+expect 0 "-cl-std=CL1.2" -- "$BIN" -v -R -p 300 -wo 4 -wi 16 -o v.raw --lss v.lss L.lsqt
 
 # Models the kernels do not run yet are refused clearly (exit 1), not simulated wrongly.
 printf 'Medium\nLayer z=0 OrenNayarDiffuseBrdf\nMedium\n' > on.lsqt
@@ -151,13 +175,17 @@ expect 0 "" -- "$BIN" --list-devices
   && ok || bad "-t 1 gives another RAW"
 
 # Ctrl-C: the current launch finishes, LSS and RAW are written, exit status is non-zero.
-"$BIN" -q -R -p 1e12 -wo 4 -wi 16 --lss int.lss -o int.raw "$EX/slab.lsqt" &
+# The signal is sent as soon as the run reports its kernel build, before any launch: an
+# early Ctrl-C must not be lost (the handler comes first) nor kill the run.
+# (timeout --foreground passes the SIGINT on once, and kills a run that ignores it.)
+timeout --foreground -k 5 120 "$BIN" -v -R -p 1e12 -wo 4 -wi 16 --lss int.lss -o int.raw "$EX/slab.lsqt" 2>int.err >/dev/null &
 pid=$!
-sleep 2
+for _ in $(seq 600); do grep -q "kernel build options" int.err 2>/dev/null && break; sleep 0.1; done
 kill -INT $pid
 wait $pid
 rc=$?
-[ "$rc" = 1 ] && [ -s int.lss ] && [ -s int.raw ] && ok || bad "Ctrl-C: exit $rc, files: $(ls int.* 2>&1)"
+[ "$rc" = 1 ] && [ -s int.lss ] && [ -s int.raw ] && grep -q "interrupted" int.err && ok \
+  || bad "Ctrl-C: exit $rc, files: $(ls int.* 2>&1), stderr: $(cat int.err)"
 expect 0 "continuing int.lss" -- "$BIN" -p 1000 --lss int.lss -o int2.raw "$EX/slab.lsqt"
 
 echo "test_cli: $pass passed, $fail failed"

@@ -46,6 +46,8 @@ void lsqt_cli_help(FILE *f);
 int lsqt_parse_double(const char *s, double *out);
 /* A count: a finite number with an integral value in [lo, hi] ("1e7" is fine). */
 int lsqt_parse_count(const char *s, double lo, double hi, uint64_t *out);
+/* An exact unsigned 64-bit integer: decimal digits only, at most 2^64 - 1. */
+int lsqt_parse_u64(const char *s, uint64_t *out);
 
 #ifdef __cplusplus
 }

@@ -43,6 +43,10 @@ typedef struct lsqt_context {
 int lsqt_context_create(lsqt_context *cx, const char *spec, char *err, size_t errcap);
 void lsqt_context_release(lsqt_context *cx);
 
+/* Can device D run a simulation (in double precision when use_double)? Returns 0, or 3
+ * (exit status "no usable OpenCL device") with err naming the device and what it lacks. */
+int lsqt_device_check(const lsqt_device_info *d, int use_double, char *err, size_t errcap);
+
 /* Builds the kernel program (embedded sources, or the files under $LSQT_KERNEL_DIR for
  * development) with OPTIONS. On a compile failure the build log goes into *log (heap,
  * caller frees) and NULL is returned. */

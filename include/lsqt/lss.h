@@ -20,7 +20,7 @@ extern "C" {
 
 #define LSQT_LSS_VERSION 1u
 
-/* Writes atomically (temporary file + rename). Returns 0 or -1. */
+/* Written through lsqt_out (util.h: atomic for regular files). Returns 0 or -1. */
 int lsqt_lss_write(const char *path, const lsqt_state *st, char *err, size_t errcap);
 
 /* Reads and checks everything (sizes, layout constants, CRC). Returns 0, or -1 with err

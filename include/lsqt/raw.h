@@ -17,7 +17,7 @@ enum lsqt_raw_mode {
     LSQT_RAW_TRANSMIT = 2  /* lower hemisphere mirrored up (z -> -z), RAWBH */
 };
 
-/* Writes atomically. *skipped counts non-finite estimates left out. Returns 0 or -1. */
+/* Written through lsqt_out (util.h). *skipped counts non-finite estimates left out. Returns 0 or -1. */
 int lsqt_raw_write(const char *path, const lsqt_state *st, const lsqt_slice_est *est, int mode,
                    int *skipped, char *err, size_t errcap);
 

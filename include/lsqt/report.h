@@ -21,7 +21,7 @@ typedef struct lsqt_run_info {
 void lsqt_report_summary(FILE *f, const lsqt_state *st, const lsqt_slice_est *est,
                          const lsqt_run_info *ri);
 
-/* Returns 0 or -1 (err filled). Written atomically. */
+/* Returns 0 or -1 (err filled). Written through lsqt_out (util.h). */
 int lsqt_report_json(const char *path, const lsqt_state *st, const lsqt_slice_est *est,
                      const lsqt_run_info *ri, char *err, size_t errcap);
 

@@ -20,6 +20,7 @@ typedef struct lsqt_sim_opts {
     size_t local_size;            /* work-group size, 0 = automatic */
     volatile sig_atomic_t *stop;  /* set asynchronously (Ctrl-C): stop after this launch */
     const char *extra_options;    /* appended to the kernel build options (tests, tuning) */
+    int verbose;                  /* print the kernel build options and launches on stderr */
 } lsqt_sim_opts;
 
 typedef struct lsqt_sim_stats {

@@ -1,4 +1,4 @@
-/* Small host utilities: whole-file reading, CRC-32, atomic file replacement, clocks. */
+/* Small host utilities: whole-file reading, CRC-32, output files, clocks. */
 #ifndef LSQT_UTIL_H
 #define LSQT_UTIL_H
 
@@ -18,22 +18,47 @@ char *lsqt_read_file(const char *path, size_t *len, char *err, size_t errcap);
 
 uint32_t lsqt_crc32(uint32_t crc, const void *data, size_t len);
 
-/* Atomic replacement: write to PATH.tmp.PID, then fsync and rename over PATH, so a crash
- * or a full disk never leaves a half-written PATH. */
-typedef struct lsqt_atomic_file {
-    FILE *f;
-    char path[4096];
-    char tmp[4200];
-} lsqt_atomic_file;
+#define LSQT_PATH_CAP 4096
 
-int lsqt_atomic_open(lsqt_atomic_file *af, const char *path, char *err, size_t errcap);
-/* Closes and renames; on any earlier write error removes the temporary and fails. */
-int lsqt_atomic_commit(lsqt_atomic_file *af, char *err, size_t errcap);
-void lsqt_atomic_abort(lsqt_atomic_file *af);
+/* Every output file (RAW, LSS, JSON, and what later tools write) goes through these, so
+ * one set of rules holds for all of them:
+ * - "-" is stdout;
+ * - a new path or an existing regular file is replaced atomically (temporary file beside
+ *   it, fsync, rename): a crash or a full disk never leaves a half-written file;
+ * - a symlink keeps the link: the file it points to is replaced atomically, the
+ *   temporary in that file's folder;
+ * - an existing character device, FIFO or socket is written in place, never renamed over
+ *   (so -o /dev/null discards, and a FIFO feeds its reader);
+ * - a directory or a block device is refused.
+ * Errors name the file and the reason. */
+enum { LSQT_OUT_REPLACE = 1, LSQT_OUT_IN_PLACE, LSQT_OUT_STDOUT };
+
+typedef struct lsqt_out {
+    FILE *f;
+    int how;                   /* LSQT_OUT_* */
+    char path[LSQT_PATH_CAP];  /* as given (for messages) */
+    char target[LSQT_PATH_CAP]; /* the file written: symlinks followed */
+    char tmp[LSQT_PATH_CAP + 64]; /* LSQT_OUT_REPLACE: the temporary beside target */
+} lsqt_out;
+
+/* Can PATH be written? Checked before a long run, so no work is lost at the end: it
+ * creates and removes the temporary file, or checks write access to a device. */
+int lsqt_out_check(const char *path, char *err, size_t errcap);
+int lsqt_out_open(lsqt_out *o, const char *path, char *err, size_t errcap);
+/* Flushes and closes (renames into place when replacing); on any write error, including
+ * an earlier one, removes the temporary and fails with the reason (ENOSPC, EPIPE, ...). */
+int lsqt_out_commit(lsqt_out *o, char *err, size_t errcap);
+void lsqt_out_abort(lsqt_out *o);
 
 double lsqt_now(void); /* monotonic seconds */
 
-int lsqt_file_exists(const char *path);
+/* What is at PATH, symlinks followed: LSQT_PATH_*; *what names it ("FIFO", ...). */
+enum { LSQT_PATH_MISSING, LSQT_PATH_REGULAR, LSQT_PATH_DIRECTORY, LSQT_PATH_SPECIAL };
+int lsqt_path_type(const char *path, const char **what);
+
+/* Would writes to A and B land on the same regular file (or both on stdout, "-")? Devices
+ * and FIFOs may be shared (two outputs to /dev/null are fine). */
+int lsqt_same_file(const char *a, const char *b);
 
 #ifdef __cplusplus
 }

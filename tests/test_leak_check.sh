@@ -1,0 +1,22 @@
+#!/usr/bin/env bash
+# The LSan suppressions hide only the OpenCL implementation's leaks: leak_canary compiles
+# and runs a kernel (PoCL and LLVM leak, and must be suppressed), then leaks memory of its
+# own, which must still be reported, with its stack, and fail the process.
+# usage: test_leak_check.sh LEAK_CANARY (run with the suite's LSAN_OPTIONS/ASAN_OPTIONS)
+set -u
+out=$("$1" 2>&1)
+rc=$?
+fail=0
+bad() { fail=1; echo "FAIL: $*" >&2; }
+grep -q "leak_canary: compiled and ran a kernel" <<<"$out" || bad "the canary did not run its kernel"
+[ "$rc" != 0 ] || bad "exit 0: the canary's leaks were not reported"
+grep -q "Direct leak of 4242 byte(s)" <<<"$out" || bad "the 4242-byte leak is not reported"
+grep -A8 "Direct leak of 4242 byte(s)" <<<"$out" | grep -q "canary_leak" || bad "its stack does not name canary_leak"
+grep -q "lsqt_state_init" <<<"$out" || bad "the leaked state (lsqt_state_init) is not reported"
+# The kernel build leaked inside LLVM/PoCL, and those leaks were suppressed, not shown.
+grep -A6 "Suppressions used" <<<"$out" | grep -qE "libLLVM|libpocl" || bad "no OpenCL leak was suppressed (are the suppressions in use?)"
+# Each leak report runs from its "leak of" line to the next blank line.
+reports=$(awk '/leak of/ { on = 1 } on && /^$/ { on = 0 } on' <<<"$out")
+if grep -qE "libLLVM|libpocl|libOpenCL" <<<"$reports"; then bad "an OpenCL-implementation leak was reported"; fi
+if [ "$fail" != 0 ]; then echo "$out" | head -80; exit 1; fi
+echo "test_leak_check: the canary's 2 leaks reported, the OpenCL implementation's suppressed"

@@ -1,0 +1,254 @@
+/* Host utilities without OpenCL: exact seed parsing, the device check behind exit status 3,
+ * and the output-file rules of util.h on every kind of target. Everything is made inside
+ * a private temporary folder; device nodes are ones this test makes there with mknod
+ * (skipped when it may not), never the system's. */
+#define _DEFAULT_SOURCE /* mknod, makedev, mkdtemp, symlink */
+#define _XOPEN_SOURCE 700
+#include <errno.h>
+#include <fcntl.h>
+#include <signal.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <sys/sysmacros.h>
+#include <sys/un.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "check.h"
+#include "lsqt/cli.h"
+#include "lsqt/device.h"
+#include "lsqt/util.h"
+
+static char dir[256];
+
+static const char *at(const char *name)
+{
+    static char buf[8][512];
+    static int k;
+    k = (k + 1) % 8;
+    snprintf(buf[k], sizeof buf[k], "%s/%s", dir, name);
+    return buf[k];
+}
+
+static int write_text(const char *path, const char *text, char *err, size_t errcap)
+{
+    lsqt_out o;
+    if (lsqt_out_open(&o, path, err, errcap)) return -1;
+    fputs(text, o.f);
+    return lsqt_out_commit(&o, err, errcap);
+}
+
+static char *slurp(const char *path)
+{
+    size_t n = 0;
+    char err[256];
+    return lsqt_read_file(path, &n, err, sizeof err);
+}
+
+static int count_temporaries(void)
+{
+    char cmd[600];
+    snprintf(cmd, sizeof cmd, "ls -a '%s' '%s/other' 2>/dev/null | grep -c '\\.tmp\\.'", dir, dir);
+    FILE *p = popen(cmd, "r");
+    int n = -1;
+    if (p && fscanf(p, "%d", &n) != 1) n = -1;
+    if (p) pclose(p);
+    return n;
+}
+
+static void test_seeds(void)
+{
+    uint64_t v = 0;
+    CHECK(lsqt_parse_u64("0", &v) == 0 && v == 0, "0");
+    CHECK(lsqt_parse_u64("9007199254740993", &v) == 0 && v == 9007199254740993ULL, "2^53+1 read as %llu",
+          (unsigned long long)v);
+    CHECK(lsqt_parse_u64("18446744073709551615", &v) == 0 && v == UINT64_MAX, "2^64-1");
+    CHECK(lsqt_parse_u64("18446744073709551616", &v) != 0, "2^64 accepted");
+    CHECK(lsqt_parse_u64("99999999999999999999", &v) != 0, "1e20-1 accepted");
+    const char *bad[] = {"", "-1", "+1", "1e3", " 1", "1 ", "0x10", "1.0", "abc"};
+    for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) CHECK(lsqt_parse_u64(bad[i], &v) != 0, "'%s' accepted", bad[i]);
+}
+
+static void test_device_check(void)
+{
+    lsqt_device_info d;
+    memset(&d, 0, sizeof d);
+    snprintf(d.name, sizeof d.name, "Fake Device 9000");
+    snprintf(d.platform_name, sizeof d.platform_name, "Fake Platform");
+    d.little_endian = 1;
+    char err[512] = "";
+    CHECK(lsqt_device_check(&d, 0, err, sizeof err) == 0, "float on a plain device: %s", err);
+    CHECK(lsqt_device_check(&d, 1, err, sizeof err) == 3, "--double without fp64 is not exit status 3");
+    CHECK(strstr(err, "Fake Device 9000") && strstr(err, "cl_khr_fp64"), "message: %s", err);
+    d.has_fp64 = 1;
+    CHECK(lsqt_device_check(&d, 1, err, sizeof err) == 0, "double with fp64: %s", err);
+    d.little_endian = 0;
+    CHECK(lsqt_device_check(&d, 0, err, sizeof err) == 3, "big-endian without 64-bit atomics accepted");
+    d.has_int64_atomics = 1;
+    CHECK(lsqt_device_check(&d, 0, err, sizeof err) == 0, "big-endian with 64-bit atomics: %s", err);
+}
+
+static void test_regular_and_links(void)
+{
+    char err[8192];
+    struct stat sb;
+    /* New file, then replacement keeps the old file's mode. */
+    CHECK(write_text(at("a.txt"), "one\n", err, sizeof err) == 0, "%s", err);
+    chmod(at("a.txt"), 0640);
+    CHECK(write_text(at("a.txt"), "two\n", err, sizeof err) == 0, "%s", err);
+    char *s = slurp(at("a.txt"));
+    CHECK(s && strcmp(s, "two\n") == 0, "replaced content: %s", s ? s : "(none)");
+    free(s);
+    CHECK(stat(at("a.txt"), &sb) == 0 && (sb.st_mode & 0777) == 0640, "mode %o not kept", (unsigned)sb.st_mode & 0777);
+
+    /* An abort leaves the old file whole and no temporary. */
+    lsqt_out o;
+    CHECK(lsqt_out_open(&o, at("a.txt"), err, sizeof err) == 0, "%s", err);
+    fputs("half", o.f);
+    lsqt_out_abort(&o);
+    s = slurp(at("a.txt"));
+    CHECK(s && strcmp(s, "two\n") == 0, "abort changed the file: %s", s ? s : "(none)");
+    free(s);
+
+    /* A relative symlink into another folder, and a chain of two: the links stay, the
+     * file they point to is replaced. */
+    mkdir(at("other"), 0755);
+    CHECK(write_text(at("other/real.txt"), "old\n", err, sizeof err) == 0, "%s", err);
+    CHECK(symlink("other/real.txt", at("link1")) == 0 && symlink("link1", at("link2")) == 0, "symlink: %s",
+          strerror(errno));
+    CHECK(lsqt_out_check(at("link2"), err, sizeof err) == 0, "%s", err);
+    CHECK(write_text(at("link2"), "new\n", err, sizeof err) == 0, "%s", err);
+    CHECK(lstat(at("link1"), &sb) == 0 && S_ISLNK(sb.st_mode), "link1 is no longer a symlink");
+    CHECK(lstat(at("link2"), &sb) == 0 && S_ISLNK(sb.st_mode), "link2 is no longer a symlink");
+    s = slurp(at("other/real.txt"));
+    CHECK(s && strcmp(s, "new\n") == 0, "link target content: %s", s ? s : "(none)");
+    free(s);
+    /* A dangling link creates the file it names. */
+    CHECK(symlink("other/made.txt", at("dangling")) == 0, "symlink");
+    CHECK(write_text(at("dangling"), "made\n", err, sizeof err) == 0, "%s", err);
+    CHECK(lstat(at("dangling"), &sb) == 0 && S_ISLNK(sb.st_mode), "dangling link replaced");
+    CHECK(stat(at("other/made.txt"), &sb) == 0 && S_ISREG(sb.st_mode), "link target not created");
+    /* A link loop is an error, not a hang. */
+    CHECK(symlink("loopb", at("loopa")) == 0 && symlink("loopa", at("loopb")) == 0, "symlink");
+    CHECK(write_text(at("loopa"), "x", err, sizeof err) != 0 && strstr(err, "symbolic links"), "loop: %s", err);
+    CHECK(count_temporaries() == 0, "%d temporaries left behind", count_temporaries());
+
+    /* Refused: a directory, a missing folder; the message names the path. */
+    CHECK(lsqt_out_check(at("other"), err, sizeof err) != 0 && strstr(err, "is a directory") &&
+              strstr(err, at("other")),
+          "directory: %s", err);
+    CHECK(write_text(at("other"), "x", err, sizeof err) != 0, "wrote over a directory");
+    CHECK(lsqt_out_check(at("nodir/x.txt"), err, sizeof err) != 0 && strstr(err, "nodir/x.txt"), "missing folder: %s",
+          err);
+    CHECK(lsqt_path_type(at("other"), &(const char *){NULL}) == LSQT_PATH_DIRECTORY, "path type of a folder");
+    CHECK(lsqt_path_type(at("link2"), &(const char *){NULL}) == LSQT_PATH_REGULAR, "path type through a link");
+    CHECK(lsqt_path_type(at("none"), &(const char *){NULL}) == LSQT_PATH_MISSING, "path type of nothing");
+
+    /* Same-file detection: through links and spellings, but devices may be shared. */
+    CHECK(lsqt_same_file(at("link2"), at("other/real.txt")), "a link and its target");
+    CHECK(lsqt_same_file(at("new.raw"), at("other/../new.raw")), "two spellings of a new file");
+    CHECK(!lsqt_same_file(at("a.txt"), at("other/real.txt")), "different files");
+    CHECK(lsqt_same_file("-", "-") && !lsqt_same_file("-", at("a.txt")), "stdout");
+}
+
+static void test_fifo(void)
+{
+    char err[8192];
+    const char *fifo = at("fifo");
+    CHECK(mkfifo(fifo, 0600) == 0, "mkfifo: %s", strerror(errno));
+    CHECK(lsqt_out_check(fifo, err, sizeof err) == 0, "check blocks or fails on a FIFO: %s", err);
+    pid_t pid = fork();
+    if (pid == 0) { /* the reader: copies the FIFO into a file */
+        alarm(30);
+        FILE *in = fopen(fifo, "rb"), *out = fopen(at("from_fifo"), "wb");
+        int c;
+        while (in && out && (c = fgetc(in)) != EOF) fputc(c, out);
+        _exit(in && out && fclose(out) == 0 ? 0 : 1);
+    }
+    alarm(30);
+    CHECK(write_text(fifo, "through the fifo\n", err, sizeof err) == 0, "%s", err);
+    int status = 0;
+    waitpid(pid, &status, 0);
+    alarm(0);
+    CHECK(WIFEXITED(status) && WEXITSTATUS(status) == 0, "reader failed");
+    char *s = slurp(at("from_fifo"));
+    CHECK(s && strcmp(s, "through the fifo\n") == 0, "reader got: %s", s ? s : "(none)");
+    free(s);
+    struct stat sb;
+    CHECK(lstat(fifo, &sb) == 0 && S_ISFIFO(sb.st_mode), "the FIFO was replaced");
+    CHECK(lsqt_path_type(fifo, &(const char *){NULL}) == LSQT_PATH_SPECIAL, "path type of a FIFO");
+}
+
+static void test_socket(void)
+{
+    char err[8192];
+    const char *path = at("sock");
+    int srv = socket(AF_UNIX, SOCK_STREAM, 0);
+    struct sockaddr_un sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sun_family = AF_UNIX;
+    snprintf(sa.sun_path, sizeof sa.sun_path, "%s", path);
+    if (srv < 0 || bind(srv, (struct sockaddr *)&sa, sizeof sa) != 0 || listen(srv, 1) != 0) {
+        printf("skip: cannot make a Unix socket here: %s\n", strerror(errno));
+        if (srv >= 0) close(srv);
+        return;
+    }
+    CHECK(write_text(path, "over a socket\n", err, sizeof err) == 0, "%s", err);
+    int c = accept(srv, NULL, NULL);
+    char buf[64] = "";
+    ssize_t n = c >= 0 ? read(c, buf, sizeof buf - 1) : -1;
+    if (n > 0) buf[n] = '\0';
+    CHECK(strcmp(buf, "over a socket\n") == 0, "socket got: %s", buf);
+    struct stat sb;
+    CHECK(lstat(path, &sb) == 0 && S_ISSOCK(sb.st_mode), "the socket was replaced");
+    if (c >= 0) close(c);
+    close(srv);
+}
+
+/* Device nodes made here (null 1:3, full 1:7), and a block node of the experimental
+ * major 240, which nothing drives: refused before any open. */
+static void test_devices(void)
+{
+    char err[8192];
+    struct stat sb;
+    if (mknod(at("null"), S_IFCHR | 0666, makedev(1, 3)) != 0) {
+        printf("skip: cannot mknod here (%s): device-node checks left to test_outputs.sh\n", strerror(errno));
+        return;
+    }
+    CHECK(lsqt_out_check(at("null"), err, sizeof err) == 0, "%s", err);
+    CHECK(write_text(at("null"), "discarded\n", err, sizeof err) == 0, "null: %s", err);
+    CHECK(lstat(at("null"), &sb) == 0 && S_ISCHR(sb.st_mode), "the null device was replaced");
+    CHECK(mknod(at("full"), S_IFCHR | 0666, makedev(1, 7)) == 0, "mknod full: %s", strerror(errno));
+    CHECK(lsqt_out_check(at("full"), err, sizeof err) == 0, "%s", err);
+    CHECK(write_text(at("full"), "no room\n", err, sizeof err) != 0 && strstr(err, at("full")) &&
+              strstr(err, strerror(ENOSPC)),
+          "full device: '%s'", err);
+    CHECK(lstat(at("full"), &sb) == 0 && S_ISCHR(sb.st_mode), "the full device was replaced");
+    CHECK(mknod(at("blk"), S_IFBLK | 0600, makedev(240, 0)) == 0, "mknod blk: %s", strerror(errno));
+    CHECK(lsqt_out_check(at("blk"), err, sizeof err) != 0 && strstr(err, "block device"), "block: %s", err);
+    CHECK(write_text(at("blk"), "x", err, sizeof err) != 0, "wrote to a block device");
+    CHECK(lstat(at("blk"), &sb) == 0 && S_ISBLK(sb.st_mode), "the block node was replaced");
+    CHECK(count_temporaries() == 0, "%d temporaries left behind", count_temporaries());
+}
+
+int main(void)
+{
+    signal(SIGPIPE, SIG_IGN);
+    snprintf(dir, sizeof dir, "%s/lsqt_test_util.XXXXXX", getenv("TMPDIR") ? getenv("TMPDIR") : "/tmp");
+    if (!mkdtemp(dir)) {
+        perror("mkdtemp");
+        return 1;
+    }
+    test_seeds();
+    test_device_check();
+    test_regular_and_links();
+    test_fifo();
+    test_socket();
+    test_devices();
+    char cmd[400];
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+    if (system(cmd) != 0) fprintf(stderr, "could not remove %s\n", dir);
+    return check_finish("test_util");
+}
