@@ -1,5 +1,7 @@
 /* LSS round trip, and refusal of every kind of damage (no OpenCL needed). */
+#define _XOPEN_SOURCE 700 /* mkdtemp */
 #include <stdlib.h>
+#include <unistd.h>
 
 #include "check.h"
 #include "lsqt/lss.h"
@@ -23,7 +25,13 @@ int main(void)
     lsqt_state a, b;
     char err[512];
     fill(&a);
-    const char *path = "test_lss.tmp.lss";
+    /* A private temporary folder: tests write nowhere else. */
+    char dir[] = "/tmp/lsqt_test_lss.XXXXXX", path[64];
+    if (!mkdtemp(dir)) {
+        perror("mkdtemp");
+        return 1;
+    }
+    snprintf(path, sizeof path, "%s/state.lss", dir);
     CHECK(lsqt_lss_write(path, &a, err, sizeof err) == 0, "%s", err);
     CHECK(lsqt_lss_read(path, &b, err, sizeof err) == 0, "%s", err);
     CHECK(strcmp(a.canonical, b.canonical) == 0, "canonical text differs");
@@ -68,6 +76,7 @@ int main(void)
     free(f1);
     free(f2);
     remove(path);
+    rmdir(dir);
     lsqt_state_free(&a);
     return check_finish("test_lss");
 }
