@@ -3,27 +3,13 @@
 # written), outputs and their names, continuation, determinism, stdin, missing device.
 # usage: test_cli.sh LSQT_CL EXAMPLES_DIR
 set -u
+# shellcheck source=cli_lib.sh
+source "$(dirname "${BASH_SOURCE[0]}")/cli_lib.sh"
 BIN=$1
 EX=$2
 T=$(mktemp -d)
 trap 'rm -rf "$T"' EXIT
 cd "$T"
-pass=0
-fail=0
-ok() { pass=$((pass + 1)); }
-bad() { fail=$((fail + 1)); echo "FAIL: $*" >&2; }
-
-# expect STATUS SUBSTRING -- command...: exit status and a substring of stdout+stderr
-expect() {
-  local want=$1 text=$2
-  shift 3
-  local out rc
-  out=$("$@" 2>&1)
-  rc=$?
-  if [ "$rc" != "$want" ]; then bad "[$*] exit $rc, expected $want: $out"; return; fi
-  if [ -n "$text" ] && ! grep -qF -- "$text" <<<"$out"; then bad "[$*] output lacks '$text': $out"; return; fi
-  ok
-}
 
 cp "$EX/tutorial/Lambertian.lsqt" L.lsqt
 
@@ -188,5 +174,4 @@ rc=$?
   || bad "Ctrl-C: exit $rc, files: $(ls int.* 2>&1), stderr: $(cat int.err)"
 expect 0 "continuing int.lss" -- "$BIN" -p 1000 --lss int.lss -o int2.raw "$EX/slab.lsqt"
 
-echo "test_cli: $pass passed, $fail failed"
-[ "$fail" = 0 ]
+finish test_cli

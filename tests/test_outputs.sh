@@ -5,6 +5,8 @@
 # regular file. Device nodes are made here with mknod, never the system's.
 # usage: test_outputs.sh LSQT_CL EXAMPLES_DIR
 set -u
+# shellcheck source=cli_lib.sh
+source "$(dirname "${BASH_SOURCE[0]}")/cli_lib.sh"
 BIN=$1
 EX=$2
 T=$(mktemp -d)
@@ -14,21 +16,6 @@ cleanup() {
 }
 trap cleanup EXIT
 cd "$T"
-pass=0
-fail=0
-ok() { pass=$((pass + 1)); }
-bad() { fail=$((fail + 1)); echo "FAIL: $*" >&2; }
-# expect STATUS SUBSTRING -- command...: exit status and a substring of stdout+stderr
-expect() {
-  local want=$1 text=$2
-  shift 3
-  local out rc
-  out=$(timeout 120 "$@" 2>&1)
-  rc=$?
-  if [ "$rc" != "$want" ]; then bad "[$*] exit $rc, expected $want: $out"; return; fi
-  if [ -n "$text" ] && ! grep -qF -- "$text" <<<"$out"; then bad "[$*] output lacks '$text': $out"; return; fi
-  ok
-}
 no_temporaries() { ! find "$T" -name '*.tmp.*' | grep -q . && ok || bad "temporaries left: $(find "$T" -name '*.tmp.*')"; }
 
 cp "$EX/tutorial/Lambertian.lsqt" L.lsqt
@@ -112,5 +99,4 @@ else
   echo "skip: cannot mount a tmpfs here (not root?): full file system checks skipped"
 fi
 
-echo "test_outputs: $pass passed, $fail failed"
-[ "$fail" = 0 ]
+finish test_outputs
