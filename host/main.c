@@ -1,4 +1,5 @@
 /* lsqt-cl: LSQT text -> assembly -> device simulation -> LSS, RAW, summary. */
+#include <pthread.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -17,13 +18,51 @@
 #include "lsqt/util.h"
 
 static volatile sig_atomic_t g_stop = 0;
+static volatile sig_atomic_t g_armed = 0; /* the input is read: Ctrl-C now means "finish" */
+static sigset_t g_sigint;
 
-/* First Ctrl-C: finish the launch, write LSS and RAW, exit non-zero. Second: die. */
-static void on_sigint(int sig)
+/* Ctrl-C is taken by this thread alone (sigwait), never by a signal handler: SIGINT is
+ * blocked in every other thread, PoCL's included, so LLVM's own handler (installed while
+ * PoCL compiles a kernel) cannot run and delete the compiler's temporary files, which
+ * failed the build. First Ctrl-C: finish the launch, write LSS and RAW, exit non-zero.
+ * Second (or any while the input is still being read): stop at once. */
+static void *sigint_watch(void *arg)
+{
+    (void)arg;
+    for (int count = 0;;) {
+        int sig = 0;
+        if (sigwait(&g_sigint, &sig) != 0 || sig != SIGINT) continue;
+        if (++count == 1 && g_armed) {
+            g_stop = 1;
+            continue;
+        }
+        static const char msg[] = "\nlsqt-cl: interrupted: stopping now, nothing more written\n";
+        if (write(STDERR_FILENO, msg, sizeof msg - 1) < 0) { /* nowhere left to say it */
+        }
+        _exit(130);
+    }
+    return NULL;
+}
+
+static void on_sigint(int sig) /* fallback when no thread can be started */
 {
     (void)sig;
     g_stop = 1;
     signal(SIGINT, SIG_DFL);
+}
+
+/* Before any other thread exists, so that every thread inherits the blocked SIGINT. */
+static void sigint_setup(void)
+{
+    sigemptyset(&g_sigint);
+    sigaddset(&g_sigint, SIGINT);
+    pthread_t t;
+    if (pthread_sigmask(SIG_BLOCK, &g_sigint, NULL) == 0 && pthread_create(&t, NULL, sigint_watch, NULL) == 0) {
+        pthread_detach(t);
+        return;
+    }
+    pthread_sigmask(SIG_UNBLOCK, &g_sigint, NULL);
+    signal(SIGINT, on_sigint);
 }
 
 static int fail(int code, const char *fmt, const char *a, const char *b)
@@ -153,7 +192,7 @@ int main(int argc, char **argv)
 {
     /* Signals first: a Ctrl-C during device setup or the kernel build must not be lost,
      * and a closed pipe is a write error to report (other outputs still get written). */
-    signal(SIGINT, on_sigint);
+    sigint_setup();
     signal(SIGPIPE, SIG_IGN);
 
     lsqt_cli c;
@@ -197,6 +236,7 @@ int main(int argc, char **argv)
         fprintf(stderr, "%s\n", diag.error);
         return 2;
     }
+    g_armed = 1;
     int line = 0;
     const char *model = lsqt_unsupported_model(&a, &line);
     if (model) {

@@ -163,8 +163,8 @@ expect 0 "" -- "$BIN" --list-devices
 # Ctrl-C: the current launch finishes, LSS and RAW are written, exit status is non-zero.
 # The signal is sent as soon as the run reports its kernel build, before any launch: an
 # early Ctrl-C must not be lost (the handler comes first) nor kill the run.
-# (timeout --foreground passes the SIGINT on once, and kills a run that ignores it.)
-timeout --foreground -k 5 120 "$BIN" -v -R -p 1e12 -wo 4 -wi 16 --lss int.lss -o int.raw "$EX/slab.lsqt" 2>int.err >/dev/null &
+# (timeout --foreground passes the SIGINT on once; after 300 s it ends a run that hangs.)
+timeout --foreground 300 "$BIN" -v -R -p 1e12 -wo 4 -wi 16 --lss int.lss -o int.raw "$EX/slab.lsqt" 2>int.err >/dev/null &
 pid=$!
 for _ in $(seq 600); do grep -q "kernel build options" int.err 2>/dev/null && break; sleep 0.1; done
 kill -INT $pid
@@ -173,5 +173,18 @@ rc=$?
 [ "$rc" = 1 ] && [ -s int.lss ] && [ -s int.raw ] && grep -q "interrupted" int.err && ok \
   || bad "Ctrl-C: exit $rc, files: $(ls int.* 2>&1), stderr: $(cat int.err)"
 expect 0 "continuing int.lss" -- "$BIN" -p 1000 --lss int.lss -o int2.raw "$EX/slab.lsqt"
+# While the input is still being read (a stdin that never ends: a FIFO this shell holds
+# open), Ctrl-C stops at once.
+mkfifo in.fifo
+exec 7<>in.fifo
+"$BIN" -p 100 - <in.fifo 2>stdin_int.err &
+pid=$!
+for _ in $(seq 300); do [ "$(ls /proc/$pid/task 2>/dev/null | wc -l)" -ge 2 ] && break; sleep 0.1; done
+kill -INT $pid
+wait $pid
+rc=$?
+[ "$rc" = 130 ] && grep -q "lsqt-cl: interrupted: stopping now" stdin_int.err && [ ! -e Layered.raw.tmp* ] && ok \
+  || bad "Ctrl-C while reading stdin: exit $rc: $(cat stdin_int.err)"
+exec 7>&-
 
 finish test_cli
