@@ -26,9 +26,17 @@ static sigset_t g_sigint;
  * PoCL compiles a kernel) cannot run and delete the compiler's temporary files, which
  * failed the build. First Ctrl-C: finish the launch, write LSS and RAW, exit non-zero.
  * Second (or any while the input is still being read): stop at once. */
+static pthread_mutex_t g_watch_lock = PTHREAD_MUTEX_INITIALIZER;
+static pthread_cond_t g_watch_cond = PTHREAD_COND_INITIALIZER;
+static int g_watch_started = 0;
+
 static void *sigint_watch(void *arg)
 {
     (void)arg;
+    pthread_mutex_lock(&g_watch_lock);
+    g_watch_started = 1;
+    pthread_cond_signal(&g_watch_cond);
+    pthread_mutex_unlock(&g_watch_lock);
     for (int count = 0;;) {
         int sig = 0;
         if (sigwait(&g_sigint, &sig) != 0 || sig != SIGINT) continue;
@@ -59,6 +67,12 @@ static void sigint_setup(void)
     pthread_t t;
     if (pthread_sigmask(SIG_BLOCK, &g_sigint, NULL) == 0 && pthread_create(&t, NULL, sigint_watch, NULL) == 0) {
         pthread_detach(t);
+        /* Wait until the thread runs: a process that exits while a thread is still being
+         * set up (a bad flag exits at once) leaves the C library's start-up data behind,
+         * which LeakSanitizer reports. */
+        pthread_mutex_lock(&g_watch_lock);
+        while (!g_watch_started) pthread_cond_wait(&g_watch_cond, &g_watch_lock);
+        pthread_mutex_unlock(&g_watch_lock);
         return;
     }
     pthread_sigmask(SIG_UNBLOCK, &g_sigint, NULL);
