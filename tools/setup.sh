@@ -4,7 +4,7 @@
 # with its sanitizer/fuzzer runtimes. Installs nothing when everything is present.
 set -euo pipefail
 PKGS=(build-essential cmake pkg-config ocl-icd-opencl-dev opencl-headers opencl-c-headers
-      ocl-icd-libopencl1 pocl-opencl-icd clinfo clang libclang-rt-14-dev)
+      ocl-icd-libopencl1 pocl-opencl-icd clinfo clang libclang-rt-14-dev python3)
 missing=()
 for p in "${PKGS[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
