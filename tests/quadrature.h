@@ -16,7 +16,6 @@ static inline void gauss_legendre(int n, double *x, double *w)
                 p0 = p1;
                 p1 = p2;
             }
-            if (n == 1) p0 = 1.0, p1 = t;
             dp = n * (t * p1 - p0) / (t * t - 1.0);
             double step = p1 / dp;
             t -= step;
