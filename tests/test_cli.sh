@@ -96,6 +96,10 @@ cmp -s once.lss S.lsqt.lss && ok || bad "split run LSS differs from single run"
   || bad "same seed and -p give different RAW"
 "$BIN" -q -R -p 5000 -wo 4 -wi 16 -s 1 -o seed1.raw --lss seed1.lss S.lsqt && ! cmp -s once.raw seed1.raw && ok \
   || bad "another seed gives the same RAW: the determinism checks above could not fail"
+# Each estimate is written twice, at (x, y, z) with y >= 0 and then at (x, -y, z), same value.
+awk 'NR > 3 && NR % 2 == 0 { s = $1; x = $2; y = $3; z = $4; v = $5 }
+     NR > 3 && NR % 2 == 1 { if ($1 != s || $2 != x || $3 + y != 0 || $4 != z || $5 != v || y < 0) bad++; n++ }
+     END { exit !(n == 4 * 16 && bad == 0) }' once.raw && ok || bad "RAW lines are not (x, y, z), (x, -y, z) pairs"
 
 # An LSS of another assembly, or a damaged one, is an error that leaves it untouched.
 cp L.lsqt.lss keep.lss

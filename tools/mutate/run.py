@@ -1,0 +1,480 @@
+#!/usr/bin/env python3
+"""Mutation check: plants each error of tools/mutate/mutations.txt in a scratch copy and
+runs the tests that should catch it. See tools/mutate/README.md.
+
+usage: run.sh [-l] [-a] [-k] [NAME_REGEX]
+
+Kernel files (kernels/*.cl, and shared headers the host never includes) are mutated in a
+copy of kernels/ + include/ and tested with the release build (build/, or LSQT_BUILD_DIR)
+through LSQT_KERNEL_DIR; everything else is mutated in a scratch copy of the source tree,
+built once in a scratch build directory and rebuilt incrementally per mutation. A
+mutation is killed when its tests fail; it survived when they pass; an error (a rotten
+entry, a mutant that does not build, a test that does not exist, a baseline that fails)
+is a failure of the list. Exit status 0 only when every selected mutation is killed."""
+
+import argparse
+import os
+import re
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(os.path.dirname(HERE))
+LIST = os.path.join(HERE, "mutations.txt")
+FIELDS = ("name", "file", "find", "replace", "tests", "why")
+MULTI = ("find", "replace")  # fields that take continuation lines (find+:, replace+:)
+NAME_RE = re.compile(r"^[a-z0-9][a-z0-9._-]*$")
+TEST_RE = re.compile(r"^[A-Za-z0-9_.*+?\[\]-]+$")  # a ctest name, or a simple pattern
+
+
+class ListError(Exception):
+    pass
+
+
+# ---- the list -----------------------------------------------------------------------
+
+def parse_list(path):
+    """Returns the mutations of the file (dicts of FIELDS plus 'line') and a list of
+    format errors ('mutations.txt:LINE: ...')."""
+    muts, errors, cur = [], [], None
+    short = os.path.relpath(path, ROOT) if path.startswith(ROOT + os.sep) else path
+
+    def close(m):
+        if m is None:
+            return
+        missing = [f for f in FIELDS if f not in m]
+        if missing:
+            errors.append("%s:%d: mutation '%s' lacks %s" % (short, m["line"], m.get("name", "?"),
+                                                             ", ".join(missing)))
+        else:
+            muts.append(m)
+
+    with open(path, encoding="utf-8") as f:
+        for n, raw in enumerate(f, 1):
+            line = raw.rstrip("\n").rstrip("\r")
+            if not line.strip() or line.startswith("#"):
+                continue
+            m = re.match(r"^([a-z]+)(\+?):(.*)$", line)
+            if not m:
+                errors.append("%s:%d: not 'key: value': %r" % (short, n, line))
+                continue
+            key, cont, value = m.group(1), m.group(2), m.group(3)
+            if value.startswith(" "):
+                value = value[1:]
+            value = value.rstrip(" \t")
+            if key not in FIELDS or (cont and key not in MULTI):
+                errors.append("%s:%d: unknown key '%s%s'" % (short, n, key, cont))
+                continue
+            if key == "name":
+                close(cur)
+                cur = {"line": n, "name": value}
+                continue
+            if cur is None:
+                errors.append("%s:%d: '%s' before the first 'name:'" % (short, n, key))
+                continue
+            if cont:
+                if key not in cur:
+                    errors.append("%s:%d: '%s+:' without a '%s:' before it" % (short, n, key, key))
+                else:
+                    cur[key] += "\n" + value
+            elif key in cur:
+                errors.append("%s:%d: second '%s:' in mutation '%s'" % (short, n, key, cur["name"]))
+            else:
+                cur[key] = value
+    close(cur)
+    return muts, errors
+
+
+def check_entry(m, seen):
+    """Problems of one entry against the real source tree (empty list: fine)."""
+    why = []
+    if not NAME_RE.match(m["name"]):
+        why.append("name '%s' is not [a-z0-9._-]" % m["name"])
+    if m["name"] in seen:
+        why.append("name used twice")
+    rel = m["file"]
+    path = os.path.normpath(os.path.join(ROOT, rel))
+    if os.path.isabs(rel) or not path.startswith(ROOT + os.sep) or not os.path.isfile(path):
+        why.append("no file '%s' in the source tree" % rel)
+    elif not m["find"]:
+        why.append("empty find")
+    else:
+        with open(path, encoding="utf-8") as f:
+            count = f.read().count(m["find"])
+        if count != 1:
+            why.append("find text occurs %d times in %s (must be exactly once): %r" % (count, rel, m["find"]))
+    if m["find"] == m["replace"]:
+        why.append("replace equals find")
+    tests = m["tests"].split()
+    if not tests or not all(TEST_RE.match(t) for t in tests):
+        why.append("tests must be ctest names separated by spaces: %r" % m["tests"])
+    if not m["why"]:
+        why.append("empty why")
+    return why
+
+
+# ---- processes ----------------------------------------------------------------------
+
+def kill_session(sid):
+    """SIGKILL every process of session sid: the one we started with start_new_session,
+    and all it started, even those that moved to a process group of their own
+    (GNU timeout does)."""
+    for _ in range(3):
+        pids = []
+        for d in os.listdir("/proc"):
+            if not d.isdigit():
+                continue
+            try:
+                with open("/proc/%s/stat" % d) as f:
+                    fields = f.read().rsplit(")", 1)[1].split()
+            except OSError:
+                continue
+            if int(fields[3]) == sid:  # after the name: state, ppid, pgrp, session
+                pids.append(int(d))
+        if not pids:
+            return
+        for pid in pids:
+            try:
+                os.kill(pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
+        time.sleep(0.2)
+
+
+def run(cmd, cwd, env, limit=None):
+    """Runs cmd in a session of its own; returns (rc, output, timed_out). On timeout, or
+    when we are interrupted, the whole session (ctest and the tests it started) is
+    killed."""
+    p = subprocess.Popen(cmd, cwd=cwd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                         start_new_session=True)
+    try:
+        out, _ = p.communicate(timeout=limit)
+        return p.returncode, out.decode("utf-8", "replace"), False
+    except subprocess.TimeoutExpired:
+        kill_session(p.pid)
+        out, _ = p.communicate()
+        return -9, out.decode("utf-8", "replace"), True
+    except BaseException:
+        kill_session(p.pid)
+        p.wait()
+        raise
+
+
+class Ctest:
+    """ctest in one build directory."""
+
+    def __init__(self, bdir, env, jobs, timeout):
+        self.bdir, self.env, self.jobs, self.timeout = bdir, env, jobs, timeout
+        self.count_cache = {}
+
+    def count(self, name):
+        """How many tests ^name$ selects."""
+        if name not in self.count_cache:
+            rc, out, _ = run(["ctest", "-N", "-R", "^(%s)$" % name], self.bdir, self.env, 120)
+            m = re.search(r"Total Tests: (\d+)", out)
+            if rc != 0 or not m:
+                raise ListError("ctest -N failed in %s:\n%s" % (self.bdir, out))
+            self.count_cache[name] = int(m.group(1))
+        return self.count_cache[name]
+
+    def missing(self, names):
+        return [t for t in names if self.count(t) == 0]
+
+    def run(self, names):
+        """Runs ^(names)$; returns (status, failed test names, output). status is 'pass',
+        'fail' (some test failed or timed out), 'hang' (ctest itself ran past its limit)
+        or 'error' (ctest failed without a failing test)."""
+        regex = "^(%s)$" % "|".join(names)
+        n = sum(self.count(t) for t in names)
+        cmd = ["ctest", "--output-on-failure", "--no-tests=error", "-j", str(self.jobs),
+               "--timeout", str(self.timeout), "-R", regex]
+        # ctest --timeout does not override a test's own TIMEOUT property (up to 300 s
+        # here), so ctest as a whole gets a hard limit too: the per-test limit for every
+        # test it runs, plus 15 s. A mutant that hangs is killed, and counts as killed.
+        rc, out, hung = run(cmd, self.bdir, self.env, self.timeout * max(n, 1) + 15)
+        failed = re.findall(r"^\s*\d+ - (\S+) \(", out, re.M)
+        if hung:
+            return "hang", failed, out
+        if rc == 0:
+            return "pass", [], out
+        if failed:
+            return "fail", failed, out
+        return "error", [], out
+
+
+# ---- scratch trees ------------------------------------------------------------------
+
+def kernel_files():
+    """The kernel sources in the order they are embedded (CMakeLists.txt)."""
+    with open(os.path.join(ROOT, "CMakeLists.txt"), encoding="utf-8") as f:
+        m = re.search(r"set\(LSQT_KERNEL_FILES\s+([^)]*)\)", f.read())
+    if not m:
+        raise ListError("CMakeLists.txt has no set(LSQT_KERNEL_FILES ...)")
+    return m.group(1).split()
+
+
+def host_includes():
+    """Headers the host C code includes ("lsqt/x.h" as include/lsqt/x.h)."""
+    inc = set()
+    for d in ("host", "include", "tests", "tools"):
+        for dirpath, _, files in os.walk(os.path.join(ROOT, d)):
+            for fn in files:
+                if fn.endswith((".c", ".h")):
+                    with open(os.path.join(dirpath, fn), encoding="utf-8", errors="replace") as f:
+                        for m in re.finditer(r'#\s*include\s+"(lsqt/[^"]+)"', f.read()):
+                            inc.add("include/" + m.group(1))
+    return inc
+
+
+def is_kernel_side(rel, kfiles, hinc):
+    """Mutated without a host rebuild: a kernel source the host never compiles."""
+    return rel in kfiles and rel not in hinc and not rel.endswith(".c")
+
+
+def copy_tree(dst):
+    """The source tree without .git and build directories."""
+    def ignore(d, names):
+        if os.path.abspath(d) == ROOT:
+            return [n for n in names if n == ".git" or n == "build" or n.startswith("build-")]
+        return [n for n in names if n.endswith((".lsqt.raw", ".lsqt.lss")) or ".tmp." in n]
+    shutil.copytree(ROOT, dst, symlinks=True, ignore=ignore)
+
+
+def write(path, text):
+    with open(path, "w", encoding="utf-8") as f:
+        f.write(text)
+    os.utime(path, None)
+
+
+def clang_check(kdir, kfiles, scratch):
+    """Compiles the kernel sources as lsqt does (one unit, in order) with clang's OpenCL
+    front end for each precision/atomics variant; returns None or the first error. A
+    mutant that does not compile would otherwise look killed."""
+    clang = shutil.which("clang") or shutil.which("clang-15") or shutil.which("clang-14")
+    if not clang:
+        return None
+    src = os.path.join(scratch, "all.cl")
+    with open(src, "w", encoding="utf-8") as out:
+        for rel in kfiles:
+            with open(os.path.join(kdir, rel), encoding="utf-8") as f:
+                out.write(f.read() + "\n")
+    base = ["-x", "cl", "-cl-std=CL1.2", "-Xclang", "-finclude-default-header", "-fsyntax-only",
+            "-DLSQT_NWI=16", "-DLSQT_HAS_BSDF_LAMBERTIAN=1", "-DLSQT_HAS_PHASE_HG=1"]
+    for extra in ([], ["-DLSQT_NO_INT64_ATOMICS=1"], ["-DLSQT_DOUBLE=1"]):
+        rc, out, _ = run([clang] + base + extra + [src], scratch, os.environ.copy(), 120)
+        if rc != 0:
+            return "the mutant kernel does not compile (clang, %s):\n%s" % (" ".join(extra) or "default options",
+                                                                           out[-3000:])
+    return None
+
+
+# ---- main ---------------------------------------------------------------------------
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("regex", nargs="?", default="", help="run only mutations whose name matches (re.search)")
+    ap.add_argument("-l", "--list", action="store_true", help="check the list and print it; run nothing")
+    ap.add_argument("-a", "--all-tests", action="store_true",
+                    help="run every test for each mutation and print which fail (to pick the smallest set)")
+    ap.add_argument("-k", "--keep", action="store_true", help="keep the scratch directory")
+    ap.add_argument("-f", "--file", default=LIST, help="the list to run (default tools/mutate/mutations.txt)")
+    args = ap.parse_args()
+
+    t_start = time.time()
+    muts, errors = parse_list(os.path.abspath(args.file))
+    for e in errors:
+        print("error: " + e)
+    if errors:
+        print("0 passed, %d failed (%s does not parse)" % (len(errors), args.file))
+        return 1
+    bad, seen = {}, set()
+    for m in muts:
+        why = check_entry(m, seen)
+        seen.add(m["name"])
+        if why:
+            bad[m["name"]] = "; ".join(why)
+    try:
+        sel = [m for m in muts if re.search(args.regex, m["name"])]
+    except re.error as e:
+        print("error: bad NAME_REGEX: %s" % e)
+        return 2
+    if not sel:
+        print("error: no mutation matches '%s'" % args.regex)
+        return 2
+    kfiles, hinc = kernel_files(), host_includes()
+    for m in sel:
+        m["kernel"] = is_kernel_side(m["file"], kfiles, hinc)
+
+    if args.list:
+        for m in sel:
+            print("%-34s %-6s %-28s %s" % (m["name"], "kernel" if m["kernel"] else "host", m["file"], m["tests"]))
+            print("    %s%s" % (m["why"], ("\n    ERROR: " + bad[m["name"]]) if m["name"] in bad else ""))
+        print("%d mutations, %d with errors" % (len(sel), sum(m["name"] in bad for m in sel)))
+        return 1 if any(m["name"] in bad for m in sel) else 0
+
+    bdir = os.path.abspath(os.environ.get("LSQT_BUILD_DIR") or os.path.join(ROOT, "build"))
+    if any(m["kernel"] for m in sel) and not os.path.isfile(os.path.join(bdir, "CTestTestfile.cmake")):
+        print("error: no release build in %s (run bash tools/build.sh first)" % bdir)
+        return 2
+    jobs = int(os.environ.get("LSQT_MUTATE_JOBS") or 2)
+    limit = int(os.environ.get("LSQT_MUTATE_TIMEOUT") or 60)
+    build_jobs = str(os.environ.get("LSQT_MUTATE_BUILD_JOBS") or os.cpu_count() or 2)
+
+    scratch = tempfile.mkdtemp(prefix="lsqt-mutate.")
+    env = os.environ.copy()
+    env.pop("LSQT_KERNEL_DIR", None)
+    if not env.get("POCL_CACHE_DIR"):
+        env["POCL_CACHE_DIR"] = os.path.join(scratch, "pocl-cache")
+        os.makedirs(env["POCL_CACHE_DIR"])
+    passed = failed = 0
+    width = max(len(m["name"]) for m in sel)
+
+    def report(m, status, secs, note=""):
+        nonlocal passed, failed
+        if status == "killed":
+            passed += 1
+        else:
+            failed += 1
+        note = note.rstrip().replace("\n", "\n        ")
+        print("%-*s  %-8s %6.1f s%s" % (width, m["name"], status, secs, ("  " + note) if note else ""), flush=True)
+
+    def tests_of(m, ct):
+        return [".*"] if args.all_tests else m["tests"].split()
+
+    def one(m, ct, apply, restore, rebuild=None):
+        t0 = time.time()
+        if m["name"] in bad:
+            return report(m, "error", 0.0, bad[m["name"]])
+        names = tests_of(m, ct)
+        miss = ct.missing(names)
+        if miss:
+            return report(m, "error", time.time() - t0, "no test named %s in %s" % (", ".join(miss), ct.bdir))
+        apply(m)
+        try:
+            if rebuild:
+                problem = rebuild(m)
+                if problem:
+                    return report(m, "error", time.time() - t0, problem)
+            status, killers, out = ct.run(names)
+        finally:
+            restore(m)
+        secs = time.time() - t0
+        if m["kernel"] and "the OpenCL kernels failed to build" in out:
+            return report(m, "error", secs, "the mutant kernel does not build on the device:\n" + out[-3000:])
+        if status == "pass":
+            return report(m, "survived", secs, "(%s pass)" % " ".join(names) if not args.all_tests else "")
+        if status == "error":
+            return report(m, "error", secs, "ctest failed without a failing test:\n" + out[-3000:])
+        note = "(%s)" % (" ".join(killers) if killers else "hung: ctest ran past its limit")
+        return report(m, "killed", secs, note)
+
+    def baseline(ct, group, label):
+        """The unmutated tree must pass the tests the group names; else nothing it
+        says is meaningful."""
+        names = sorted({t for m in group for t in tests_of(m, ct)})
+        names = [t for t in names if ct.count(t) > 0]
+        if not names:
+            return True
+        t0 = time.time()
+        status, killers, out = ct.run(names)
+        if status != "pass":
+            print("error: unmutated baseline fails in %s (%s):\n%s" % (ct.bdir, " ".join(killers), out[-5000:]))
+            return False
+        print("%-*s  %-8s %6.1f s  (%s)" % (width, "(baseline, %s)" % label, "ok",
+                                           time.time() - t0, " ".join(names)), flush=True)
+        return True
+
+    try:
+        kern = [m for m in sel if m["kernel"]]
+        host = [m for m in sel if not m["kernel"]]
+        if kern:
+            kdir = os.path.join(scratch, "kernel-dir")
+            for d in ("kernels", "include"):
+                shutil.copytree(os.path.join(ROOT, d), os.path.join(kdir, d))
+            kenv = dict(env, LSQT_KERNEL_DIR=kdir)
+            ct = Ctest(bdir, kenv, jobs, limit)
+            originals = {}
+
+            def k_apply(m):
+                p = os.path.join(kdir, m["file"])
+                with open(p, encoding="utf-8") as f:
+                    originals[p] = f.read()
+                write(p, originals[p].replace(m["find"], m["replace"], 1))
+
+            def k_restore(m):
+                p = os.path.join(kdir, m["file"])
+                write(p, originals.pop(p))
+
+            use_clang = True
+            problem = clang_check(kdir, kfiles, scratch)
+            if problem:  # this clang cannot judge the clean sources: rely on the device
+                print("note: clang's check fails on the unmutated kernels; skipped:\n" + problem)
+                use_clang = False
+
+            def k_check(m):
+                return clang_check(kdir, kfiles, scratch) if use_clang else None
+
+            if baseline(ct, [m for m in kern if m["name"] not in bad], "release build"):
+                for m in kern:
+                    one(m, ct, k_apply, k_restore, k_check)
+            else:
+                for m in kern:
+                    report(m, "error", 0.0, "baseline fails")
+        if host:
+            src, hb = os.path.join(scratch, "src"), os.path.join(scratch, "build")
+            t0 = time.time()
+            copy_tree(src)
+            rc, out, _ = run(["cmake", "-S", src, "-B", hb, "-DCMAKE_BUILD_TYPE=RelWithDebInfo",
+                              "-DLSQT_WERROR=OFF"], scratch, env, 600)
+            if rc == 0:
+                rc, out, _ = run(["cmake", "--build", hb, "-j", build_jobs], scratch, env, 1200)
+            ok = rc == 0
+            if not ok:
+                print("error: the unmutated scratch copy does not build:\n" + out[-5000:])
+            else:
+                print("%-*s  %-8s %6.1f s" % (width, "(scratch build)", "ok", time.time() - t0), flush=True)
+            ct = Ctest(hb, env, jobs, limit)
+            originals = {}
+
+            def h_apply(m):
+                p = os.path.join(src, m["file"])
+                with open(p, encoding="utf-8") as f:
+                    originals[p] = f.read()
+                write(p, originals[p].replace(m["find"], m["replace"], 1))
+
+            def h_restore(m):
+                p = os.path.join(src, m["file"])
+                write(p, originals.pop(p))
+
+            def h_build(m):
+                rc, out, _ = run(["cmake", "--build", hb, "-j", build_jobs], scratch, env, 1200)
+                return None if rc == 0 else "the mutant does not build:\n" + out[-3000:]
+
+            if ok and baseline(ct, [m for m in host if m["name"] not in bad], "scratch build"):
+                for m in host:
+                    one(m, ct, h_apply, h_restore, h_build)
+            else:
+                for m in host:
+                    report(m, "error", 0.0, "scratch build or baseline fails")
+    except ListError as e:
+        print("error: %s" % e)
+        failed += 1
+    except KeyboardInterrupt:
+        print("interrupted")
+        failed += 1
+    finally:
+        if args.keep:
+            print("scratch kept in %s" % scratch)
+        else:
+            shutil.rmtree(scratch, ignore_errors=True)
+    print("mutation check: %.0f s in all" % (time.time() - t_start))
+    print("%d passed, %d failed" % (passed, failed))
+    return 0 if failed == 0 else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
