@@ -244,6 +244,24 @@ def copy_tree(dst):
     shutil.copytree(ROOT, dst, symlinks=True, ignore=ignore)
 
 
+def patcher(root):
+    """(apply, restore) for mutations of the copy at root: apply plants m's replacement,
+    restore puts the file back as it was."""
+    originals = {}
+
+    def apply(m):
+        p = os.path.join(root, m["file"])
+        with open(p, encoding="utf-8") as f:
+            originals[p] = f.read()
+        write(p, originals[p].replace(m["find"], m["replace"], 1))
+
+    def restore(m):
+        p = os.path.join(root, m["file"])
+        write(p, originals.pop(p))
+
+    return apply, restore
+
+
 def write(path, text):
     with open(path, "w", encoding="utf-8") as f:
         f.write(text)
@@ -397,17 +415,7 @@ def main():
                 shutil.copytree(os.path.join(ROOT, d), os.path.join(kdir, d))
             kenv = dict(env, LSQT_KERNEL_DIR=kdir)
             ct = Ctest(bdir, kenv, jobs, limit)
-            originals = {}
-
-            def k_apply(m):
-                p = os.path.join(kdir, m["file"])
-                with open(p, encoding="utf-8") as f:
-                    originals[p] = f.read()
-                write(p, originals[p].replace(m["find"], m["replace"], 1))
-
-            def k_restore(m):
-                p = os.path.join(kdir, m["file"])
-                write(p, originals.pop(p))
+            k_apply, k_restore = patcher(kdir)
 
             use_clang = True
             problem = clang_check(kdir, kfiles, scratch)
@@ -438,17 +446,7 @@ def main():
             else:
                 print("%-*s  %-8s %6.1f s" % (width, "(scratch build)", "ok", time.time() - t0), flush=True)
             ct = Ctest(hb, env, jobs, limit)
-            originals = {}
-
-            def h_apply(m):
-                p = os.path.join(src, m["file"])
-                with open(p, encoding="utf-8") as f:
-                    originals[p] = f.read()
-                write(p, originals[p].replace(m["find"], m["replace"], 1))
-
-            def h_restore(m):
-                p = os.path.join(src, m["file"])
-                write(p, originals.pop(p))
+            h_apply, h_restore = patcher(src)
 
             def h_build(m):
                 rc, out, _ = run(["cmake", "--build", hb, "-j", build_jobs], scratch, env, 1200)
