@@ -132,12 +132,13 @@ inline void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulong *hi
         }
         if (at_layer) {
             __global const lsqt_dev_layer *l = &c->layers[layer];
-            if (l->kind != LSQT_BSDF_NULL) {
+            const int bounced = l->kind != LSQT_BSDF_NULL;
+            if (bounced) {
                 nee_layer(c, layer, d, w);
                 real3 wi;
                 w *= bsdf_sample(l, -d, rng, &wi);
                 scattered = 1;
-                if (!(w > R(0.0)) || !roulette(&w, rng)) return;
+                if (!(w > R(0.0))) return;
                 d = wi;
             }
             at_layer = 0;
@@ -161,6 +162,9 @@ inline void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulong *hi
                 }
                 return;
             }
+            /* Roulette only for paths that go on inside the stack: on one that leaves it
+             * would add noise and save no work. */
+            if (bounced && !roulette(&w, rng)) return;
             continue;
         }
         /* Inside interior medium `medium` at height h, travelling along d. */

@@ -85,6 +85,30 @@ static void test_lambertian(void)
     lsqt_state_free(&st);
 }
 
+/* A path that leaves the stack right after a bounce is never rouletted: a single
+ * Lambertian layer reflects exactly fR per path, with no noise at all (roulette there
+ * gave 0.0975 +- 0.0013 for fR = 0.1). fR is a float on the device and each path's
+ * weight rounds once to the 2^-30 grid, so R is fR to within 2^-31 + float rounding. */
+static void test_roulette_exit(void)
+{
+    const double deg[] = {0, 60};
+    const double fr[] = {0.1, 3e-9};
+    for (int i = 0; i < 2; i++) {
+        char text[128];
+        snprintf(text, sizeof text, "Medium\nLayer z=0 LambertianBsdf fR=%g\nMedium\n", fr[i]);
+        lsqt_state st;
+        lsqt_slice_est *e = fixture_run(text, 2, deg, 16, 20000, 11, &st);
+        for (int s = 0; s < 2; s++) {
+            CHECK(fabs(e[s].R.mean - fr[i]) <= ldexp(1.0, -31) + 1e-7 * fr[i], "fR=%g slice %d: R = %.12g", fr[i], s,
+                  e[s].R.mean);
+            CHECK(e[s].R.err == 0.0, "fR=%g slice %d: R has an error %.3g (every path carries fR)", fr[i], s,
+                  e[s].R.err);
+        }
+        lsqt_estimates_free(e, 2);
+        lsqt_state_free(&st);
+    }
+}
+
 static void test_slab(void)
 {
     const double deg[] = {0, 45, 80};
@@ -255,6 +279,7 @@ int main(void)
 {
     fixture_open();
     test_lambertian();
+    test_roulette_exit();
     test_slab();
     test_adding();
     test_reproducible();
