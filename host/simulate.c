@@ -36,8 +36,8 @@ static double medium_tau(const lsqt_assembly *a, int m)
     return (a->media[m].mua + a->media[m].mus) * medium_thickness(a, m);
 }
 
-void lsqt_device_tables(const lsqt_assembly *a, lsqt_dev_scene *scene, lsqt_dev_medium *media,
-                        lsqt_dev_layer *layers)
+void lsqt_device_tables(const lsqt_assembly *a, lsqt_dev_scene *scene, lsqt_dev_medium_d *media,
+                        lsqt_dev_layer_d *layers)
 {
     const int n = a->n_layers;
     memset(scene, 0, sizeof *scene);
@@ -49,8 +49,8 @@ void lsqt_device_tables(const lsqt_assembly *a, lsqt_dev_scene *scene, lsqt_dev_
         layers[i].kind = l->kind;
         layers[i].iter_count = l->iter_count;
         layers[i].multiple_scattering = l->multiple_scattering;
-        layers[i].p[0] = (float)l->fR;
-        layers[i].p[1] = (float)l->fT;
+        layers[i].p[0] = l->fR;
+        layers[i].p[1] = l->fT;
         if (l->kind != LSQT_BSDF_NULL) {
             if (scene->top_nonnull < 0) scene->top_nonnull = i;
             scene->bottom_nonnull = i;
@@ -58,26 +58,47 @@ void lsqt_device_tables(const lsqt_assembly *a, lsqt_dev_scene *scene, lsqt_dev_
     }
     for (int m = 0; m <= n; m++) {
         const lsqt_medium *src = &a->media[m];
-        lsqt_dev_medium *d = &media[m];
+        lsqt_dev_medium_d *d = &media[m];
         memset(d, 0, sizeof *d);
-        d->eta = (float)src->eta;
-        d->mua = (float)src->mua;
-        d->mus = (float)src->mus;
-        d->mut = (float)(src->mua + src->mus);
-        d->thickness = (float)medium_thickness(a, m);
+        d->eta = src->eta;
+        d->mua = src->mua;
+        d->mus = src->mus;
+        d->mut = src->mua + src->mus;
+        d->thickness = medium_thickness(a, m);
         d->phase_kind = src->mus > 0 ? src->phase.kind : LSQT_PHASE_NONE;
-        d->pp[0] = (float)src->phase.g;
+        d->pp[0] = src->phase.g;
     }
     /* Optical thickness of the interior media strictly above / below each medium. */
     double acc = 0.0;
     for (int m = 0; m <= n; m++) {
-        media[m].tau_above = (float)acc;
+        media[m].tau_above = acc;
         acc += medium_tau(a, m);
     }
     acc = 0.0;
     for (int m = n; m >= 0; m--) {
-        media[m].tau_below = (float)acc;
+        media[m].tau_below = acc;
         acc += medium_tau(a, m);
+    }
+}
+
+/* The float tables of a kernel built without -DLSQT_DOUBLE (same fields, rounded). */
+static void tables_to_float(const lsqt_dev_medium_d *md, lsqt_dev_medium *mf, int n_media,
+                            const lsqt_dev_layer_d *ld, lsqt_dev_layer *lf, int n_layers)
+{
+    for (int m = 0; m < n_media; m++) {
+        const lsqt_dev_medium_d *d = &md[m];
+        lsqt_dev_medium *f = &mf[m];
+        memset(f, 0, sizeof *f);
+        f->eta = (float)d->eta, f->mua = (float)d->mua, f->mus = (float)d->mus, f->mut = (float)d->mut;
+        f->thickness = (float)d->thickness, f->tau_above = (float)d->tau_above, f->tau_below = (float)d->tau_below;
+        for (int i = 0; i < 4; i++) f->pp[i] = (float)d->pp[i];
+        f->phase_kind = d->phase_kind;
+    }
+    for (int l = 0; l < n_layers; l++) {
+        memset(&lf[l], 0, sizeof lf[l]);
+        lf[l].kind = ld[l].kind, lf[l].iter_count = ld[l].iter_count;
+        lf[l].multiple_scattering = ld[l].multiple_scattering;
+        for (int i = 0; i < 8; i++) lf[l].p[i] = (float)ld[l].p[i];
     }
 }
 
@@ -163,19 +184,27 @@ int lsqt_simulate(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint
     /* Tables and tallies (the state's tallies go up, so a run continues where it was). */
     const int n = a->n_layers;
     lsqt_dev_scene scene;
-    lsqt_dev_medium *media = calloc((size_t)n + 1, sizeof *media);
-    lsqt_dev_layer *layers = calloc((size_t)n, sizeof *layers);
+    lsqt_dev_medium_d *media = calloc((size_t)n + 1, sizeof *media);
+    lsqt_dev_layer_d *layers = calloc((size_t)n, sizeof *layers);
+    lsqt_dev_medium *media_f = calloc((size_t)n + 1, sizeof *media_f);
+    lsqt_dev_layer *layers_f = calloc((size_t)n, sizeof *layers_f);
     float *wo = calloc((size_t)st->n_slices * 4, sizeof *wo);
     const size_t pad = LSQT_PAD4((size_t)st->n_wi);
     float *wi = calloc((size_t)st->n_slices * 3 * pad, sizeof *wi);
     sim_buffers b;
     memset(&b, 0, sizeof b);
     int rc = 1;
-    if (!media || !layers || !wo || !wi) {
+    if (!media || !layers || !media_f || !layers_f || !wo || !wi) {
         snprintf(err, errcap, "out of memory");
         goto done;
     }
     lsqt_device_tables(a, &scene, media, layers);
+    tables_to_float(media, media_f, n + 1, layers, layers_f, n);
+    /* The kernel reads the layout it was built for (see device_layout.h). */
+    const void *media_up = st->use_double ? (const void *)media : (const void *)media_f;
+    const void *layers_up = st->use_double ? (const void *)layers : (const void *)layers_f;
+    const size_t media_size = st->use_double ? sizeof *media : sizeof *media_f;
+    const size_t layer_size = st->use_double ? sizeof *layers : sizeof *layers_f;
     scene.n_wi = st->n_wi;
     scene.seed_lo = (lsqt_u32)st->seed;
     scene.seed_hi = (lsqt_u32)(st->seed >> 32);
@@ -190,8 +219,8 @@ int lsqt_simulate(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint
     cl_mem_flags ro = CL_MEM_READ_ONLY, rw = CL_MEM_READ_WRITE;
     cl_uint flags0 = 0;
     b.scene = make_buffer(cx, ro, sizeof scene, &scene, &e);
-    b.media = make_buffer(cx, ro, ((size_t)n + 1) * sizeof *media, media, &e);
-    b.layers = make_buffer(cx, ro, (size_t)n * sizeof *layers, layers, &e);
+    b.media = make_buffer(cx, ro, ((size_t)n + 1) * media_size, (void *)media_up, &e);
+    b.layers = make_buffer(cx, ro, (size_t)n * layer_size, (void *)layers_up, &e);
     b.wo = make_buffer(cx, ro, (size_t)st->n_slices * 4 * sizeof *wo, wo, &e);
     b.wi = make_buffer(cx, ro, (size_t)st->n_slices * 3 * LSQT_PAD4((size_t)st->n_wi) * sizeof(float), wi, &e);
     b.nee = make_buffer(cx, rw, lsqt_state_nee_count(st) * 8, st->nee, &e);
@@ -271,6 +300,8 @@ done:
     buffers_release(&b);
     free(media);
     free(layers);
+    free(media_f);
+    free(layers_f);
     free(wo);
     free(wi);
     clReleaseKernel(k);

@@ -28,9 +28,10 @@ static inline void fixture_open(void)
 }
 
 /* Parses text and simulates `paths` per slice at the given angles (degrees) with n_wi
- * spread directions; fills *st (caller frees) and returns the estimates. */
-static inline lsqt_slice_est *fixture_run(const char *text, int n_slices, const double *deg, int n_wi,
-                                   uint64_t paths, uint64_t seed, lsqt_state *st)
+ * spread directions, in double precision when use_double; fills *st (caller frees) and
+ * returns the estimates. */
+static inline lsqt_slice_est *fixture_run_prec(const char *text, int n_slices, const double *deg, int n_wi,
+                                               uint64_t paths, uint64_t seed, int use_double, lsqt_state *st)
 {
     lsqt_assembly a;
     lsqt_diag diag;
@@ -45,6 +46,7 @@ static inline lsqt_slice_est *fixture_run(const char *text, int n_slices, const 
     if (lsqt_state_init(st, canon, lsqt_assembly_hash(&a), seed, n_slices, n_wi, lsqt_assembly_transmits(&a)))
         exit(1);
     free(canon);
+    st->use_double = use_double;
     for (int s = 0; s < n_slices; s++) {
         st->theta_o[s] = deg[s] * 3.14159265358979323846 / 180.0;
         lsqt_wi_spread(n_wi, st->transmits, st->wi + (size_t)s * (size_t)n_wi * 4);
@@ -58,6 +60,12 @@ static inline lsqt_slice_est *fixture_run(const char *text, int n_slices, const 
     }
     lsqt_assembly_free(&a);
     return lsqt_estimates(st);
+}
+
+static inline lsqt_slice_est *fixture_run(const char *text, int n_slices, const double *deg, int n_wi,
+                                          uint64_t paths, uint64_t seed, lsqt_state *st)
+{
+    return fixture_run_prec(text, n_slices, deg, n_wi, paths, seed, 0, st);
 }
 
 #endif

@@ -215,7 +215,7 @@ int main(void)
     if (!prog) return check_finish("test_models");
     const double hg_g[] = {0.0, 0.3, -0.6, 0.85};
     for (int i = 0; i < 4; i++) {
-        model_case m = {"HenyeyGreenstein", 1, {0}, {0, 0, 0, 0, 0, 0, 0, 0, {0}}, {0.3, -0.2, 0.9327379}, 1.0};
+        model_case m = {.name = "HenyeyGreenstein", .use_phase = 1, .wo = {0.3, -0.2, 0.9327379}, .albedo = 1.0};
         m.medium.phase_kind = LSQT_PHASE_HG;
         m.medium.pp[0] = (float)hg_g[i];
         test_model(&m);
@@ -223,7 +223,7 @@ int main(void)
     const double lam[][2] = {{0.6, 0.0}, {0.3, 0.5}, {0.0, 1.0}};
     const double wos[][3] = {{0.0, 0.0, 1.0}, {0.6, 0.0, -0.8}, {0.99, 0.0, 0.14106736}};
     for (int i = 0; i < 3; i++) {
-        model_case m = {"Lambertian", 0, {0}, {0, 0, 0, 0, 0, 0, 0, 0, {0}}, {wos[i][0], wos[i][1], wos[i][2]}, lam[i][0] + lam[i][1]};
+        model_case m = {.name = "Lambertian", .wo = {wos[i][0], wos[i][1], wos[i][2]}, .albedo = lam[i][0] + lam[i][1]};
         m.layer.kind = LSQT_BSDF_LAMBERTIAN;
         m.layer.p[0] = (float)lam[i][0];
         m.layer.p[1] = (float)lam[i][1];

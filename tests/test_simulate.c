@@ -109,6 +109,30 @@ static void test_roulette_exit(void)
     }
 }
 
+/* --double is double end to end: the layer's fR = 0.1 reaches the kernel unrounded. Every
+ * path reflects exactly fR, rounded once to the 2^-30 grid, so in double R = 0.1 within
+ * 2^-31, while the float 0.1f = 0.1 + 1.49e-9 is three times further off than that. */
+static void test_double_tables(void)
+{
+    if (!fixture_cx.dev.has_fp64) {
+        printf("skip: %s has no fp64, --double is refused there\n", fixture_cx.dev.name);
+        return;
+    }
+    const double deg[] = {0, 45};
+    for (int dbl = 0; dbl < 2; dbl++) {
+        lsqt_state st;
+        lsqt_slice_est *e = fixture_run_prec("Medium\nLayer z=0 LambertianBsdf fR=0.1\nMedium\n", 2, deg, 16, 4096, 12,
+                                             dbl, &st);
+        const double want = dbl ? 0.1 : (double)0.1f;
+        for (int s = 0; s < 2; s++)
+            CHECK(fabs(e[s].R.mean - want) <= ldexp(1.0, -31), "%s: R = %.15g, want %.15g", dbl ? "double" : "float",
+                  e[s].R.mean, want);
+        if (dbl) CHECK(fabs(e[0].R.mean - 0.1f) > ldexp(1.0, -31), "double run got the float parameter: R = %.15g", e[0].R.mean);
+        lsqt_estimates_free(e, 2);
+        lsqt_state_free(&st);
+    }
+}
+
 static void test_slab(void)
 {
     const double deg[] = {0, 45, 80};
@@ -280,6 +304,7 @@ int main(void)
     fixture_open();
     test_lambertian();
     test_roulette_exit();
+    test_double_tables();
     test_slab();
     test_adding();
     test_reproducible();

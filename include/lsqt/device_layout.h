@@ -1,7 +1,8 @@
 /* Layouts shared by the host and the OpenCL kernels: the device tables of one assembly
  * and the tally buffers. This file is compiled both as C11 and as OpenCL C 1.2 (it is
- * prepended to the kernel sources), so it holds only 4-byte scalar fields: the layout is
- * then the same on every device and host without packing pragmas. */
+ * prepended to the kernel sources), so it holds only 4-byte scalar fields, or 8-byte ones
+ * in whole pairs of 4-byte fields: the layout is then the same on every device and host
+ * without packing pragmas. */
 #ifndef LSQT_DEVICE_LAYOUT_H
 #define LSQT_DEVICE_LAYOUT_H
 
@@ -50,22 +51,38 @@ typedef uint32_t lsqt_u32;
  * the cap sits far above that for tau = 1e4. Paths it stops are counted and reported. */
 #define LSQT_MAX_EVENTS 1000000000
 
-typedef struct lsqt_dev_medium {
-    float eta, mua, mus, mut; /* mut = mua + mus */
-    float thickness;          /* 0 for the top and bottom media */
-    float tau_above;          /* optical thickness of interior media above this one */
-    float tau_below;          /* ... and below it */
-    lsqt_i32 phase_kind;      /* enum lsqt_phase_kind, NONE when mus == 0 */
-    float pp[4];              /* phase parameters: HG {g} */
-} lsqt_dev_medium;
+/* The tables of media and layers. Their parameters are of type T: float, or double in a
+ * kernel built with -DLSQT_DOUBLE, so --double is double end to end (a float table would
+ * cut every parameter to 1e-7 relative). The host knows both layouts: lsqt_dev_medium /
+ * lsqt_dev_layer (float) and lsqt_dev_medium_d / lsqt_dev_layer_d (double). Integer
+ * fields come in pairs, so the double layout has no padding either. */
+#define LSQT_DEV_TABLES(T, SUFFIX)                                                          \
+    typedef struct lsqt_dev_medium##SUFFIX {                                                \
+        T eta, mua, mus, mut; /* mut = mua + mus */                                         \
+        T thickness;          /* 0 for the top and bottom media */                          \
+        T tau_above;          /* optical thickness of interior media above this one */      \
+        T tau_below;          /* ... and below it */                                        \
+        T pp[4];              /* phase parameters: HG {g} */                                \
+        lsqt_i32 phase_kind;  /* enum lsqt_phase_kind, NONE when mus == 0 */                \
+        lsqt_i32 pad;                                                                       \
+    } lsqt_dev_medium##SUFFIX;                                                              \
+    typedef struct lsqt_dev_layer##SUFFIX {                                                 \
+        lsqt_i32 kind;        /* enum lsqt_bsdf_kind */                                     \
+        lsqt_i32 iter_count;                                                                \
+        lsqt_i32 multiple_scattering;                                                       \
+        lsqt_i32 pad;                                                                       \
+        T p[8];               /* BSDF parameters: Lambertian {fR, fT} */                    \
+    } lsqt_dev_layer##SUFFIX;
 
-typedef struct lsqt_dev_layer {
-    lsqt_i32 kind;            /* enum lsqt_bsdf_kind */
-    lsqt_i32 iter_count;
-    lsqt_i32 multiple_scattering;
-    lsqt_i32 pad;
-    float p[8];               /* BSDF parameters: Lambertian {fR, fT} */
-} lsqt_dev_layer;
+#if defined(__OPENCL_C_VERSION__) && defined(LSQT_DOUBLE)
+#pragma OPENCL EXTENSION cl_khr_fp64 : enable
+LSQT_DEV_TABLES(double, )
+#else
+LSQT_DEV_TABLES(float, )
+#endif
+#ifndef __OPENCL_C_VERSION__
+LSQT_DEV_TABLES(double, _d)
+#endif
 
 typedef struct lsqt_dev_scene {
     lsqt_i32 n_layers;

@@ -34,9 +34,10 @@ typedef struct lsqt_sim_stats {
 int lsqt_simulate(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint64_t add_paths,
                   const lsqt_sim_opts *o, lsqt_sim_stats *stats, char *err, size_t errcap);
 
-/* Fills the device tables of an assembly (exposed for the tests). */
-void lsqt_device_tables(const lsqt_assembly *a, lsqt_dev_scene *scene, lsqt_dev_medium *media,
-                        lsqt_dev_layer *layers);
+/* Fills the device tables of an assembly in double precision (exposed for the tests;
+ * a float kernel gets them rounded). */
+void lsqt_device_tables(const lsqt_assembly *a, lsqt_dev_scene *scene, lsqt_dev_medium_d *media,
+                        lsqt_dev_layer_d *layers);
 
 /* NULL when the kernels support every model of the assembly, else the first model name. */
 const char *lsqt_unsupported_model(const lsqt_assembly *a, int *line);
