@@ -45,6 +45,12 @@ static void put_u64(wbuf *w, uint64_t v)
     put_u32(w, (uint32_t)(v >> 32));
 }
 
+static void put_u128(wbuf *w, lsqt_u128 v)
+{
+    put_u64(w, v.lo);
+    put_u64(w, v.hi);
+}
+
 static void put_f64(wbuf *w, double d)
 {
     uint64_t v;
@@ -83,10 +89,10 @@ int lsqt_lss_write(const char *path, const lsqt_state *st, char *err, size_t err
         put_u64(&w, st->paths);
         for (size_t k = 0; k < nw; k++)
             for (int c = 0; c < 3; c++) put_f32(&w, st->wi[((size_t)s * nw + k) * 4 + (size_t)c]);
-        for (size_t i = 0; i < LSQT_BATCHES * nw; i++) put_u64(&w, st->nee[(size_t)s * LSQT_BATCHES * nw + i]);
+        for (size_t i = 0; i < LSQT_BATCHES * nw; i++) put_u128(&w, st->nee[(size_t)s * LSQT_BATCHES * nw + i]);
         for (size_t i = 0; i < LSQT_BATCHES * LSQT_T_COUNT; i++)
-            put_u64(&w, st->scalars[(size_t)s * LSQT_BATCHES * LSQT_T_COUNT + i]);
-        for (size_t i = 0; i < LSQT_HIST_BINS; i++) put_u64(&w, st->hist[(size_t)s * LSQT_HIST_BINS + i]);
+            put_u128(&w, st->scalars[(size_t)s * LSQT_BATCHES * LSQT_T_COUNT + i]);
+        for (size_t i = 0; i < LSQT_HIST_BINS; i++) put_u128(&w, st->hist[(size_t)s * LSQT_HIST_BINS + i]);
     }
     put_u32(&w, lsqt_crc32(0, w.p, w.n));
     if (w.oom) {
@@ -133,6 +139,14 @@ static uint64_t get_u64(rbuf *r)
 {
     uint64_t lo = get_u32(r);
     return lo | (uint64_t)get_u32(r) << 32;
+}
+
+static lsqt_u128 get_u128(rbuf *r)
+{
+    lsqt_u128 v;
+    v.lo = get_u64(r);
+    v.hi = get_u64(r);
+    return v;
 }
 
 static double get_f64(rbuf *r)
@@ -191,8 +205,8 @@ int lsqt_lss_parse(const unsigned char *data, size_t len, lsqt_state *st, char *
         return -1;
     }
     /* The rest must have exactly the size the header announces. */
-    const size_t per_slice = 16 + (size_t)n_wi * 12 + (size_t)LSQT_BATCHES * n_wi * 8 +
-                             LSQT_BATCHES * LSQT_T_COUNT * 8 + LSQT_HIST_BINS * 8;
+    const size_t per_slice = 16 + (size_t)n_wi * 12 + (size_t)LSQT_BATCHES * n_wi * 16 +
+                             LSQT_BATCHES * LSQT_T_COUNT * 16 + LSQT_HIST_BINS * 16;
     if (r.n - r.at != tl + per_slice * n_slices) {
         snprintf(err, errcap, "corrupt LSS file (size does not match its header)");
         return -1;
@@ -219,10 +233,10 @@ int lsqt_lss_parse(const unsigned char *data, size_t len, lsqt_state *st, char *
         if (get_u64(&r) != paths) r.bad = 1;
         for (size_t k = 0; k < nw; k++)
             for (size_t c = 0; c < 3; c++) st->wi[(s * nw + k) * 4 + c] = get_f32(&r);
-        for (size_t i = 0; i < LSQT_BATCHES * nw; i++) st->nee[s * LSQT_BATCHES * nw + i] = get_u64(&r);
+        for (size_t i = 0; i < LSQT_BATCHES * nw; i++) st->nee[s * LSQT_BATCHES * nw + i] = get_u128(&r);
         for (size_t i = 0; i < LSQT_BATCHES * LSQT_T_COUNT; i++)
-            st->scalars[s * LSQT_BATCHES * LSQT_T_COUNT + i] = get_u64(&r);
-        for (size_t i = 0; i < LSQT_HIST_BINS; i++) st->hist[s * LSQT_HIST_BINS + i] = get_u64(&r);
+            st->scalars[s * LSQT_BATCHES * LSQT_T_COUNT + i] = get_u128(&r);
+        for (size_t i = 0; i < LSQT_HIST_BINS; i++) st->hist[s * LSQT_HIST_BINS + i] = get_u128(&r);
     }
     if (r.bad) {
         lsqt_state_free(st);

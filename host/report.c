@@ -29,7 +29,6 @@ void lsqt_report_summary(FILE *f, const lsqt_state *st, const lsqt_slice_est *es
         }
     if (cut) fprintf(f, "warning: %llu paths reached the safety cap of %d events and were stopped\n", cut, LSQT_MAX_EVENTS);
     if (nonfinite) fprintf(f, "warning: %d non-finite estimates were left out of RAW\n", nonfinite);
-    if (st->flags & LSQT_FLAG_OVERFLOW) fprintf(f, "warning: a tally overflowed its fixed-point range; values are clamped\n");
     if (st->flags & LSQT_FLAG_NONFINITE) fprintf(f, "warning: non-finite path contributions were dropped\n");
 }
 

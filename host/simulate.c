@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "lsqt/tally.h"
 #include "lsqt/util.h"
 
 /* Models the kernels can run today; the parser knows them all. */
@@ -223,9 +224,9 @@ int lsqt_simulate(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint
     b.layers = make_buffer(cx, ro, (size_t)n * layer_size, (void *)layers_up, &e);
     b.wo = make_buffer(cx, ro, (size_t)st->n_slices * 4 * sizeof *wo, wo, &e);
     b.wi = make_buffer(cx, ro, (size_t)st->n_slices * 3 * LSQT_PAD4((size_t)st->n_wi) * sizeof(float), wi, &e);
-    b.nee = make_buffer(cx, rw, lsqt_state_nee_count(st) * 8, st->nee, &e);
-    b.scalars = make_buffer(cx, rw, lsqt_state_scalar_count(st) * 8, st->scalars, &e);
-    b.hist = make_buffer(cx, rw, lsqt_state_hist_count(st) * 8, st->hist, &e);
+    b.nee = make_buffer(cx, rw, lsqt_state_nee_count(st) * sizeof *st->nee, st->nee, &e);
+    b.scalars = make_buffer(cx, rw, lsqt_state_scalar_count(st) * sizeof *st->scalars, st->scalars, &e);
+    b.hist = make_buffer(cx, rw, lsqt_state_hist_count(st) * sizeof *st->hist, st->hist, &e);
     b.flags = make_buffer(cx, rw, sizeof flags0, &flags0, &e);
     if (e != CL_SUCCESS) {
         snprintf(err, errcap, "cannot allocate device buffers: %s (%d)", lsqt_cl_error_name(e), (int)e);
@@ -283,9 +284,9 @@ int lsqt_simulate(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint
         snprintf(err, errcap, "kernel launch failed: %s (%d)", lsqt_cl_error_name(e), (int)e);
         goto done;
     }
-    e |= clEnqueueReadBuffer(cx->queue, b.nee, CL_TRUE, 0, lsqt_state_nee_count(st) * 8, st->nee, 0, NULL, NULL);
-    e |= clEnqueueReadBuffer(cx->queue, b.scalars, CL_TRUE, 0, lsqt_state_scalar_count(st) * 8, st->scalars, 0, NULL, NULL);
-    e |= clEnqueueReadBuffer(cx->queue, b.hist, CL_TRUE, 0, lsqt_state_hist_count(st) * 8, st->hist, 0, NULL, NULL);
+    e |= clEnqueueReadBuffer(cx->queue, b.nee, CL_TRUE, 0, lsqt_state_nee_count(st) * sizeof *st->nee, st->nee, 0, NULL, NULL);
+    e |= clEnqueueReadBuffer(cx->queue, b.scalars, CL_TRUE, 0, lsqt_state_scalar_count(st) * sizeof *st->scalars, st->scalars, 0, NULL, NULL);
+    e |= clEnqueueReadBuffer(cx->queue, b.hist, CL_TRUE, 0, lsqt_state_hist_count(st) * sizeof *st->hist, st->hist, 0, NULL, NULL);
     e |= clEnqueueReadBuffer(cx->queue, b.flags, CL_TRUE, 0, sizeof flags0, &flags0, 0, NULL, NULL);
     if (e != CL_SUCCESS) {
         snprintf(err, errcap, "cannot read the tallies back: %s (%d)", lsqt_cl_error_name(e), (int)e);
@@ -295,6 +296,7 @@ int lsqt_simulate(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint
     stats->seconds = lsqt_now() - t0;
     st->paths = pos;
     st->flags |= flags0;
+    if (lsqt_tally_flags_error(flags0, err, errcap)) goto done;
     rc = 0;
 done:
     buffers_release(&b);

@@ -1,5 +1,6 @@
 #include "lsqt/state.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -57,4 +58,13 @@ uint64_t lsqt_batch_paths(uint64_t total, int b)
     uint64_t full = total / LSQT_CHUNK, rest = total % LSQT_CHUNK;
     uint64_t chunks = full / LSQT_BATCHES + ((uint64_t)b < full % LSQT_BATCHES ? 1u : 0u);
     return chunks * LSQT_CHUNK + (full % LSQT_BATCHES == (uint64_t)b ? rest : 0u);
+}
+
+double lsqt_u128_to_double(lsqt_u128 v) { return ldexp((double)v.hi, 64) + (double)v.lo; }
+
+lsqt_u128 lsqt_u128_add(lsqt_u128 a, lsqt_u128 b)
+{
+    lsqt_u128 r = {a.lo + b.lo, a.hi + b.hi};
+    r.hi += r.lo < a.lo;
+    return r;
 }

@@ -1,16 +1,17 @@
 #include "lsqt/tally.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 
 #include "lsqt/util.h"
 
-lsqt_est lsqt_batch_estimate(const uint64_t *sums, size_t stride, uint64_t total_paths, double scale)
+lsqt_est lsqt_batch_estimate(const lsqt_u128 *sums, size_t stride, uint64_t total_paths, double scale)
 {
     lsqt_est r = {0.0, 0.0};
     if (total_paths == 0) return r;
     double total = 0.0;
-    for (int b = 0; b < LSQT_BATCHES; b++) total += (double)sums[(size_t)b * stride];
+    for (int b = 0; b < LSQT_BATCHES; b++) total += lsqt_u128_to_double(sums[(size_t)b * stride]);
     double mean = total / scale / (double)total_paths;
     /* Batches of unequal size: var(mean) = B/(B-1) sum (S_b - n_b mean)^2 / N^2 over the
      * B batches that hold paths. */
@@ -19,13 +20,23 @@ lsqt_est lsqt_batch_estimate(const uint64_t *sums, size_t stride, uint64_t total
     for (int b = 0; b < LSQT_BATCHES; b++) {
         uint64_t nb = lsqt_batch_paths(total_paths, b);
         if (nb == 0) continue;
-        double dev = (double)sums[(size_t)b * stride] / scale - (double)nb * mean;
+        double dev = lsqt_u128_to_double(sums[(size_t)b * stride]) / scale - (double)nb * mean;
         ss += dev * dev;
         used++;
     }
     r.mean = mean;
     r.err = used > 1 ? sqrt(ss * used / (used - 1)) / (double)total_paths : INFINITY;
     return r;
+}
+
+int lsqt_tally_flags_error(uint32_t flags, char *err, size_t errcap)
+{
+    if (!(flags & LSQT_FLAG_OVERFLOW)) return 0;
+    /* A clamped or wrapped tally would be a silently biased result. */
+    snprintf(err, errcap,
+             "a path contribution exceeded the tally range (2^44 = 1.8e13 per event, 2^88 per sum): "
+             "the result would be biased, so nothing is written");
+    return 1;
 }
 
 lsqt_slice_est *lsqt_estimates(const lsqt_state *st)
@@ -37,17 +48,17 @@ lsqt_slice_est *lsqt_estimates(const lsqt_state *st)
         lsqt_slice_est *e = &out[s];
         e->theta_o = st->theta_o[s];
         e->paths = st->paths;
-        const uint64_t *sc = st->scalars + (size_t)s * LSQT_BATCHES * LSQT_T_COUNT;
+        const lsqt_u128 *sc = st->scalars + (size_t)s * LSQT_BATCHES * LSQT_T_COUNT;
         e->R = lsqt_batch_estimate(sc + LSQT_T_R, LSQT_T_COUNT, st->paths, LSQT_FIX_SCALE);
         e->T = lsqt_batch_estimate(sc + LSQT_T_T, LSQT_T_COUNT, st->paths, LSQT_FIX_SCALE);
         e->delta_T = lsqt_batch_estimate(sc + LSQT_T_DELTA_T, LSQT_T_COUNT, st->paths, LSQT_FIX_SCALE);
-        for (int b = 0; b < LSQT_BATCHES; b++) e->cut += sc[(size_t)b * LSQT_T_COUNT + LSQT_T_CUT];
+        for (int b = 0; b < LSQT_BATCHES; b++) e->cut += sc[(size_t)b * LSQT_T_COUNT + LSQT_T_CUT].lo;
         e->f = calloc(nw, sizeof *e->f);
         if (!e->f) {
             lsqt_estimates_free(out, st->n_slices);
             return NULL;
         }
-        const uint64_t *nee = st->nee + (size_t)s * LSQT_BATCHES * nw;
+        const lsqt_u128 *nee = st->nee + (size_t)s * LSQT_BATCHES * nw;
         for (size_t k = 0; k < nw; k++) {
             lsqt_est c = lsqt_batch_estimate(nee + k, nw, st->paths, LSQT_FIX_SCALE);
             double cz = fabs((double)st->wi[((size_t)s * nw + k) * 4 + 2]);

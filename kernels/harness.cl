@@ -37,3 +37,22 @@ __kernel void harness_eval(__global const lsqt_dev_layer *layers,
     out[2 * i] = (float)(use_phase ? phase_eval(media, wo, d) : bsdf_eval(layers, wo, d));
     out[2 * i + 1] = (float)(use_phase ? phase_pdf(media, wo, d) : bsdf_pdf(layers, wo, d));
 }
+
+/* Tallies: every work-item adds its value into the work-group's 128-bit accumulator (in
+ * local memory, as the walk's) and straight into global tally 0; the group's sum then
+ * goes to global tally 1. out: two tallies of two 64-bit words. */
+__kernel void harness_tally(__global const float *v, __global ulong *out, volatile __global uint *flags)
+{
+    __local acc_word acc[LSQT_ACC_WORDS];
+    const int lid = (int)get_local_id(0);
+    if (lid < LSQT_ACC_WORDS) acc[lid] = 0;
+    barrier(CLK_LOCAL_MEM_FENCE);
+    fix1 q = to_fixed((real)v[get_global_id(0)], flags);
+    local_add128(acc, q.lo, q.hi, flags);
+    global_add128(out, q.lo, q.hi, flags);
+    barrier(CLK_LOCAL_MEM_FENCE);
+    if (lid == 0) {
+        fix1 t = acc_read(acc);
+        global_add128(out + 2, t.lo, t.hi, flags);
+    }
+}

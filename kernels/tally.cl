@@ -1,19 +1,32 @@
-/* Order-independent tallies: values become 64-bit unsigned fixed point and are added with
- * integer atomics, so the sums do not depend on thread scheduling, work-group size or how
- * the path range was split. Every add detects a carry out of 64 bits and raises a flag
- * instead of wrapping silently. Without cl_khr_int64_base_atomics a 64-bit word is two
- * 32-bit words (little-endian device, checked by the host) with an explicit carry. */
+/* Order-independent tallies: values become 128-bit unsigned fixed point (2^-LSQT_FIX_BITS
+ * units, two 64-bit words, low first) and are added with integer atomics, so the sums do
+ * not depend on thread scheduling, work-group size or how the path range was split. A
+ * contribution may be up to LSQT_FIX_MAX_VALUE (above 1e13) and as small as 1e-12; 2^128
+ * units hold 1e10 of the largest. Adds propagate carries word by word and raise a flag
+ * instead of wrapping. Without cl_khr_int64_base_atomics a 64-bit word is two 32-bit
+ * words (little-endian device, checked by the host). */
 #if defined(cl_khr_int64_base_atomics) && !defined(LSQT_NO_INT64_ATOMICS)
 #pragma OPENCL EXTENSION cl_khr_int64_base_atomics : enable
 #define LSQT_INT64_ATOMICS 1
 #endif
 
-/* Largest value accepted per contribution; beyond it the flag is raised (keeps per-chunk
- * local sums far from 2^64). */
-#define LSQT_FIX_MAX_VALUE R(1048576.0)
+/* Largest value accepted per contribution (2^44 = 1.76e13): anything larger raises
+ * LSQT_FLAG_OVERFLOW, which fails the run (the host never reports a clamped result). */
+#define LSQT_FIX_MAX_VALUE R(17592186044416.0)
+#define LSQT_TWO64 R(18446744073709551616.0)
 
-/* Four values at once; non-finite or negative lanes raise a flag and count as 0. */
-inline ulong4 to_fixed4(real4 v, volatile __global uint *flags)
+typedef struct {
+    ulong4 lo, hi;
+} fix4;
+
+typedef struct {
+    ulong lo, hi;
+} fix1;
+
+/* Four values at once, each rounded to the nearest unit (a float sum x + 0.5 that ties
+ * may round up once more: at most one unit, 1e-7 relative, and the same every time);
+ * non-finite or negative lanes raise a flag and count as 0. */
+inline fix4 to_fixed4(real4 v, volatile __global uint *flags)
 {
     mask4 bad = isnan(v) | isinf(v) | (v < R(0.0));
     if (any(bad)) {
@@ -24,48 +37,98 @@ inline ulong4 to_fixed4(real4 v, volatile __global uint *flags)
         atomic_or(flags, LSQT_FLAG_OVERFLOW);
         v = fmin(v, LSQT_FIX_MAX_VALUE);
     }
-    /* Values are below 2^51, so the signed conversion (one instruction per lane on x86,
-     * where the unsigned one branches) is exact. */
-#ifdef LSQT_DOUBLE
-    return as_ulong4(convert_long4(v * LSQT_FIX_SCALE + 0.5));
-#else
-    return as_ulong4(convert_long4(v * (float)LSQT_FIX_SCALE + 0.5f));
-#endif
+    real4 x = v * (real)LSQT_FIX_SCALE;
+    fix4 r;
+    /* Almost every value is below 2^63 units (8e6): one signed conversion per lane (on
+     * x86 the unsigned one branches). Larger ones are whole numbers of units and split
+     * into words exactly: the scalings are powers of two and the remainder holds only low
+     * bits of x. */
+    if (all(x < R(0.5) * LSQT_TWO64)) {
+        r.lo = as_ulong4(convert_long4(x + R(0.5))); /* to nearest (rte costs 20 % here) */
+        r.hi = (ulong4)(0);
+    } else {
+        real4 h = floor(x / LSQT_TWO64);
+        r.hi = convert_ulong4(h);
+        r.lo = convert_ulong4(x - h * LSQT_TWO64);
+    }
+    return r;
 }
 
 /* One value: lane x of the same conversion. */
-inline ulong to_fixed(real v, volatile __global uint *flags)
+inline fix1 to_fixed(real v, volatile __global uint *flags)
 {
-    return to_fixed4((real4)(v), flags).x;
+    fix4 q = to_fixed4((real4)(v), flags);
+    fix1 r = {q.lo.x, q.hi.x};
+    return r;
 }
 
-/* Adds v to a 64-bit word held as two 32-bit local words (lo, hi). */
-inline void local_add64(volatile __local uint *lo, volatile __local uint *hi, ulong v,
-                        volatile __global uint *flags)
-{
-    uint vlo = (uint)v, vhi = (uint)(v >> 32);
-    uint old = atomic_add(lo, vlo);
-    if (old + vlo < old) vhi++;
-    if (vhi) {
-        uint oh = atomic_add(hi, vhi);
-        if (oh + vhi < oh) atomic_or(flags, LSQT_FLAG_OVERFLOW);
-    }
-}
+/* 128-bit add into four 32-bit words w[0..3] (low first) with atomics on each word: a
+ * word that wraps carries one into the next, counted by the add that wrapped it, so the
+ * total is exact whatever the order. Zero words cost nothing. */
+#define LSQT_ADD128_WORDS(w, lo, hi, flags)                                          \
+    do {                                                                             \
+        uint v_[4] = {(uint)(lo), (uint)((lo) >> 32), (uint)(hi), (uint)((hi) >> 32)}; \
+        uint carry_ = 0;                                                             \
+        for (int i_ = 0; i_ < 4; i_++) {                                             \
+            uint add_ = v_[i_] + carry_;                                             \
+            carry_ = add_ < carry_;                                                  \
+            if (add_ == 0) continue;                                                 \
+            uint old_ = atomic_add(&(w)[i_], add_);                                  \
+            carry_ += old_ + add_ < old_;                                            \
+        }                                                                            \
+        if (carry_) atomic_or(flags, LSQT_FLAG_OVERFLOW);                            \
+    } while (0)
 
-inline void global_add64(__global ulong *p, ulong v, volatile __global uint *flags)
-{
-    if (v == 0) return;
+/* The work-group accumulators: 64-bit words where the device has 64-bit atomics (one
+ * atomic per add as a rule: the high word only takes carries), else 32-bit words. */
 #ifdef LSQT_INT64_ATOMICS
-    ulong old = atom_add((volatile __global ulong *)p, v);
-    if (old + v < old) atomic_or(flags, LSQT_FLAG_OVERFLOW);
+typedef ulong acc_word;
+#define LSQT_ACC_WORDS 2
+#else
+typedef uint acc_word;
+#define LSQT_ACC_WORDS 4
+#endif
+
+inline void local_add128(volatile __local acc_word *w, ulong lo, ulong hi, volatile __global uint *flags)
+{
+#ifdef LSQT_INT64_ATOMICS
+    if (lo) {
+        ulong old = atom_add(&w[0], lo);
+        hi += old + lo < old ? 1ul : 0ul;
+    }
+    if (hi) {
+        ulong oh = atom_add(&w[1], hi);
+        if (oh + hi < oh) atomic_or(flags, LSQT_FLAG_OVERFLOW);
+    }
+#else
+    LSQT_ADD128_WORDS(w, lo, hi, flags);
+#endif
+}
+
+/* The 128-bit value of accumulator w (LSQT_ACC_WORDS words). */
+inline fix1 acc_read(volatile __local acc_word *w)
+{
+#ifdef LSQT_INT64_ATOMICS
+    fix1 r = {w[0], w[1]};
+#else
+    fix1 r = {((ulong)w[1] << 32) | (ulong)w[0], ((ulong)w[3] << 32) | (ulong)w[2]};
+#endif
+    return r;
+}
+
+/* p: two 64-bit words (low first). */
+inline void global_add128(__global ulong *p, ulong lo, ulong hi, volatile __global uint *flags)
+{
+    if (lo == 0 && hi == 0) return;
+#ifdef LSQT_INT64_ATOMICS
+    ulong old = atom_add((volatile __global ulong *)p, lo);
+    ulong h = hi + (old + lo < old ? 1ul : 0ul);
+    if (h) {
+        ulong oh = atom_add((volatile __global ulong *)(p + 1), h);
+        if (oh + h < oh) atomic_or(flags, LSQT_FLAG_OVERFLOW);
+    }
 #else
     volatile __global uint *w = (volatile __global uint *)p;
-    uint vlo = (uint)v, vhi = (uint)(v >> 32);
-    uint old = atomic_add(&w[0], vlo);
-    if (old + vlo < old) vhi++;
-    if (vhi) {
-        uint oh = atomic_add(&w[1], vhi);
-        if (oh + vhi < oh) atomic_or(flags, LSQT_FLAG_OVERFLOW);
-    }
+    LSQT_ADD128_WORDS(w, lo, hi, flags);
 #endif
 }

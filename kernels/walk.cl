@@ -11,9 +11,10 @@
 
 #define LSQT_NWI_PAD LSQT_PAD4(LSQT_NWI)
 
-/* Work-group accumulators of the scalar tallies. Point estimates are summed per
- * work-item in private integers first (no atomics on the hot path), then once per
- * work-item into the work-group's; integer sums keep the result independent of order. */
+/* Work-group accumulators of the tallies: ACC_N 128-bit sums (tally.cl's acc_word).
+ * Point estimates are summed per work-item in private 128-bit integers first (no atomics
+ * on the hot path), then once per work-item into the work-group's; integer sums keep the
+ * result independent of order. */
 #define ACC_N (LSQT_NWI + LSQT_T_COUNT)
 
 typedef struct {
@@ -21,15 +22,17 @@ typedef struct {
     __global const lsqt_dev_medium *media;
     __global const lsqt_dev_layer *layers;
     __global const float *wi;          /* this slice's directions: x[pad], y[pad], z[pad] */
-    ulong *nee;                        /* this work-item's point-estimate sums (private) */
-    volatile __local uint *acc_lo;     /* the work-group's tallies */
-    volatile __local uint *acc_hi;
+    ulong *nee;                        /* this work-item's point-estimate sums, low words */
+    volatile __local acc_word *acc;    /* the work-group's tallies, LSQT_ACC_WORDS each */
     volatile __global uint *flags;
 } walk_ctx;
 
 inline void acc_add(const walk_ctx *c, int k, real v)
 {
-    if (v != R(0.0)) local_add64(&c->acc_lo[k], &c->acc_hi[k], to_fixed(v, c->flags), c->flags);
+    if (v != R(0.0)) {
+        fix1 q = to_fixed(v, c->flags);
+        local_add128(c->acc + LSQT_ACC_WORDS * k, q.lo, q.hi, c->flags);
+    }
 }
 
 inline dir4 wi_dir4(const walk_ctx *c, int k)
@@ -41,8 +44,9 @@ inline dir4 wi_dir4(const walk_ctx *c, int k)
 
 /* Adds, to directions k..k+3, model values f times the transmittance of the media the
  * light crosses on its way out (optical thickness tau_up above, tau_down below), only
- * where leaving that way is allowed. Contributions are below 2^50 (to_fixed4 clamps), so
- * a private sum needs 2^14 of them at the maximum to wrap; the check costs one compare. */
+ * where leaving that way is allowed. A work-item keeps only the low 64-bit words; a high
+ * word (a contribution above 2^63 units, 8e6, or a carry out of the low word) is rare
+ * and goes straight to the work-group's 128-bit sum, where it counts the same. */
 inline void nee_add4(const walk_ctx *c, int k, real4 f, real4 z, real tau_up, real tau_down, int up, int down)
 {
     real4 t = (real4)(R(1.0));
@@ -50,17 +54,23 @@ inline void nee_add4(const walk_ctx *c, int k, real4 f, real4 z, real tau_up, re
         t = exp(-select((real4)(tau_down), (real4)(tau_up), z > R(0.0)) / fabs(z));
     mask4 ok = ((z > R(0.0)) & (mask4)(up ? -1 : 0)) | ((z < R(0.0)) & (mask4)(down ? -1 : 0));
     if (!any(ok)) return;
-    ulong4 q = to_fixed4(select((real4)(R(0.0)), f * t, ok), c->flags);
-    ulong4 old = vload4(0, c->nee + k), sum = old + q;
-    if (any(sum < old)) atomic_or(c->flags, LSQT_FLAG_OVERFLOW);
+    fix4 q = to_fixed4(select((real4)(R(0.0)), f * t, ok), c->flags);
+    ulong4 old = vload4(0, c->nee + k), sum = old + q.lo;
     vstore4(sum, 0, c->nee + k);
+    if (any(q.hi != 0) || any(sum < old)) {
+        ulong4 h = q.hi + select((ulong4)(0), (ulong4)(1), sum < old);
+        ulong hs[4];
+        vstore4(h, 0, hs);
+        for (int i = 0; i < 4; i++)
+            if (hs[i]) local_add128(c->acc + LSQT_ACC_WORDS * (k + i), 0, hs[i], c->flags);
+    }
 }
 
-/* A contribution below 2^-31 rounds to 0 in fixed point. Weights are at most 1 and
- * values at most 2^20 (to_fixed clamps), so light that must cross more than this optical
- * thickness (exp(-40) < 2^-51) cannot change a tally: skipping it is exact, and saves
- * the work at the deep vertices of optically thick media. */
-#define LSQT_NEE_TAU_MAX R(40.0)
+/* A contribution below 2^-41 rounds to 0 in fixed point. Weights are at most 1 and
+ * values at most 2^44 (a larger one fails the run), so light that must cross more than
+ * this optical thickness (exp(-60) < 2^-86) cannot change a tally: skipping it is exact,
+ * and saves the work at the deep vertices of optically thick media. */
+#define LSQT_NEE_TAU_MAX R(60.0)
 
 inline int nee_visible(real tau_up, real tau_down, int up, int down)
 {
@@ -127,7 +137,7 @@ inline void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulong *hi
     int scattered = 0, at_layer = 1, layer = 0, medium = 0;
     for (int events = 0;; events++) {
         if (events >= LSQT_MAX_EVENTS) {
-            local_add64(&c->acc_lo[LSQT_NWI + LSQT_T_CUT], &c->acc_hi[LSQT_NWI + LSQT_T_CUT], 1, c->flags);
+            local_add128(c->acc + LSQT_ACC_WORDS * (LSQT_NWI + LSQT_T_CUT), 1, 0, c->flags);
             return;
         }
         if (at_layer) {
@@ -156,7 +166,8 @@ inline void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulong *hi
                 int up = medium == 0;
                 acc_add(c, LSQT_NWI + (up ? LSQT_T_R : LSQT_T_T), w);
                 if (scattered) {
-                    global_add64(&hist[hist_bin(d, up)], to_fixed(w, c->flags), c->flags);
+                    fix1 q = to_fixed(w, c->flags);
+                    global_add128(hist + 2 * hist_bin(d, up), q.lo, q.hi, c->flags);
                 } else {
                     acc_add(c, LSQT_NWI + LSQT_T_DELTA_T, w);
                 }
@@ -202,7 +213,7 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
                         __global ulong *nee, __global ulong *scalars, __global ulong *hist,
                         volatile __global uint *flags)
 {
-    __local uint acc_lo[ACC_N], acc_hi[ACC_N];
+    __local acc_word acc[LSQT_ACC_WORDS * ACC_N];
     const int lid = (int)get_local_id(0), lsz = (int)get_local_size(0);
     const uint slice = (uint)get_global_id(1);
     const ulong chunk = chunk_first + get_group_id(0);
@@ -210,25 +221,25 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
     const ulong end = min((chunk + 1) * LSQT_CHUNK, path_end);
     const int batch = (int)(chunk % LSQT_BATCHES);
 
-    for (int k = lid; k < ACC_N; k += lsz) acc_lo[k] = acc_hi[k] = 0;
+    for (int k = lid; k < LSQT_ACC_WORDS * ACC_N; k += lsz) acc[k] = 0;
     barrier(CLK_LOCAL_MEM_FENCE);
 
     ulong nee_priv[LSQT_NWI_PAD];
     for (int k = 0; k < LSQT_NWI_PAD; k++) nee_priv[k] = 0;
-    walk_ctx c = {scene, media, layers, wi_dirs + 3 * LSQT_NWI_PAD * slice, nee_priv, acc_lo, acc_hi, flags};
+    walk_ctx c = {scene, media, layers, wi_dirs + 3 * LSQT_NWI_PAD * slice, nee_priv, acc, flags};
     real3 wo = make_real3(wo_dirs[4 * slice], wo_dirs[4 * slice + 1], wo_dirs[4 * slice + 2]);
     for (ulong p = begin + (ulong)lid; p < end; p += (ulong)lsz) {
         rng_t rng = rng_init(scene->seed_lo, scene->seed_hi, slice, p, RNG_PURPOSE_WALK);
-        run_path(&c, wo, &rng, hist + (ulong)slice * LSQT_HIST_BINS);
+        run_path(&c, wo, &rng, hist + 2 * (ulong)slice * LSQT_HIST_BINS);
     }
     for (int k = 0; k < LSQT_NWI; k++)
-        if (nee_priv[k]) local_add64(&acc_lo[k], &acc_hi[k], nee_priv[k], flags);
+        if (nee_priv[k]) local_add128(acc + LSQT_ACC_WORDS * k, nee_priv[k], 0, flags);
     barrier(CLK_LOCAL_MEM_FENCE);
 
     ulong base = (ulong)slice * LSQT_BATCHES + (ulong)batch;
     for (int k = lid; k < ACC_N; k += lsz) {
-        ulong v = ((ulong)acc_hi[k] << 32) | (ulong)acc_lo[k];
-        if (k < LSQT_NWI) global_add64(&nee[base * LSQT_NWI + k], v, flags);
-        else global_add64(&scalars[base * LSQT_T_COUNT + (k - LSQT_NWI)], v, flags);
+        fix1 v = acc_read(acc + LSQT_ACC_WORDS * k);
+        if (k < LSQT_NWI) global_add128(nee + 2 * (base * LSQT_NWI + k), v.lo, v.hi, flags);
+        else global_add128(scalars + 2 * (base * LSQT_T_COUNT + (k - LSQT_NWI)), v.lo, v.hi, flags);
     }
 }

@@ -15,9 +15,12 @@ static void fill(lsqt_state *st)
     st->flags = 2;
     for (int s = 0; s < 3; s++) st->theta_o[s] = 0.1 * s;
     for (size_t i = 0; i < (size_t)3 * 16 * 4; i++) st->wi[i] = (i % 4 == 3) ? 0.0f : (float)i * 0.01f;
-    for (size_t i = 0; i < lsqt_state_nee_count(st); i++) st->nee[i] = i * 0x9E3779B97F4A7C15ULL;
-    for (size_t i = 0; i < lsqt_state_scalar_count(st); i++) st->scalars[i] = i * 77;
-    for (size_t i = 0; i < lsqt_state_hist_count(st); i++) st->hist[i] = i ^ 0xFFFF;
+    for (size_t i = 0; i < lsqt_state_nee_count(st); i++) {
+        st->nee[i].lo = i * 0x9E3779B97F4A7C15ULL;
+        st->nee[i].hi = i * 0x5851F42D4C957F2DULL; /* both words must round-trip */
+    }
+    for (size_t i = 0; i < lsqt_state_scalar_count(st); i++) st->scalars[i].lo = i * 77, st->scalars[i].hi = i;
+    for (size_t i = 0; i < lsqt_state_hist_count(st); i++) st->hist[i].lo = i ^ 0xFFFF, st->hist[i].hi = ~i;
 }
 
 int main(void)
@@ -39,9 +42,9 @@ int main(void)
     CHECK(a.n_slices == b.n_slices && a.n_wi == b.n_wi && a.transmits == b.transmits, "shape differs");
     CHECK(memcmp(a.theta_o, b.theta_o, 3 * sizeof(double)) == 0, "theta_o differs");
     CHECK(memcmp(a.wi, b.wi, (size_t)3 * 16 * 4 * sizeof(float)) == 0, "wi differs");
-    CHECK(memcmp(a.nee, b.nee, lsqt_state_nee_count(&a) * 8) == 0, "nee differs");
-    CHECK(memcmp(a.scalars, b.scalars, lsqt_state_scalar_count(&a) * 8) == 0, "scalars differ");
-    CHECK(memcmp(a.hist, b.hist, lsqt_state_hist_count(&a) * 8) == 0, "hist differs");
+    CHECK(memcmp(a.nee, b.nee, lsqt_state_nee_count(&a) * sizeof *a.nee) == 0, "nee differs");
+    CHECK(memcmp(a.scalars, b.scalars, lsqt_state_scalar_count(&a) * sizeof *a.scalars) == 0, "scalars differ");
+    CHECK(memcmp(a.hist, b.hist, lsqt_state_hist_count(&a) * sizeof *a.hist) == 0, "hist differs");
     lsqt_state_free(&b);
 
     /* Writing the same state twice gives the same bytes. */

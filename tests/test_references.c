@@ -55,12 +55,12 @@ static void wi_of(const lsqt_state *st, int s, int k, double v[3])
     v[2] = p[2];
 }
 
-/* Batch sums of the RAW point estimate at (s, k): nee / 2^30 / |wi.z|. */
+/* Batch sums of the RAW point estimate at (s, k): nee / 2^40 / |wi.z|. */
 static double batch_f(const lsqt_state *st, int s, int b, int k)
 {
-    const uint64_t *nee = st->nee + (size_t)s * NB * (size_t)st->n_wi;
+    const lsqt_u128 *nee = st->nee + (size_t)s * NB * (size_t)st->n_wi;
     double z = st->wi[((size_t)s * (size_t)st->n_wi + (size_t)k) * 4 + 2];
-    return (double)nee[(size_t)b * (size_t)st->n_wi + (size_t)k] / LSQT_FIX_SCALE / fabs(z);
+    return lsqt_u128_to_double(nee[(size_t)b * (size_t)st->n_wi + (size_t)k]) / LSQT_FIX_SCALE / fabs(z);
 }
 
 /* Ratio estimate sum(y) / sum(x) over the batches, with its batch-means standard error
@@ -233,7 +233,7 @@ static void test_single_scattering(void)
                  * exactly 1) instead of all paths: the count's noise cancels and what is
                  * left checks the value tallied per collision, om p e^{-tau_out/mui}, to
                  * ~0.1%. Both lie in [1, 1 + mean bound/ref] up to noise. */
-                const uint64_t *sc = st.scalars + (size_t)s * NB * LSQT_T_COUNT;
+                const lsqt_u128 *sc = st.scalars + (size_t)s * NB * LSQT_T_COUNT;
                 for (int up = 0; up <= 1; up++) {
                     int ks[NWI], n = 0;
                     double bmean = 0.0;
@@ -250,7 +250,7 @@ static void test_single_scattering(void)
                         for (int i = 0; i < n; i++) y[b] += batch_f(&st, s, b, ks[i]) / ref[ks[i]];
                         y[b] *= p1 / n;
                         x[b] = (double)lsqt_batch_paths(st.paths, b) -
-                               (double)sc[(size_t)b * LSQT_T_COUNT + LSQT_T_DELTA_T] / LSQT_FIX_SCALE;
+                               lsqt_u128_to_double(sc[(size_t)b * LSQT_T_COUNT + LSQT_T_DELTA_T]) / LSQT_FIX_SCALE;
                     }
                     lsqt_est C = batch_ratio(y, x);
                     const char *h = up ? "R" : "T";
@@ -418,8 +418,8 @@ static void test_absorber_lambertian(void)
     /* The way in is analog (a path survives tau/muo with chance e^{-tau/muo}) and the same
      * for every wi; the way out is the next-event transmittance. So
      * f(wi) = fR/pi e^{-tau/muo} e^{-tau/mui}, and f e^{tau/mui} is one number for all wi:
-     * every surviving path arrives with weight 1 and adds round(v 2^30) to direction k,
-     * v = fR mui/pi e^{-tau/mui} in float. Its relative error is at most 2^-31/v (fixed
+     * every surviving path arrives with weight 1 and adds round(v 2^40) to direction k,
+     * v = fR mui/pi e^{-tau/mui} in float. Its relative error is at most 2^-41/v (fixed
      * point) plus a few float roundings: fR mui/pi (3), 1/mui (1, times the exponent
      * x = tau/mui), exp (<= 3 ulp by OpenCL), f*t (1); allowed: twice that. */
     const double deg[] = {0, 45, 75}, fr = 0.5, tau = 1.0;
@@ -438,7 +438,7 @@ static void test_absorber_lambertian(void)
             wi_of(&st, s, k, wi);
             const double x = tau / wi[2], v = fr * wi[2] / PI * exp(-x);
             scaled[k] = e[s].f[k].mean * exp(x);
-            tol[k] = v * LSQT_FIX_SCALE >= 1.0 ? 2.0 * (ldexp(1.0, -31) / v + (8.0 + x) * eps) : -1.0;
+            tol[k] = v * LSQT_FIX_SCALE >= 1.0 ? 2.0 * ((0.5 / LSQT_FIX_SCALE) / v + (8.0 + x) * eps) : -1.0;
             if (wi[2] > st.wi[((size_t)s * NWI + (size_t)kb) * 4 + 2]) kb = k;
         }
         int used = 0;
@@ -468,7 +468,7 @@ static void test_absorber_lambertian(void)
 /* A Lambertian that every exit on one side crosses last makes f there a constant: the
  * point estimates on that side come only from that layer, w fT |cos|/pi per arrival, and
  * every weight here is 1 (no absorption, fR + fT = 1), so f = (arrivals/N) fT/pi in every
- * direction, to fixed-point and float rounding: 2^-31 pi/mui + a few 2^-24 < 1e-6 for
+ * direction, to fixed-point and float rounding: 2^-41 pi/mui + a few 2^-24 < 1e-6 for
  * mui >= 1/64. A next-event estimate from the medium on the wrong side of the layer would
  * add light with the phase function's shape. */
 /* E3(tau) = integral over mu in (0, 1] of mu exp(-tau / mu): the cosine-weighted
@@ -503,7 +503,7 @@ static void check_constant_side(const char *what, const char *text, int upper, d
             wi_of(&st, s, k, wi);
             if ((wi[2] > 0) != upper) continue;
             /* A contribution is at least 0.25 fT |mu| exp(-tau/mu) / pi (roulette keeps
-             * weights >= 0.25): where that is below 1e-3, fixed-point rounding (2^-31
+             * weights >= 0.25): where that is below 1e-3, fixed-point rounding (2^-41
              * each) could exceed 5e-7 relative, so such grazing directions are left out. */
             double mu = fabs(wi[2]), vmin = 0.25 * fT * mu * exp(-tau / mu) / PI;
             if (vmin < 1e-3) continue;
@@ -514,7 +514,7 @@ static void check_constant_side(const char *what, const char *text, int upper, d
             spread = fmax(spread, fabs(r));
             /* float rounding of the value and of exp(-tau/mu) on the device, and the
              * fixed-point rounding bound */
-            double tol = 1e-6 + (8.0 + tau / mu) * ldexp(1.0, -24) + ldexp(1.0, -31) / vmin;
+            double tol = 1e-6 + (8.0 + tau / mu) * ldexp(1.0, -24) + (0.5 / LSQT_FIX_SCALE) / vmin;
             CHECK(fabs(r) <= tol, "%s to=%g wi.z=%.3f: f exp(tau/mu) %.9g differs from %.9g by %.3g", what, deg[s],
                   wi[2], c, c0, r);
         }

@@ -20,11 +20,12 @@ static lsqt_est nee_albedo_minus(const lsqt_state *st, int s, int upper, double 
     const double w = (st->transmits ? 4.0 : 2.0) * PI / st->n_wi, n = (double)st->paths;
     double d[LSQT_BATCHES], total = 0;
     for (int b = 0; b < LSQT_BATCHES; b++) {
-        const uint64_t *nee = st->nee + ((size_t)s * LSQT_BATCHES + (size_t)b) * nw;
+        const lsqt_u128 *nee = st->nee + ((size_t)s * LSQT_BATCHES + (size_t)b) * nw;
         double a = 0;
         for (size_t k = 0; k < nw; k++)
-            if ((st->wi[((size_t)s * nw + k) * 4 + 2] > 0) == upper) a += w * (double)nee[k]; /* cosine included */
-        double r = (double)st->scalars[((size_t)s * LSQT_BATCHES + (size_t)b) * LSQT_T_COUNT + LSQT_T_R];
+            if ((st->wi[((size_t)s * nw + k) * 4 + 2] > 0) == upper)
+                a += w * lsqt_u128_to_double(nee[k]); /* cosine included */
+        double r = lsqt_u128_to_double(st->scalars[((size_t)s * LSQT_BATCHES + (size_t)b) * LSQT_T_COUNT + LSQT_T_R]);
         d[b] = (a - c * r) / LSQT_FIX_SCALE;
         total += d[b];
     }
@@ -35,25 +36,25 @@ static lsqt_est nee_albedo_minus(const lsqt_state *st, int s, int upper, double 
     return e;
 }
 
-/* Sum of fixed-point tallies over batches (or bins) of one slice. */
-static uint64_t sum_u64(const uint64_t *p, size_t n, size_t stride)
+/* Exact sum of fixed-point tallies over batches (or bins) of one slice. */
+static lsqt_u128 sum_u128(const lsqt_u128 *p, size_t n, size_t stride)
 {
-    uint64_t t = 0;
-    for (size_t i = 0; i < n; i++) t += p[i * stride];
+    lsqt_u128 t = {0, 0};
+    for (size_t i = 0; i < n; i++) t = lsqt_u128_add(t, p[i * stride]);
     return t;
 }
 
 /* Every scattered exit lands in one histogram bin with the same fixed-point weight as
- * its R or T tally: the integer sums must agree exactly. */
+ * its R or T tally: the integer sums must agree exactly (R + T = binned + delta_T). */
 static void check_hist_total(const lsqt_state *st, int s)
 {
-    const uint64_t *sc = st->scalars + (size_t)s * LSQT_BATCHES * LSQT_T_COUNT;
-    uint64_t exits = sum_u64(sc + LSQT_T_R, LSQT_BATCHES, LSQT_T_COUNT) +
-                     sum_u64(sc + LSQT_T_T, LSQT_BATCHES, LSQT_T_COUNT) -
-                     sum_u64(sc + LSQT_T_DELTA_T, LSQT_BATCHES, LSQT_T_COUNT);
-    uint64_t binned = sum_u64(st->hist + (size_t)s * LSQT_HIST_BINS, LSQT_HIST_BINS, 1);
-    CHECK(exits == binned, "slice %d: histogram holds %llu, exits %llu", s, (unsigned long long)binned,
-          (unsigned long long)exits);
+    const lsqt_u128 *sc = st->scalars + (size_t)s * LSQT_BATCHES * LSQT_T_COUNT;
+    lsqt_u128 exits = lsqt_u128_add(sum_u128(sc + LSQT_T_R, LSQT_BATCHES, LSQT_T_COUNT),
+                                    sum_u128(sc + LSQT_T_T, LSQT_BATCHES, LSQT_T_COUNT));
+    lsqt_u128 binned = lsqt_u128_add(sum_u128(st->hist + (size_t)s * LSQT_HIST_BINS, LSQT_HIST_BINS, 1),
+                                     sum_u128(sc + LSQT_T_DELTA_T, LSQT_BATCHES, LSQT_T_COUNT));
+    CHECK(exits.lo == binned.lo && exits.hi == binned.hi, "slice %d: histogram + delta_T holds %.17g, exits %.17g",
+          s, lsqt_u128_to_double(binned), lsqt_u128_to_double(exits));
 }
 
 static void test_lambertian(void)
@@ -69,11 +70,11 @@ static void test_lambertian(void)
         check_hist_total(&st, s);
         /* Exits are cosine distributed: row i of the |cos| grid holds (2i+1)/N^2 of them.
          * Every path weighs exactly fR, so weight / fR counts paths (chi-square). */
-        const uint64_t *h = st.hist + (size_t)s * LSQT_HIST_BINS;
+        const lsqt_u128 *h = st.hist + (size_t)s * LSQT_HIST_BINS;
         const double unit = 0.6 * LSQT_FIX_SCALE, n = (double)st.paths;
         double chi2 = 0.0;
         for (int i = 0; i < LSQT_HIST_NMU; i++) {
-            double got = (double)sum_u64(h + (size_t)i * LSQT_HIST_NPHI, LSQT_HIST_NPHI, 1) / unit;
+            double got = lsqt_u128_to_double(sum_u128(h + (size_t)i * LSQT_HIST_NPHI, LSQT_HIST_NPHI, 1)) / unit;
             double want = n * (2.0 * i + 1.0) / (LSQT_HIST_NMU * LSQT_HIST_NMU);
             chi2 += (got - want) * (got - want) / want;
         }
@@ -88,7 +89,8 @@ static void test_lambertian(void)
 /* A path that leaves the stack right after a bounce is never rouletted: a single
  * Lambertian layer reflects exactly fR per path, with no noise at all (roulette there
  * gave 0.0975 +- 0.0013 for fR = 0.1). fR is a float on the device and each path's
- * weight rounds once to the 2^-30 grid, so R is fR to within 2^-31 + float rounding. */
+ * weight rounds once to the 2^-40 grid, so R is fR to within half a unit + float
+ * rounding (fR = 3e-9 is 3299 units: resolved, not 0 +- 0). */
 static void test_roulette_exit(void)
 {
     const double deg[] = {0, 60};
@@ -99,7 +101,7 @@ static void test_roulette_exit(void)
         lsqt_state st;
         lsqt_slice_est *e = fixture_run(text, 2, deg, 16, 20000, 11, &st);
         for (int s = 0; s < 2; s++) {
-            CHECK(fabs(e[s].R.mean - fr[i]) <= ldexp(1.0, -31) + 1e-7 * fr[i], "fR=%g slice %d: R = %.12g", fr[i], s,
+            CHECK(fabs(e[s].R.mean - fr[i]) <= (0.5 / LSQT_FIX_SCALE) + 1e-7 * fr[i], "fR=%g slice %d: R = %.12g", fr[i], s,
                   e[s].R.mean);
             CHECK(e[s].R.err == 0.0, "fR=%g slice %d: R has an error %.3g (every path carries fR)", fr[i], s,
                   e[s].R.err);
@@ -110,8 +112,8 @@ static void test_roulette_exit(void)
 }
 
 /* --double is double end to end: the layer's fR = 0.1 reaches the kernel unrounded. Every
- * path reflects exactly fR, rounded once to the 2^-30 grid, so in double R = 0.1 within
- * 2^-31, while the float 0.1f = 0.1 + 1.49e-9 is three times further off than that. */
+ * path reflects exactly fR, rounded once to the 2^-40 grid, so in double R = 0.1 within
+ * half a unit (4.5e-13), while the float 0.1f = 0.1 + 1.49e-9 is far further off. */
 static void test_double_tables(void)
 {
     if (!fixture_cx.dev.has_fp64) {
@@ -125,9 +127,9 @@ static void test_double_tables(void)
                                              dbl, &st);
         const double want = dbl ? 0.1 : (double)0.1f;
         for (int s = 0; s < 2; s++)
-            CHECK(fabs(e[s].R.mean - want) <= ldexp(1.0, -31), "%s: R = %.15g, want %.15g", dbl ? "double" : "float",
+            CHECK(fabs(e[s].R.mean - want) <= (0.5 / LSQT_FIX_SCALE), "%s: R = %.15g, want %.15g", dbl ? "double" : "float",
                   e[s].R.mean, want);
-        if (dbl) CHECK(fabs(e[0].R.mean - 0.1f) > ldexp(1.0, -31), "double run got the float parameter: R = %.15g", e[0].R.mean);
+        if (dbl) CHECK(fabs(e[0].R.mean - 0.1f) > (0.5 / LSQT_FIX_SCALE), "double run got the float parameter: R = %.15g", e[0].R.mean);
         lsqt_estimates_free(e, 2);
         lsqt_state_free(&st);
     }
@@ -226,9 +228,9 @@ static void test_reproducible(void)
     char err[512];
     CHECK(lsqt_simulate(&fixture_cx, &a, &split, 5000 - 1234, &o, &stats, err, sizeof err) == 0, "%s", err);
     CHECK(split.paths == one.paths, "%llu paths", (unsigned long long)split.paths);
-    CHECK(memcmp(one.nee, split.nee, lsqt_state_nee_count(&one) * 8) == 0, "point-estimate tallies differ");
-    CHECK(memcmp(one.scalars, split.scalars, lsqt_state_scalar_count(&one) * 8) == 0, "R/T tallies differ");
-    CHECK(memcmp(one.hist, split.hist, lsqt_state_hist_count(&one) * 8) == 0, "histograms differ");
+    CHECK(memcmp(one.nee, split.nee, lsqt_state_nee_count(&one) * sizeof *one.nee) == 0, "point-estimate tallies differ");
+    CHECK(memcmp(one.scalars, split.scalars, lsqt_state_scalar_count(&one) * sizeof *one.scalars) == 0, "R/T tallies differ");
+    CHECK(memcmp(one.hist, split.hist, lsqt_state_hist_count(&one) * sizeof *one.hist) == 0, "histograms differ");
     /* The 32-bit-atomics fallback (devices without cl_khr_int64_base_atomics) sums the
      * same integers. */
     lsqt_state st32;
@@ -237,14 +239,14 @@ static void test_reproducible(void)
     memcpy(st32.wi, one.wi, sizeof(float) * 2 * 16 * 4);
     lsqt_sim_opts o32 = {0, 0.0, 0, NULL, "-DLSQT_NO_INT64_ATOMICS=1", 0};
     CHECK(lsqt_simulate(&fixture_cx, &a, &st32, 5000, &o32, &stats, err, sizeof err) == 0, "%s", err);
-    CHECK(memcmp(one.nee, st32.nee, lsqt_state_nee_count(&one) * 8) == 0, "32-bit atomics: tallies differ");
-    CHECK(memcmp(one.scalars, st32.scalars, lsqt_state_scalar_count(&one) * 8) == 0, "32-bit atomics: R/T differ");
-    CHECK(memcmp(one.hist, st32.hist, lsqt_state_hist_count(&one) * 8) == 0, "32-bit atomics: histograms differ");
+    CHECK(memcmp(one.nee, st32.nee, lsqt_state_nee_count(&one) * sizeof *one.nee) == 0, "32-bit atomics: tallies differ");
+    CHECK(memcmp(one.scalars, st32.scalars, lsqt_state_scalar_count(&one) * sizeof *one.scalars) == 0, "32-bit atomics: R/T differ");
+    CHECK(memcmp(one.hist, st32.hist, lsqt_state_hist_count(&one) * sizeof *one.hist) == 0, "32-bit atomics: histograms differ");
     lsqt_state_free(&st32);
     /* ... and another seed gives other paths. */
     lsqt_state other;
     lsqt_slice_est *e3 = fixture_run(text, 2, deg, 16, 5000, 10, &other);
-    CHECK(memcmp(one.scalars, other.scalars, lsqt_state_scalar_count(&one) * 8) != 0, "seed has no effect");
+    CHECK(memcmp(one.scalars, other.scalars, lsqt_state_scalar_count(&one) * sizeof *one.scalars) != 0, "seed has no effect");
     lsqt_assembly_free(&a);
     lsqt_estimates_free(e1, 2);
     lsqt_estimates_free(e2, 2);

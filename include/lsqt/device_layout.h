@@ -25,9 +25,17 @@ typedef uint32_t lsqt_u32;
  * each padded to a multiple of 4 with zero vectors, which contribute nothing. */
 #define LSQT_PAD4(n) (((n) + 3) / 4 * 4)
 
-/* Tallies are 64-bit unsigned fixed point: value * 2^LSQT_FIX_BITS, rounded. */
-#define LSQT_FIX_BITS 30
-#define LSQT_FIX_SCALE 1073741824.0
+/* Tallies are 128-bit unsigned fixed point, value * 2^LSQT_FIX_BITS rounded, stored as
+ * two 64-bit words, low first: a unit of 2^-40 resolves 1e-12 of a unit weight, and
+ * 2^88 holds 1e10 contributions of 1e12 (kernels/tally.cl). */
+#define LSQT_FIX_BITS 40
+#define LSQT_FIX_SCALE 1099511627776.0
+#define LSQT_TALLY_WORDS 2 /* 64-bit words per tally */
+#ifndef __OPENCL_C_VERSION__
+typedef struct lsqt_u128 {
+    uint64_t lo, hi;
+} lsqt_u128;
+#endif
 
 /* Per-(slice, batch) scalar tallies, after the n_wi point-estimate sums. */
 #define LSQT_T_R 0        /* weight leaving upward */

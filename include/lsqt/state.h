@@ -23,9 +23,9 @@ typedef struct lsqt_state {
     double *theta_o;        /* n_slices, radians, wo = (sin, 0, cos) */
     float *wi;              /* n_slices * n_wi * 4 (x, y, z, 0), unit, y >= 0 */
     uint64_t paths;         /* paths done per slice (every slice the same) */
-    uint64_t *nee;          /* [slice][LSQT_BATCHES][n_wi] fixed point */
-    uint64_t *scalars;      /* [slice][LSQT_BATCHES][LSQT_T_COUNT] */
-    uint64_t *hist;         /* [slice][LSQT_HIST_BINS] fixed point */
+    lsqt_u128 *nee;         /* [slice][LSQT_BATCHES][n_wi] fixed point */
+    lsqt_u128 *scalars;     /* [slice][LSQT_BATCHES][LSQT_T_COUNT] */
+    lsqt_u128 *hist;        /* [slice][LSQT_HIST_BINS] fixed point */
     uint32_t flags;         /* LSQT_FLAG_* raised so far */
 } lsqt_state;
 
@@ -34,12 +34,17 @@ int lsqt_state_init(lsqt_state *st, const char *canonical, uint64_t hash, uint64
                     int n_slices, int n_wi, int transmits);
 void lsqt_state_free(lsqt_state *st);
 
+/* Tally counts (each one lsqt_u128). */
 size_t lsqt_state_nee_count(const lsqt_state *st);
 size_t lsqt_state_scalar_count(const lsqt_state *st);
 size_t lsqt_state_hist_count(const lsqt_state *st);
 
 /* Paths of [0, total) that fall in batch b (chunk c belongs to batch c % LSQT_BATCHES). */
 uint64_t lsqt_batch_paths(uint64_t total, int b);
+
+/* A tally as a number: units (fixed point divides by LSQT_FIX_SCALE), and exact sums. */
+double lsqt_u128_to_double(lsqt_u128 v);
+lsqt_u128 lsqt_u128_add(lsqt_u128 a, lsqt_u128 b);
 
 #ifdef __cplusplus
 }

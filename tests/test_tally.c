@@ -1,0 +1,137 @@
+/* The 128-bit fixed-point tallies (kernels/tally.cl), through a harness kernel that adds
+ * values the way the walk does (local 32-bit words, global 64-bit words or the 32-bit
+ * fallback), against exact sums computed here in integer arithmetic:
+ * - contributions from 1e-12 to 1.7e13 of a unit, each rounded to the nearest 2^-40;
+ * - carries through every word: many values just below 2^63 units, and 2^84-unit ones;
+ * - a value above the range raises the overflow flag (which fails a run), a NaN the
+ *   non-finite flag; values in range raise nothing. */
+#include "cl_fixture.h"
+
+/* Exact units of a float: round(v 2^40) to nearest, halves up (none of the values
+ * here is a tie). v 2^40 is exact in double; at or above 2^53 it is a whole number
+ * m 2^e with e >= 0. */
+static lsqt_u128 ref_units(float v)
+{
+    double x = ldexp((double)v, LSQT_FIX_BITS);
+    lsqt_u128 r = {0, 0};
+    if (x < 9007199254740992.0) {
+        r.lo = (uint64_t)floor(x + 0.5);
+        return r;
+    }
+    int e;
+    double m = frexp(x, &e); /* x = m 2^e, m in [0.5, 1) */
+    uint64_t mi = (uint64_t)ldexp(m, 53);
+    e -= 53;
+    r.lo = e >= 64 ? 0 : mi << e;
+    r.hi = e == 0 ? 0 : e >= 64 ? mi << (e - 64) : mi >> (64 - e);
+    return r;
+}
+
+static cl_program build(const char *extra)
+{
+    char opt[256], err[1024], *log = NULL;
+    snprintf(opt, sizeof opt, "-cl-std=CL1.2 %s", extra);
+    cl_program p = lsqt_program_build(&fixture_cx, opt, &log, err, sizeof err);
+    CHECK(p != NULL, "%s\n%s", err, log ? log : "");
+    free(log);
+    return p;
+}
+
+/* Adds v[0..n) on the device; returns the flags, fills the two tallies. */
+static unsigned run_tally(cl_program prog, const float *v, size_t n, size_t local, lsqt_u128 out[2])
+{
+    cl_int e = CL_SUCCESS;
+    cl_kernel k = clCreateKernel(prog, "harness_tally", &e);
+    cl_mem bv = clCreateBuffer(fixture_cx.ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, n * sizeof *v, (void *)v, &e);
+    uint64_t zero[4] = {0, 0, 0, 0};
+    cl_uint flags = 0;
+    cl_mem bo = clCreateBuffer(fixture_cx.ctx, CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR, sizeof zero, zero, &e);
+    cl_mem bf = clCreateBuffer(fixture_cx.ctx, CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR, sizeof flags, &flags, &e);
+    clSetKernelArg(k, 0, sizeof bv, &bv);
+    clSetKernelArg(k, 1, sizeof bo, &bo);
+    clSetKernelArg(k, 2, sizeof bf, &bf);
+    if (e == CL_SUCCESS) e = clEnqueueNDRangeKernel(fixture_cx.queue, k, 1, NULL, &n, &local, 0, NULL, NULL);
+    if (e == CL_SUCCESS) e = clEnqueueReadBuffer(fixture_cx.queue, bo, CL_TRUE, 0, sizeof zero, zero, 0, NULL, NULL);
+    if (e == CL_SUCCESS) e = clEnqueueReadBuffer(fixture_cx.queue, bf, CL_TRUE, 0, sizeof flags, &flags, 0, NULL, NULL);
+    CHECK(e == CL_SUCCESS, "harness_tally: %s (%d)", lsqt_cl_error_name(e), (int)e);
+    out[0].lo = zero[0], out[0].hi = zero[1], out[1].lo = zero[2], out[1].hi = zero[3];
+    clReleaseMemObject(bv);
+    clReleaseMemObject(bo);
+    clReleaseMemObject(bf);
+    clReleaseKernel(k);
+    return flags;
+}
+
+static void check_sum(cl_program prog, const char *what, const float *v, size_t n, size_t local)
+{
+    lsqt_u128 want = {0, 0}, got[2];
+    for (size_t i = 0; i < n; i++) want = lsqt_u128_add(want, ref_units(v[i]));
+    unsigned flags = run_tally(prog, v, n, local, got);
+    CHECK(flags == 0, "%s: flags %u", what, flags);
+    for (int t = 0; t < 2; t++)
+        CHECK(got[t].lo == want.lo && got[t].hi == want.hi,
+              "%s (%s): got %016llx%016llx units, want %016llx%016llx", what, t ? "local words" : "global words",
+              (unsigned long long)got[t].hi, (unsigned long long)got[t].lo, (unsigned long long)want.hi,
+              (unsigned long long)want.lo);
+}
+
+static void test_variant(const char *extra)
+{
+    cl_program prog = build(extra);
+    if (!prog) return;
+    printf("tallies %s\n", *extra ? extra : "(64-bit atomics where the device has them)");
+    enum { N = 4096 };
+    static float v[N];
+    /* Contributions across the range, each rounded once: 1e-12 (1.1 units) to 1.7e13. */
+    const float span[] = {1e-12f, 3e-9f, 0.1f, 1.0f, 12345.678f, 8388607.5f, 1e12f, 1.7e13f, 2.5e-7f, 7e5f};
+    for (int i = 0; i < N; i++) v[i] = span[i % 10];
+    check_sum(prog, "mixed 1e-12 .. 1.7e13", v, N, 64);
+    /* Just below 2^63 units each: the low 64-bit word wraps on every other add, and the
+     * local 32-bit words carry at every level. */
+    for (int i = 0; i < N; i++) v[i] = 8388607.5f;
+    check_sum(prog, "carries out of the low word", v, N, 256);
+    /* 2^84 units each: only high words, 4096 of them (2^96). */
+    for (int i = 0; i < N; i++) v[i] = 17592186044416.0f;
+    check_sum(prog, "high words", v, N, 32);
+    /* Tiny values: 1e-12 is 1.1 units, still counted. */
+    for (int i = 0; i < N; i++) v[i] = 1e-12f;
+    check_sum(prog, "1e-12 each", v, N, 64);
+    lsqt_u128 got[2];
+    for (int i = 0; i < N; i++) v[i] = 1.0f;
+    v[17] = 2e13f;
+    CHECK(run_tally(prog, v, N, 64, got) & LSQT_FLAG_OVERFLOW, "2e13 did not raise the overflow flag");
+    v[17] = NAN;
+    unsigned f = run_tally(prog, v, N, 64, got);
+    CHECK((f & LSQT_FLAG_NONFINITE) && !(f & LSQT_FLAG_OVERFLOW), "NaN: flags %u", f);
+    CHECK(got[0].lo == (uint64_t)(N - 1) << LSQT_FIX_BITS && got[0].hi == 0, "NaN counted as 0: %llu units",
+          (unsigned long long)got[0].lo);
+    clReleaseProgram(prog);
+}
+
+/* Host side: a tally as a number, and the flags that fail a run. */
+static void test_host(void)
+{
+    lsqt_u128 one_high = {0, 1}, mixed = {12345, 3};
+    CHECK(lsqt_u128_to_double(one_high) == 18446744073709551616.0, "2^64 units read as %.17g",
+          lsqt_u128_to_double(one_high));
+    CHECK(lsqt_u128_to_double(mixed) == 3 * 18446744073709551616.0 + 12345, "%.17g", lsqt_u128_to_double(mixed));
+    lsqt_u128 a = {~0ull, 5}, b = {1, 0}, c = lsqt_u128_add(a, b);
+    CHECK(c.lo == 0 && c.hi == 6, "carry of lsqt_u128_add");
+    char err[256] = "";
+    CHECK(lsqt_tally_flags_error(0, err, sizeof err) == 0, "no flags: %s", err);
+    CHECK(lsqt_tally_flags_error(LSQT_FLAG_NONFINITE, err, sizeof err) == 0, "a dropped NaN is reported, not fatal");
+    CHECK(lsqt_tally_flags_error(LSQT_FLAG_OVERFLOW, err, sizeof err) != 0 && strstr(err, "tally range"),
+          "an overflow must fail the run: '%s'", err);
+}
+
+int main(void)
+{
+    test_host();
+    fixture_open();
+    /* the reference itself: 1.5 units rounds to 2, 2^84 units is one high bit */
+    CHECK(ref_units(ldexpf(1.5f, -40)).lo == 2 && ref_units(17592186044416.0f).hi == (1ull << 20), "ref_units");
+    test_variant("");
+    test_variant("-DLSQT_NO_INT64_ATOMICS=1");
+    lsqt_context_release(&fixture_cx);
+    return check_finish("test_tally");
+}
