@@ -8,16 +8,22 @@
 #include "lsqt/tally.h"
 #include "lsqt/util.h"
 
-/* Models the kernels can run today; the parser knows them all. */
-static int bsdf_supported(int kind) { return kind == LSQT_BSDF_NULL || kind == LSQT_BSDF_LAMBERTIAN; }
+/* Models the kernels can run today; the parser knows them all. The conductor runs its
+ * single-scattering term (its default); its multiple scattering is not there yet. */
+static int bsdf_supported(const lsqt_layer *l)
+{
+    return l->kind == LSQT_BSDF_NULL || l->kind == LSQT_BSDF_LAMBERTIAN ||
+           (l->kind == LSQT_BSDF_MS_CONDUCTIVE && !l->multiple_scattering);
+}
 static int phase_supported(int kind) { return kind == LSQT_PHASE_NONE || kind == LSQT_PHASE_HG; }
 
 const char *lsqt_unsupported_model(const lsqt_assembly *a, int *line)
 {
     for (int i = 0; i < a->n_layers; i++)
-        if (!bsdf_supported(a->layers[i].kind)) {
+        if (!bsdf_supported(&a->layers[i])) {
             *line = a->layers[i].line;
-            return lsqt_bsdf_name(a->layers[i].kind);
+            return a->layers[i].kind == LSQT_BSDF_MS_CONDUCTIVE ? "MicrosurfaceConductiveBrdf use_multiple_scattering=true"
+                                                               : lsqt_bsdf_name(a->layers[i].kind);
         }
     for (int m = 0; m <= a->n_layers; m++)
         if (a->media[m].mus > 0 && !phase_supported(a->media[m].phase.kind)) {
@@ -50,8 +56,16 @@ void lsqt_device_tables(const lsqt_assembly *a, lsqt_dev_scene *scene, lsqt_dev_
         layers[i].kind = l->kind;
         layers[i].iter_count = l->iter_count;
         layers[i].multiple_scattering = l->multiple_scattering;
-        layers[i].p[0] = l->fR;
-        layers[i].p[1] = l->fT;
+        if (l->kind == LSQT_BSDF_MS_CONDUCTIVE) {
+            /* alpha, and the metal's complex index relative to the medium above */
+            const lsqt_medium *up = &a->media[i], *metal = &a->media[i + 1];
+            layers[i].p[0] = l->alpha;
+            layers[i].p[1] = metal->eta / up->eta;
+            layers[i].p[2] = metal->mua / up->eta;
+        } else {
+            layers[i].p[0] = l->fR;
+            layers[i].p[1] = l->fT;
+        }
         if (l->kind != LSQT_BSDF_NULL) {
             if (scene->top_nonnull < 0) scene->top_nonnull = i;
             scene->bottom_nonnull = i;

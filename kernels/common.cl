@@ -45,3 +45,4 @@ inline real sqr(real x) { return x * x; }
 
 /* sqrt that never returns NaN for round-off negatives */
 inline real safe_sqrt(real x) { return sqrt(fmax(x, R(0.0))); }
+inline real4 safe_sqrt4(real4 x) { return sqrt(fmax(x, (real4)(R(0.0)))); }

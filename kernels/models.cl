@@ -10,6 +10,9 @@ inline real4 bsdf_eval4(__global const lsqt_dev_layer *l, real3 wo, dir4 wi)
 #ifdef LSQT_HAS_BSDF_LAMBERTIAN
     case LSQT_BSDF_LAMBERTIAN: return lambertian_eval4(l, wo, wi);
 #endif
+#ifdef LSQT_HAS_BSDF_MS_CONDUCTIVE
+    case LSQT_BSDF_MS_CONDUCTIVE: return conductor_eval4(l, wo, wi);
+#endif
     default: return (real4)(R(0.0));
     }
 }
@@ -27,6 +30,9 @@ inline real bsdf_sample(__global const lsqt_dev_layer *l, real3 wo, rng_t *rng, 
 #ifdef LSQT_HAS_BSDF_LAMBERTIAN
     case LSQT_BSDF_LAMBERTIAN: return lambertian_sample(l, wo, u0, u1, u2, wi);
 #endif
+#ifdef LSQT_HAS_BSDF_MS_CONDUCTIVE
+    case LSQT_BSDF_MS_CONDUCTIVE: return conductor_sample(l, wo, u0, u1, wi);
+#endif
     default: return R(0.0);
     }
 }
@@ -36,6 +42,9 @@ inline real bsdf_pdf(__global const lsqt_dev_layer *l, real3 wo, real3 wi)
     switch (l->kind) {
 #ifdef LSQT_HAS_BSDF_LAMBERTIAN
     case LSQT_BSDF_LAMBERTIAN: return lambertian_pdf(l, wo, wi);
+#endif
+#ifdef LSQT_HAS_BSDF_MS_CONDUCTIVE
+    case LSQT_BSDF_MS_CONDUCTIVE: return conductor_pdf(l, wo, wi);
 #endif
     default: return R(0.0);
     }

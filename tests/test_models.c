@@ -4,11 +4,12 @@
  * the sphere equal to the model's albedo. */
 #include "cl_fixture.h"
 #include "quadrature.h"
+#include "ref_conductor.h"
 
 #define PI 3.14159265358979323846
 #define NU 16
 #define NPHI 16
-#define SUB 6
+#define SUB 24 /* midpoints per cell side for the expected counts: 6 could not resolve a grazing GGX lobe */
 #define NSAMPLES 100000
 
 static cl_program prog;
@@ -20,6 +21,7 @@ typedef struct {
     lsqt_dev_medium medium;
     double wo[3];
     double albedo;
+    double quad_tol; /* allowed quadrature error of the normalisation checks, 0: 2e-5 */
 } model_case;
 
 static void run_kernel(const char *name, const model_case *m, cl_mem extra_in, cl_mem out, size_t n)
@@ -65,40 +67,58 @@ static double chi2_tail(double x, double k)
     return 0.5 * erfc(z / sqrt(2.0));
 }
 
-/* The integrals of f and of the pdf over the sphere, to about 1e-7: Gauss-Legendre in
- * cos of the angle to an axis, separately on each side of the plane normal to it (where
- * a BSDF jumps between reflection and transmission), times an even rule in azimuth.
- * The axis is z for a BSDF and the forward direction -wo for a phase function, so a
- * peaked lobe is resolved. */
-#define QN 96
-#define QPHI 128
+/* The integrals of f and of the pdf over the sphere: Gauss-Legendre in cos of the angle
+ * to an axis, on panels that split at the plane normal to it (where a BSDF jumps
+ * between reflection and transmission) and, for a BSDF, grade towards mu = +-cos theta_o
+ * (a specular lobe and its transmitted or below-horizon part), times an even rule in
+ * azimuth. The axis is z for a BSDF and the forward direction -wo for a phase function,
+ * so a peaked lobe is resolved. */
+#define QN 16 /* nodes per panel */
+#define QPHI 512
 static void sphere_integrals(const model_case *m, double *f_int, double *pdf_int)
 {
     double gx[QN], gw[QN], ax[3] = {0, 0, 1}, u[3], v[3];
     gauss_legendre(QN, gx, gw);
+    double edges[32];
+    int np = 0;
+    edges[0] = -1.0;
     if (m->use_phase) {
         double n = sqrt(m->wo[0] * m->wo[0] + m->wo[1] * m->wo[1] + m->wo[2] * m->wo[2]);
         for (int i = 0; i < 3; i++) ax[i] = -m->wo[i] / n;
+        /* HG peaks at mu = 1 about -wo: panels graded towards it */
+        const double cut[] = {-0.5, 0.0, 0.5, 0.8, 0.9, 0.95, 0.98, 0.99, 0.995};
+        for (int i = 0; i < 9; i++) edges[++np] = cut[i];
+    } else {
+        double mp = fabs(m->wo[2]);
+        const double off[] = {-0.1, -0.02, 0.0, 0.02, 0.1};
+        for (int sgn = -1; sgn <= 1; sgn += 2)
+            for (int i = 0; i < 5; i++) {
+                double c = sgn < 0 ? -mp - off[4 - i] : mp + off[i];
+                if (sgn > 0 && edges[np] < 0.0) edges[++np] = 0.0;
+                if (c > edges[np] + 1e-3 && c < 1.0 - 1e-3 && fabs(c) > 1e-3) edges[++np] = c;
+            }
+        if (edges[np] < 0.0) edges[++np] = 0.0;
     }
+    edges[++np] = 1.0;
     /* u, v: an orthonormal pair normal to the axis */
     double t[3] = {fabs(ax[0]) < 0.9 ? 1.0 : 0.0, fabs(ax[0]) < 0.9 ? 0.0 : 1.0, 0.0};
     u[0] = ax[1] * t[2] - ax[2] * t[1], u[1] = ax[2] * t[0] - ax[0] * t[2], u[2] = ax[0] * t[1] - ax[1] * t[0];
     double un = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
     for (int i = 0; i < 3; i++) u[i] /= un;
     v[0] = ax[1] * u[2] - ax[2] * u[1], v[1] = ax[2] * u[0] - ax[0] * u[2], v[2] = ax[0] * u[1] - ax[1] * u[0];
-    const size_t ng = (size_t)2 * QN * QPHI;
+    const size_t ng = (size_t)np * QN * QPHI;
     float *dirs = malloc(ng * 4 * sizeof *dirs), *fp = malloc(ng * 2 * sizeof *fp);
     double *wt = malloc(ng * sizeof *wt);
     size_t q = 0;
-    for (int side = 0; side < 2; side++)
+    for (int p = 0; p < np; p++)
         for (int i = 0; i < QN; i++) {
-            double mu = side ? 0.5 * (gx[i] + 1) : -0.5 * (gx[i] + 1), s = sqrt(1 - mu * mu);
+            double h = 0.5 * (edges[p + 1] - edges[p]), mu = edges[p] + h * (gx[i] + 1), s = sqrt(1 - mu * mu);
             for (int j = 0; j < QPHI; j++, q++) {
                 double phi = 2 * PI * (j + 0.5) / QPHI;
                 for (int c = 0; c < 3; c++)
                     dirs[4 * q + c] = (float)(mu * ax[c] + s * (cos(phi) * u[c] + sin(phi) * v[c]));
                 dirs[4 * q + 3] = 0;
-                wt[q] = 0.5 * gw[i] * 2 * PI / QPHI;
+                wt[q] = h * gw[i] * 2 * PI / QPHI;
             }
         }
     cl_int e = CL_SUCCESS;
@@ -150,9 +170,10 @@ static void test_model(const model_case *m)
      * bound 2e-5 still sees a model value off by 1e-4 (a 0.5 % error is 250 times it). */
     double qf = 0, qp = 0;
     sphere_integrals(m, &qf, &qp);
-    CHECK(fabs(qf - m->albedo) <= 2e-5 * m->albedo + 1e-9, "%s: integral of f = %.9f, albedo %.9f", m->name, qf,
+    const double tol = m->quad_tol > 0 ? m->quad_tol : 2e-5;
+    CHECK(fabs(qf - m->albedo) <= tol * m->albedo + 1e-9, "%s: integral of f = %.9f, albedo %.9f", m->name, qf,
           m->albedo);
-    CHECK(fabs(qp - 1.0) <= 2e-5, "%s: integral of pdf = %.9f", m->name, qp);
+    CHECK(fabs(qp - 1.0) <= tol, "%s: integral of pdf = %.9f", m->name, qp);
 
     /* Sample, bin, and compare weights with f / pdf at the sampled directions. */
     float *smp = malloc((size_t)NSAMPLES * 4 * sizeof *smp), *fs = malloc((size_t)NSAMPLES * 2 * sizeof *fs);
@@ -208,7 +229,8 @@ int main(void)
 {
     fixture_open();
     char err[1024], *log = NULL;
-    prog = lsqt_program_build(&fixture_cx, "-cl-std=CL1.2 -DLSQT_HAS_BSDF_LAMBERTIAN=1 -DLSQT_HAS_PHASE_HG=1", &log,
+    prog = lsqt_program_build(&fixture_cx, "-cl-std=CL1.2 -DLSQT_HAS_BSDF_LAMBERTIAN=1 -DLSQT_HAS_PHASE_HG=1 "
+                              "-DLSQT_HAS_BSDF_MS_CONDUCTIVE=1", &log,
                               err, sizeof err);
     CHECK(prog != NULL, "%s\n%s", err, log ? log : "");
     free(log);
@@ -229,6 +251,28 @@ int main(void)
         m.layer.p[1] = (float)lam[i][1];
         test_model(&m);
     }
+    /* The single-scattering GGX conductor: its albedo from the independent reference
+     * (ref_conductor.h, converged to 1e-5 by its quadrature), silver's index. The
+     * samples below the horizon carry weight 0 and the pdf covers them (it integrates to
+     * 1 over the sphere). alpha 0.05 is checked in test_conductor (values) only: this
+     * grid's expected counts cannot resolve its lobe. */
+    const double calpha[] = {0.3, 1.0, 2.4}, cdeg[] = {0, 60, 85};
+    for (int ia = 0; ia < 3; ia++)
+        for (int it = 0; it < 3; it++) {
+            double th = cdeg[it] * PI / 180;
+            /* At 85 degrees the lobe hugs the horizon and the rule converges slowly (512 vs
+             * 128 azimuths moved the integrals by up to 7e-4; what is left is below 4e-4):
+             * there the bound is 5e-4, still ten times below a 0.5 % model error. */
+            model_case m = {.name = "Conductor", .wo = {sin(th), 0.0, cos(th)},
+                            .albedo = ref_albedo(calpha[ia], 0.051585 + 3.9046 * I, th, 64),
+                            .quad_tol = cdeg[it] > 80 ? 5e-4 : 0.0};
+            m.layer.kind = LSQT_BSDF_MS_CONDUCTIVE;
+            m.layer.p[0] = (float)calpha[ia];
+            m.layer.p[1] = 0.051585f;
+            m.layer.p[2] = 3.9046f;
+            printf("alpha %.2g, theta_o %2.0f: ", calpha[ia], cdeg[it]);
+            test_model(&m);
+        }
     clReleaseProgram(prog);
     lsqt_context_release(&fixture_cx);
     return check_finish("test_models");
