@@ -33,7 +33,7 @@ inline real4 conductor_eval4(__global const lsqt_dev_layer *l, real3 wo, dir4 wi
     hx *= inv, hy *= inv, hz *= inv;
     real4 oh = wo.x * hx + wo.y * hy + wo.z * hz;
     real4 g2 = R(1.0) / (R(1.0) + ggx_lambda(alpha, wo.z) + ggx_lambda4(alpha, wi.z));
-    real4 f = fresnel_conductor4(l->p[1], l->p[2], oh) * ggx_d4(alpha, hz) * g2 / (R(4.0) * wo.z);
+    real4 f = fresnel_conductor4(l->p[1], l->p[2], oh) * ggx_d4(alpha, hx, hy, hz) * g2 / (R(4.0) * wo.z);
     return select((real4)(R(0.0)), f, wi.z > R(0.0));
 }
 
@@ -48,7 +48,7 @@ inline real conductor_pdf(__global const lsqt_dev_layer *l, real3 wo, real3 wi)
     if (!(n > R(1e-12))) return R(0.0);
     h /= n;
     if (!(dot(wo, h) > R(0.0))) return R(0.0);
-    return ggx_d4(alpha, (real4)(h.z)).x / ((R(1.0) + ggx_lambda(alpha, wo.z)) * R(4.0) * wo.z);
+    return ggx_d4(alpha, (real4)(h.x), (real4)(h.y), (real4)(h.z)).x / ((R(1.0) + ggx_lambda(alpha, wo.z)) * R(4.0) * wo.z);
 }
 
 /* Reflects wo about a visible normal; the weight f/pdf is F (1 + Lo) / (1 + Lo + Li),

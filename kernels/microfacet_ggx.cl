@@ -14,12 +14,14 @@ inline real4 ggx_lambda4(real alpha, real4 z)
 
 inline real ggx_lambda(real alpha, real z) { return ggx_lambda4(alpha, (real4)(z)).x; }
 
-/* D(h) = alpha^2 / (pi ((alpha^2 - 1) cos^2 + 1)^2) for a normal h on the upper side. */
-inline real4 ggx_d4(real alpha, real4 hz)
+/* D(h) = alpha^2 / (pi ((alpha^2 - 1) cos^2 + 1)^2) for a unit normal h on the upper side,
+ * written as alpha^2 / (pi (alpha^2 hz^2 + hx^2 + hy^2)^2): the same for unit h, but with
+ * no cancellation, so a smooth surface (alpha 1e-4, alpha^2 below float's epsilon) keeps
+ * its finite peak 1 / (pi alpha^2) instead of dividing by a rounded 0. */
+inline real4 ggx_d4(real alpha, real4 hx, real4 hy, real4 hz)
 {
     real a2 = alpha * alpha;
-    real4 c2 = hz * hz;
-    real4 k = (a2 - R(1.0)) * c2 + R(1.0);
+    real4 k = a2 * hz * hz + hx * hx + hy * hy;
     return select((real4)(R(0.0)), a2 * LSQT_INV_PI / (k * k), hz > R(0.0));
 }
 

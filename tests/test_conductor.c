@@ -116,6 +116,22 @@ static void test_values(void)
                    2 * NP, worst);
         }
     }
+    /* The peak of a smooth surface, alpha 1e-4, at the mirror direction (normal and 60
+     * degrees): 1/(pi alpha^2) = 3.2e7 times F G2 / (4 cos), finite in float too. */
+    for (int dbl = 0; dbl < 2; dbl++) {
+        if (!progs[dbl]) continue;
+        double po[2][3] = {{0, 0, 1}, {sin(PI / 3), 0, cos(PI / 3)}}, pi_[2][3] = {{0, 0, 1}, {-sin(PI / 3), 0, cos(PI / 3)}};
+        kernel_f(progs[dbl], dbl, 1e-4, eta, k, (const double(*)[3])po, (const double(*)[3])pi_, 2, got);
+        for (int i = 0; i < 2; i++) {
+            double o[3], w[3];
+            for (int c = 0; c < 3; c++) o[c] = (float)po[i][c], w[c] = (float)pi_[i][c];
+            double r = ref_f(1e-4, eta + k * I, o, w);
+            /* float: cos of h at the peak is 1 - O(1e-8), which moves D by up to 10 %
+             * there; double is exact to 1e-6 */
+            CHECK(isfinite(got[i]) && fabs(got[i] - r) <= (dbl ? 1e-6 : 0.1) * r, "alpha 1e-4 peak %s: f %.9g vs %.9g",
+                  dbl ? "double" : "float", got[i], r);
+        }
+    }
     for (int d = 0; d < 2; d++)
         if (progs[d]) clReleaseProgram(progs[d]);
 }
@@ -171,6 +187,44 @@ static void test_smooth_limit(void)
     lsqt_state_free(&st);
 }
 
+/* Extremes (SPEC section 9): alpha 1e-4 (a peak of 1/(pi alpha^2) = 3e7 in the point
+ * estimates) and 10, theta_o up to 89.9 degrees, metal index ratios from a dielectric
+ * above, float and double: every value finite and non-negative, no flag (nothing
+ * dropped, nothing out of the tally range), R <= 1 within 3 sigma. */
+static void test_extremes(void)
+{
+    const char *cases[] = {
+        "Medium\nLayer z=0 MicrosurfaceConductive alpha=1e-4\nMedium eta=0.051585 mua=3.9046\n",
+        "Medium\nLayer z=0 MicrosurfaceConductive alpha=10\nMedium eta=0.051585 mua=3.9046\n",
+        "Medium eta=4\nLayer z=0 MicrosurfaceConductive alpha=1e-4\nMedium eta=1 mua=0.01\n",
+        "Medium\nLayer z=0 MicrosurfaceConductive alpha=0.5\nMedium eta=4 mua=1e3\n",
+    };
+    const double deg[] = {0, 60, 89.9};
+    for (int dbl = 0; dbl < 2; dbl++) {
+        if (dbl && !fixture_cx.dev.has_fp64) continue;
+        for (int c = 0; c < 4; c++) {
+            lsqt_state st;
+            lsqt_slice_est *e = fixture_run_prec(cases[c], 3, deg, 64, 4096, 40 + (uint64_t)c, dbl, &st);
+            int bad = 0;
+            double fmax_seen = 0;
+            for (int s = 0; s < 3; s++) {
+                CHECK(isfinite(e[s].R.mean) && e[s].R.mean >= 0 && e[s].R.mean <= 1 + 3 * e[s].R.err + 1e-9,
+                      "case %d %s slice %d: R = %.9g +- %.2g", c, dbl ? "double" : "float", s, e[s].R.mean, e[s].R.err);
+                for (int k = 0; k < st.n_wi; k++) {
+                    bad += !(isfinite(e[s].f[k].mean) && e[s].f[k].mean >= 0);
+                    fmax_seen = fmax(fmax_seen, e[s].f[k].mean);
+                }
+            }
+            CHECK(bad == 0 && st.flags == 0, "case %d %s: %d bad values, flags %u", c, dbl ? "double" : "float", bad,
+                  st.flags);
+            printf("extreme case %d %s: R %.4f %.4f %.4f, largest f %.3g\n", c, dbl ? "double" : "float ", e[0].R.mean,
+                   e[1].R.mean, e[2].R.mean, fmax_seen);
+            lsqt_estimates_free(e, 3);
+            lsqt_state_free(&st);
+        }
+    }
+}
+
 int main(void)
 {
     fixture_open();
@@ -180,6 +234,7 @@ int main(void)
     test_values();
     test_silver();
     test_smooth_limit();
+    test_extremes();
     lsqt_context_release(&fixture_cx);
     return check_finish("test_conductor");
 }
