@@ -1,5 +1,7 @@
 #!/usr/bin/env bash
-# Paths per second of lsqt-cl on the examples (default device, or pass -d ...).
+# Paths per second of lsqt-cl on the examples (default device, or pass -d ...), with
+# wall and CPU seconds (user + sys: the machine is shared, so CPU time is the fair
+# measure) and the efficiency 1 / (max rel err^2 * s).
 # usage: tools/bench.sh [PATHS] [lsqt-cl options...]; prints one line per example.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -9,15 +11,21 @@ BIN=./build/lsqt-cl
 [ -x "$BIN" ] || bash tools/build.sh
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-# efficiency = 1 / (max rel err^2 * seconds): how fast error falls; higher is better.
-printf "%-34s %10s %12s %10s %12s %12s\n" example paths/slice "paths/s" seconds "max rel err" efficiency
-for ex in examples/tutorial/Lambertian.lsqt examples/tutorial/Dust.lsqt examples/slab.lsqt examples/two-lambertian.lsqt; do
-  "$BIN" -q -R -p "$P" --lss "$work/b.lss" -o "$work/b.raw" --json "$work/b.json" "$@" "$ex"
-  python3 - "$ex" "$P" "$work/b.json" <<'PY'
+# wall_s: the simulation (launch loop); cpu_s: the whole process, user + sys
+printf "%-34s %10s %12s %9s %9s %12s %12s\n" example paths/slice "paths/s" wall_s cpu_s "max rel err" efficiency
+for ex in examples/tutorial/Lambertian.lsqt examples/tutorial/Dust.lsqt examples/tutorial/Silver.lsqt \
+          examples/slab.lsqt examples/two-lambertian.lsqt; do
+  # a short run first, so the kernel build is not timed
+  "$BIN" -q -R -p 1000 --lss "$work/b.lss" -o "$work/b.raw" "$@" "$ex"
+  TIMEFORMAT='%U %S'
+  { time "$BIN" -q -R -p "$P" --lss "$work/b.lss" -o "$work/b.raw" --json "$work/b.json" "$@" "$ex" ; } 2>"$work/t"
+  python3 - "$ex" "$P" "$work/b.json" "$work/t" <<'PY'
 import json, sys
 j = json.load(open(sys.argv[3]))
+user, sys_ = (float(x) for x in open(sys.argv[4]).read().split()[-2:])
 err = max(s["max_rel_err"] for s in j["slices"])
 eff = 1.0 / (err * err * j["seconds"]) if err > 0 and j["seconds"] > 0 else float("inf")
-print("%-34s %10s %12.4g %10.3f %12.3g %12.4g" % (sys.argv[1], sys.argv[2], j["paths_per_second"], j["seconds"], err, eff))
+print("%-34s %10s %12.4g %9.3f %9.3f %12.3g %12.4g" % (sys.argv[1], sys.argv[2], j["paths_per_second"], j["seconds"],
+                                                      user + sys_, err, eff))
 PY
 done
