@@ -8,12 +8,11 @@
 #include "lsqt/tally.h"
 #include "lsqt/util.h"
 
-/* Models the kernels can run today; the parser knows them all. The conductor runs its
- * single-scattering term (its default); its multiple scattering is not there yet. */
+/* Models the kernels can run today; the parser knows them all. */
 static int bsdf_supported(const lsqt_layer *l)
 {
-    return l->kind == LSQT_BSDF_NULL || l->kind == LSQT_BSDF_LAMBERTIAN ||
-           (l->kind == LSQT_BSDF_MS_CONDUCTIVE && !l->multiple_scattering);
+    return l->kind == LSQT_BSDF_NULL || l->kind == LSQT_BSDF_LAMBERTIAN || l->kind == LSQT_BSDF_MS_LAMBERTIAN ||
+           l->kind == LSQT_BSDF_MS_DIELECTRIC || l->kind == LSQT_BSDF_MS_CONDUCTIVE;
 }
 static int phase_supported(int kind) { return kind == LSQT_PHASE_NONE || kind == LSQT_PHASE_HG; }
 
@@ -22,8 +21,7 @@ const char *lsqt_unsupported_model(const lsqt_assembly *a, int *line)
     for (int i = 0; i < a->n_layers; i++)
         if (!bsdf_supported(&a->layers[i])) {
             *line = a->layers[i].line;
-            return a->layers[i].kind == LSQT_BSDF_MS_CONDUCTIVE ? "MicrosurfaceConductiveBrdf use_multiple_scattering=true"
-                                                               : lsqt_bsdf_name(a->layers[i].kind);
+            return lsqt_bsdf_name(a->layers[i].kind);
         }
     for (int m = 0; m <= a->n_layers; m++)
         if (a->media[m].mus > 0 && !phase_supported(a->media[m].phase.kind)) {
@@ -56,12 +54,22 @@ void lsqt_device_tables(const lsqt_assembly *a, lsqt_dev_scene *scene, lsqt_dev_
         layers[i].kind = l->kind;
         layers[i].iter_count = l->iter_count;
         layers[i].multiple_scattering = l->multiple_scattering;
+        const lsqt_medium *up = &a->media[i], *down = &a->media[i + 1];
         if (l->kind == LSQT_BSDF_MS_CONDUCTIVE) {
             /* alpha, and the metal's complex index relative to the medium above */
-            const lsqt_medium *up = &a->media[i], *metal = &a->media[i + 1];
             layers[i].p[0] = l->alpha;
-            layers[i].p[1] = metal->eta / up->eta;
-            layers[i].p[2] = metal->mua / up->eta;
+            layers[i].p[1] = down->eta / up->eta;
+            layers[i].p[2] = down->mua / up->eta;
+        } else if (l->kind == LSQT_BSDF_MS_DIELECTRIC) {
+            /* alpha, the index below relative to the one above, the Fresnel scales */
+            layers[i].p[0] = l->alpha;
+            layers[i].p[1] = down->eta / up->eta;
+            layers[i].p[2] = l->kR;
+            layers[i].p[3] = l->kT;
+        } else if (l->kind == LSQT_BSDF_MS_LAMBERTIAN) {
+            layers[i].p[0] = l->alpha;
+            layers[i].p[1] = l->fR;
+            layers[i].p[2] = l->fT;
         } else {
             layers[i].p[0] = l->fR;
             layers[i].p[1] = l->fT;
@@ -119,12 +127,12 @@ static void tables_to_float(const lsqt_dev_medium_d *md, lsqt_dev_medium *mf, in
 
 /* Device buffers of one simulation. */
 typedef struct sim_buffers {
-    cl_mem scene, media, layers, wo, wi, nee, scalars, hist, flags;
+    cl_mem scene, media, layers, wo, wi, tab, nee, scalars, hist, flags;
 } sim_buffers;
 
 static void buffers_release(sim_buffers *b)
 {
-    cl_mem *all[] = {&b->scene, &b->media, &b->layers, &b->wo, &b->wi,
+    cl_mem *all[] = {&b->scene, &b->media, &b->layers, &b->wo, &b->wi, &b->tab,
                      &b->nee, &b->scalars, &b->hist, &b->flags};
     for (size_t i = 0; i < sizeof all / sizeof *all; i++)
         if (*all[i]) clReleaseMemObject(*all[i]);
@@ -188,10 +196,14 @@ int lsqt_simulate(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint
         free(log);
         return 1;
     }
-    cl_int e = CL_SUCCESS;
+    cl_int e = CL_SUCCESS, e2 = CL_SUCCESS;
     cl_kernel k = clCreateKernel(prog, "lsqt_walk", &e);
-    if (e != CL_SUCCESS) {
-        snprintf(err, errcap, "clCreateKernel(lsqt_walk): %s (%d)", lsqt_cl_error_name(e), (int)e);
+    cl_kernel kp = clCreateKernel(prog, "lsqt_prepare", &e2);
+    if (e != CL_SUCCESS || e2 != CL_SUCCESS) {
+        if (e == CL_SUCCESS) e = e2;
+        snprintf(err, errcap, "clCreateKernel: %s (%d)", lsqt_cl_error_name(e), (int)e);
+        if (k) clReleaseKernel(k);
+        if (kp) clReleaseKernel(kp);
         clReleaseProgram(prog);
         return 1;
     }
@@ -238,6 +250,9 @@ int lsqt_simulate(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint
     b.layers = make_buffer(cx, ro, (size_t)n * layer_size, (void *)layers_up, &e);
     b.wo = make_buffer(cx, ro, (size_t)st->n_slices * 4 * sizeof *wo, wo, &e);
     b.wi = make_buffer(cx, ro, (size_t)st->n_slices * 3 * LSQT_PAD4((size_t)st->n_wi) * sizeof(float), wi, &e);
+    /* per slice and layer: T, Lambda, lgamma(1 + Lambda) of every direction */
+    const size_t tab_size = (size_t)st->n_slices * (size_t)n * 3 * pad * (st->use_double ? sizeof(double) : sizeof(float));
+    b.tab = make_buffer(cx, rw, tab_size, NULL, &e);
     b.nee = make_buffer(cx, rw, lsqt_state_nee_count(st) * sizeof *st->nee, st->nee, &e);
     b.scalars = make_buffer(cx, rw, lsqt_state_scalar_count(st) * sizeof *st->scalars, st->scalars, &e);
     b.hist = make_buffer(cx, rw, lsqt_state_hist_count(st) * sizeof *st->hist, st->hist, &e);
@@ -246,12 +261,19 @@ int lsqt_simulate(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint
         snprintf(err, errcap, "cannot allocate device buffers: %s (%d)", lsqt_cl_error_name(e), (int)e);
         goto done;
     }
-    cl_mem *args[] = {&b.scene, &b.media, &b.layers, &b.wo, &b.wi};
-    for (cl_uint i = 0; i < 5; i++) e |= clSetKernelArg(k, i, sizeof(cl_mem), args[i]);
-    e |= clSetKernelArg(k, 8, sizeof(cl_mem), &b.nee);
-    e |= clSetKernelArg(k, 9, sizeof(cl_mem), &b.scalars);
-    e |= clSetKernelArg(k, 10, sizeof(cl_mem), &b.hist);
-    e |= clSetKernelArg(k, 11, sizeof(cl_mem), &b.flags);
+    cl_mem *args[] = {&b.scene, &b.media, &b.layers, &b.wo, &b.wi, &b.tab};
+    for (cl_uint i = 0; i < 6; i++) e |= clSetKernelArg(k, i, sizeof(cl_mem), args[i]);
+    e |= clSetKernelArg(k, 9, sizeof(cl_mem), &b.nee);
+    e |= clSetKernelArg(k, 10, sizeof(cl_mem), &b.scalars);
+    e |= clSetKernelArg(k, 11, sizeof(cl_mem), &b.hist);
+    e |= clSetKernelArg(k, 12, sizeof(cl_mem), &b.flags);
+    /* The direction tables, once for the whole run. */
+    cl_mem *pargs[] = {&b.scene, &b.media, &b.layers, &b.wi, &b.tab};
+    for (cl_uint i = 0; i < 5; i++) e |= clSetKernelArg(kp, i, sizeof(cl_mem), pargs[i]);
+    if (e == CL_SUCCESS) {
+        size_t pglobal[2] = {pad, (size_t)st->n_slices};
+        e = clEnqueueNDRangeKernel(cx->queue, kp, 2, NULL, pglobal, NULL, 0, NULL, NULL);
+    }
 
     size_t ls = o->local_size ? o->local_size : 64, kmax = 0;
     clGetKernelWorkGroupInfo(k, cx->dev.id, CL_KERNEL_WORK_GROUP_SIZE, sizeof kmax, &kmax, NULL);
@@ -271,9 +293,9 @@ int lsqt_simulate(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint
         cl_ulong end = (chunk0 + chunks_per_launch) * LSQT_CHUNK;
         if (end > target) end = target;
         cl_ulong nchunks = (end - 1) / LSQT_CHUNK - chunk0 + 1, begin = pos;
-        e |= clSetKernelArg(k, 5, sizeof begin, &begin);
-        e |= clSetKernelArg(k, 6, sizeof end, &end);
-        e |= clSetKernelArg(k, 7, sizeof chunk0, &chunk0);
+        e |= clSetKernelArg(k, 6, sizeof begin, &begin);
+        e |= clSetKernelArg(k, 7, sizeof end, &end);
+        e |= clSetKernelArg(k, 8, sizeof chunk0, &chunk0);
         size_t global[2] = {(size_t)nchunks * ls, (size_t)st->n_slices}, local[2] = {ls, 1};
         double t = lsqt_now();
         if (e == CL_SUCCESS) e = clEnqueueNDRangeKernel(cx->queue, k, 2, NULL, global, local, 0, NULL, NULL);
@@ -321,6 +343,7 @@ done:
     free(wo);
     free(wi);
     clReleaseKernel(k);
+    clReleaseKernel(kp);
     clReleaseProgram(prog);
     return rc;
 }

@@ -1,11 +1,11 @@
-/* MicrosurfaceConductiveBrdf, single scattering (use_multiple_scattering=false): GGX
- * facets with the exact unpolarised Fresnel reflectance of a conductor of complex
- * relative index eta + i k (the metal below over the medium above), and the
- * height-correlated Smith masking-shadowing that uniform heights imply,
- * G2 = 1 / (1 + Lambda(wo) + Lambda(wi)). With the cosine of wi included (SPEC section 4):
- *   f = F(wo.h) D(h) G2(wo, wi) / (4 wo.z),  h = normalize(wo + wi),  both above.
- * Parameters p[0] = alpha, p[1] = eta, p[2] = k (relative to the medium above). Light
- * reaches it only from above; what the single-scattering term does not reflect is lost. */
+/* MicrosurfaceConductiveBrdf: GGX facets with the exact unpolarised Fresnel reflectance
+ * of a conductor of complex relative index eta + i k (the metal below over the medium
+ * above). Single scattering (with the cosine of wi, SPEC section 4) with the
+ * height-correlated Smith masking-shadowing that uniform heights imply:
+ *   f = F(wo.h) D(h) G2(wo, wi) / (4 wo.z),  G2 = 1 / (1 + Lambda(wo) + Lambda(wi)),
+ * h = normalize(wo + wi), both above; multiple scattering adds the walk's orders >= 2
+ * (microsurface.cl). Parameters p[0] = alpha, p[1] = eta, p[2] = k (relative to the medium
+ * above). Light reaches it only from above. */
 
 /* Unpolarised Fresnel reflectance of a conductor for cos(incidence) c, four at once:
  * with a^2 + b^2 = sqrt((eta^2 - k^2 - s^2)^2 + 4 eta^2 k^2), s = sin, (the standard
@@ -24,17 +24,38 @@ inline real4 fresnel_conductor4(real eta, real k, real4 c)
     return R(0.5) * (rs + rp);
 }
 
+/* The facets' phase function towards u (the ray's side's frame): F D_v(m) / (4 v.m) =
+ * F D(m) / (4 A(v)), m = normalize(v + u); 0 towards the other side (a reflection that
+ * points into the surface hits it again). */
+inline real4 conductor_phase4(__global const lsqt_dev_layer *l, const ms_vtx *x, dir4 u)
+{
+    dir4 m;
+    ms_half4(x->v, u, (real4)(R(1.0)), &m);
+    real4 vm = x->v.x * m.x + x->v.y * m.y + x->v.z * m.z;
+    real4 f = fresnel_conductor4(l->p[1], l->p[2], vm) * ggx_d4(l->p[0], m.x, m.y, m.z) * (R(0.25) * x->inv_area);
+    return select((real4)(R(0.0)), f, (vm > R(0.0)) & (u.z > R(0.0)));
+}
+
+/* Reflects about the vertex's visible normal; returns the facet albedo F. */
+inline real conductor_scatter(__global const lsqt_dev_layer *l, const ms_vtx *x, real3 *r)
+{
+    real vm = dot(x->v, x->m);
+    *r = normalize(R(2.0) * vm * x->m - x->v);
+    return vm > R(0.0) ? fresnel_conductor4(l->p[1], l->p[2], (real4)(vm)).x : R(0.0);
+}
+
+/* Single scattering: the phase function times the chance the reflected light escapes,
+ * averaged over the first hit's height: (1 + Lambda(v)) / (1 + Lambda(v) + Lambda(u)). */
+inline real4 conductor_single4(__global const lsqt_dev_layer *l, const ms_vtx *x, dir4 u, real4 lam_u)
+{
+    return conductor_phase4(l, x, u) * ((R(1.0) + x->lam_v) / (R(1.0) + x->lam_v + lam_u));
+}
+
 inline real4 conductor_eval4(__global const lsqt_dev_layer *l, real3 wo, dir4 wi)
 {
-    const real alpha = l->p[0];
     if (!(wo.z > R(0.0))) return (real4)(R(0.0));
-    real4 hx = wo.x + wi.x, hy = wo.y + wi.y, hz = wo.z + wi.z;
-    real4 inv = rsqrt(fmax(hx * hx + hy * hy + hz * hz, (real4)(R(1e-30))));
-    hx *= inv, hy *= inv, hz *= inv;
-    real4 oh = wo.x * hx + wo.y * hy + wo.z * hz;
-    real4 g2 = R(1.0) / (R(1.0) + ggx_lambda(alpha, wo.z) + ggx_lambda4(alpha, wi.z));
-    real4 f = fresnel_conductor4(l->p[1], l->p[2], oh) * ggx_d4(alpha, hx, hy, hz) * g2 / (R(4.0) * wo.z);
-    return select((real4)(R(0.0)), f, wi.z > R(0.0));
+    ms_vtx x = ms_vertex(l->p[0], wo, R(1.0), R(1.0), R(0.5), R(0.5));
+    return conductor_single4(l, &x, wi, ggx_lambda4(l->p[0], wi.z));
 }
 
 /* Density of conductor_sample's directions (reflections of visible normals, also those
@@ -51,16 +72,14 @@ inline real conductor_pdf(__global const lsqt_dev_layer *l, real3 wo, real3 wi)
     return ggx_d4(alpha, (real4)(h.x), (real4)(h.y), (real4)(h.z)).x / ((R(1.0) + ggx_lambda(alpha, wo.z)) * R(4.0) * wo.z);
 }
 
-/* Reflects wo about a visible normal; the weight f/pdf is F (1 + Lo) / (1 + Lo + Li),
- * 0 when the reflection points below the surface (single scattering only). */
+/* Single scattering: reflects wo about a visible normal; the weight f/pdf is
+ * F (1 + Lo) / (1 + Lo + Li), 0 when the reflection points below the surface. */
 inline real conductor_sample(__global const lsqt_dev_layer *l, real3 wo, real u1, real u2, real3 *wi)
 {
     const real alpha = l->p[0];
     if (!(wo.z > R(0.0))) return R(0.0);
-    real3 h = ggx_sample_vndf(alpha, wo, u1, u2);
-    real oh = dot(wo, h);
-    *wi = normalize(R(2.0) * oh * h - wo);
+    ms_vtx x = ms_vertex(alpha, wo, R(1.0), R(1.0), u1, u2);
+    real f = conductor_scatter(l, &x, wi);
     if (!(wi->z > R(0.0))) return R(0.0);
-    real lo = ggx_lambda(alpha, wo.z), li = ggx_lambda(alpha, wi->z);
-    return fresnel_conductor4(l->p[1], l->p[2], (real4)(oh)).x * (R(1.0) + lo) / (R(1.0) + lo + li);
+    return f * (R(1.0) + x.lam_v) / (R(1.0) + x.lam_v + ggx_lambda(alpha, wi->z));
 }

@@ -46,3 +46,9 @@ inline real sqr(real x) { return x * x; }
 /* sqrt that never returns NaN for round-off negatives */
 inline real safe_sqrt(real x) { return sqrt(fmax(x, R(0.0))); }
 inline real4 safe_sqrt4(real4 x) { return sqrt(fmax(x, (real4)(R(0.0)))); }
+
+/* Point-estimate directions per slice (the host passes -DLSQT_NWI=n), padded to fours. */
+#ifndef LSQT_NWI
+#define LSQT_NWI 1
+#endif
+#define LSQT_NWI_PAD LSQT_PAD4(LSQT_NWI)

@@ -56,3 +56,26 @@ __kernel void harness_tally(__global const float *v, __global ulong *out, volati
         global_add128(out + 2, t.lo, t.hi, flags);
     }
 }
+
+/* Stochastic evaluation of a microsurface (layer 0) for fixed wo towards the LSQT_NWI
+ * directions wi (x[pad], y[pad], z[pad]), with the direction table tab that lsqt_prepare
+ * makes for a one-layer scene: each work-item averages `reps` vertex evaluations (each
+ * iter_count walks plus the analytic single scattering, exactly as the path loop does)
+ * and writes its means, out[item * LSQT_NWI_PAD + k]; the spread across work-items gives
+ * the noise. */
+__kernel void harness_ms_eval(__global const lsqt_dev_layer *layers, float wox, float woy, float woz,
+                              __global const float *wi, __global const real *tab, uint seed, int reps,
+                              __global float *out)
+{
+    uint i = (uint)get_global_id(0);
+    rng_t rng = rng_init(seed, 0u, 1u, i, 7u);
+    real3 wo = normalize(make_real3(wox, woy, woz));
+    real sum[LSQT_NWI_PAD];
+    for (int k = 0; k < LSQT_NWI_PAD; k++) sum[k] = R(0.0);
+    ms_sink sink = {sum, wi, tab};
+    for (int r = 0; r < reps; r++) {
+        real3 o;
+        ms_vertex_walks(layers, -wo, &rng, R(1.0) / (real)reps, 1, &sink, &o);
+    }
+    for (int k = 0; k < LSQT_NWI_PAD; k++) out[(size_t)i * LSQT_NWI_PAD + k] = (float)sum[k];
+}

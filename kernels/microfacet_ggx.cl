@@ -41,3 +41,73 @@ inline real3 ggx_sample_vndf(real alpha, real3 wo, real u1, real u2)
     real3 nh = p1 * t1 + p2 * t2 + safe_sqrt(R(1.0) - p1 * p1 - p2 * p2) * vh;
     return normalize(make_real3(alpha * nh.x, alpha * nh.y, fmax(R(1e-9), nh.z)));
 }
+
+/* Projected area of the facets visible from v (either hemisphere), per unit macro area:
+ * A(v) = (v.z + sqrt(v.z^2 + alpha^2 (1 - v.z^2))) / 2, which is (1 + Lambda) v.z above
+ * the surface and Lambda(-v) |v.z| below it. The visible normals' density is
+ * D_v(m) = max(0, v.m) D(m) / A(v). */
+inline real ggx_area(real alpha, real vz)
+{
+    real z2 = vz * vz;
+    return R(0.5) * (vz + sqrt(z2 + alpha * alpha * fmax(R(1.0) - z2, R(0.0))));
+}
+
+/* Uniform heights (Heitz et al. 2016): h uniform on [-1, 1], so C1(h) = (1 + h) / 2 and
+ * the chance that a ray leaving height h along w (w.z > 0) escapes is G1 = C1(h)^Lambda(w).
+ * A walk keeps c = C1(h) in the frame of the side the ray is on; the other side sees the
+ * mirrored surface, where the same height has C1 = 1 - c. */
+#define LSQT_MS_C_MIN R(1e-30)
+
+/* One step of the walk's height: a ray at c travelling along r (in its side's frame)
+ * either escapes (returns 0) or hits the microsurface at a new c (returns 1). Going down
+ * it always hits: C1(h') = C1(h) u^(1/(1 + Lambda)); going up it escapes with G1, else
+ * C1(h') = C1(h) u^(-1/Lambda) for u in (G1, 1] (inverting the Smith masking in height). */
+inline int ms_next_height(real alpha, real3 r, real *c, real u)
+{
+    real lam = ggx_lambda(alpha, r.z), lu = log(u);
+    if (r.z > R(0.0)) {
+        if (lu <= lam * log(*c)) return 0;
+        *c = fmin(R(1.0), *c * exp(-lu / lam));
+    } else if (r.z < R(0.0)) {
+        *c = fmax(LSQT_MS_C_MIN, *c * exp(lu / (R(1.0) + lam)));
+    }
+    return 1;
+}
+
+/* What a facet interaction needs to know about the ray that arrives, fixed for every
+ * direction it is evaluated towards. Frame: the side the ray is on, z up. */
+typedef struct {
+    real3 v;          /* towards where the ray came from (v.z < 0 when it arrived going up) */
+    real3 m;          /* a visible normal sampled for this vertex (D_v) */
+    real inv_area;    /* 1 / A(v) */
+    real lam_v;       /* Lambda(v): analytic single scattering (v.z > 0 there) */
+    real lg_v;        /* lgamma(1 + Lambda(v)) */
+    real log_c;       /* log C1(h): escape to this side is exp(Lambda(u) log_c) */
+    real log_cbar;    /* log (1 - C1(h)): escape to the other side */
+    real e;           /* relative index across the facets seen from this side */
+} ms_vtx;
+
+inline ms_vtx ms_vertex(real alpha, real3 v, real c, real e, real u1, real u2)
+{
+    ms_vtx x;
+    x.v = v;
+    x.m = ggx_sample_vndf(alpha, v, u1, u2);
+    x.inv_area = R(1.0) / fmax(ggx_area(alpha, v.z), R(1e-30));
+    x.lam_v = ggx_lambda(alpha, v.z);
+    x.lg_v = lgamma(R(1.0) + x.lam_v);
+    x.log_c = log(fmax(c, LSQT_MS_C_MIN));
+    x.log_cbar = log(fmax(R(1.0) - c, LSQT_MS_C_MIN));
+    x.e = e;
+    return x;
+}
+
+/* Half vector of wo and u for reflection (k = 1) or refraction (k = relative index),
+ * oriented up: q = v + k u, m = q / |q|; returns |q|^2. Four directions at once. */
+inline real4 ms_half4(real3 v, dir4 u, real4 k, dir4 *m)
+{
+    real4 qx = v.x + k * u.x, qy = v.y + k * u.y, qz = v.z + k * u.z;
+    real4 n2 = fmax(qx * qx + qy * qy + qz * qz, (real4)(R(1e-30)));
+    real4 inv = rsqrt(n2) * select((real4)(R(1.0)), (real4)(R(-1.0)), qz < R(0.0));
+    m->x = qx * inv, m->y = qy * inv, m->z = qz * inv;
+    return n2;
+}

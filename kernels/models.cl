@@ -3,7 +3,10 @@
  * nothing it does not contain. */
 
 /* Evaluation takes four directions at once (next-event estimation's inner loop); the
- * single-direction form used by the test harness is lane x of the same code. */
+ * single-direction form used by the test harness is lane x of the same code. For the
+ * microsurfaces it is the analytic single-scattering term (conductor, dielectric; 0 for
+ * Lambertian facets): their full value is the walks' (microsurface.cl), which the path
+ * loop runs itself. */
 inline real4 bsdf_eval4(__global const lsqt_dev_layer *l, real3 wo, dir4 wi)
 {
     switch (l->kind) {
@@ -12,6 +15,9 @@ inline real4 bsdf_eval4(__global const lsqt_dev_layer *l, real3 wo, dir4 wi)
 #endif
 #ifdef LSQT_HAS_BSDF_MS_CONDUCTIVE
     case LSQT_BSDF_MS_CONDUCTIVE: return conductor_eval4(l, wo, wi);
+#endif
+#ifdef LSQT_HAS_BSDF_MS_DIELECTRIC
+    case LSQT_BSDF_MS_DIELECTRIC: return dielectric_eval4(l, wo, wi);
 #endif
     default: return (real4)(R(0.0));
     }
@@ -25,13 +31,14 @@ inline real bsdf_eval(__global const lsqt_dev_layer *l, real3 wo, real3 wi)
 /* Samples wi given wo; returns the weight f / pdf, 0 when the path is absorbed. */
 inline real bsdf_sample(__global const lsqt_dev_layer *l, real3 wo, rng_t *rng, real3 *wi)
 {
+#if defined(LSQT_HAS_BSDF_MS_LAMBERTIAN) || defined(LSQT_HAS_BSDF_MS_DIELECTRIC) || defined(LSQT_HAS_BSDF_MS_CONDUCTIVE)
+    if (l->kind == LSQT_BSDF_MS_LAMBERTIAN || l->kind == LSQT_BSDF_MS_DIELECTRIC || l->kind == LSQT_BSDF_MS_CONDUCTIVE)
+        return ms_sample(l, wo, rng, wi);
+#endif
     real u0 = rng_uniform(rng), u1 = rng_uniform(rng), u2 = rng_uniform(rng);
     switch (l->kind) {
 #ifdef LSQT_HAS_BSDF_LAMBERTIAN
     case LSQT_BSDF_LAMBERTIAN: return lambertian_sample(l, wo, u0, u1, u2, wi);
-#endif
-#ifdef LSQT_HAS_BSDF_MS_CONDUCTIVE
-    case LSQT_BSDF_MS_CONDUCTIVE: return conductor_sample(l, wo, u0, u1, wi);
 #endif
     default: return R(0.0);
     }
@@ -45,6 +52,9 @@ inline real bsdf_pdf(__global const lsqt_dev_layer *l, real3 wo, real3 wi)
 #endif
 #ifdef LSQT_HAS_BSDF_MS_CONDUCTIVE
     case LSQT_BSDF_MS_CONDUCTIVE: return conductor_pdf(l, wo, wi);
+#endif
+#ifdef LSQT_HAS_BSDF_MS_DIELECTRIC
+    case LSQT_BSDF_MS_DIELECTRIC: return dielectric_pdf(l, wo, wi);
 #endif
     default: return R(0.0);
     }

@@ -5,16 +5,11 @@
  * left the stack (reflection), one that enters medium n going down has too (transmission).
  * Inside an interior medium the position is the height h above its bottom boundary, so a
  * thin medium far from z = 0 is as exact as one near it. */
-#ifndef LSQT_NWI
-#define LSQT_NWI 1
-#endif
-
-#define LSQT_NWI_PAD LSQT_PAD4(LSQT_NWI)
-
 /* Work-group accumulators of the tallies: ACC_N 128-bit sums (tally.cl's acc_word).
- * Point estimates are summed per work-item in private 128-bit integers first (no atomics
- * on the hot path), then once per work-item into the work-group's; integer sums keep the
- * result independent of order. */
+ * A path's point estimates are summed per direction in floating point (`sum`, in the
+ * path's own fixed order) and converted to fixed point once per path; the work-item keeps
+ * those in private integers (no atomics on the hot path), and adds them once into the
+ * work-group's. Integer sums keep the result independent of order. */
 #define ACC_N (LSQT_NWI + LSQT_T_COUNT)
 
 typedef struct {
@@ -22,6 +17,8 @@ typedef struct {
     __global const lsqt_dev_medium *media;
     __global const lsqt_dev_layer *layers;
     __global const float *wi;          /* this slice's directions: x[pad], y[pad], z[pad] */
+    __global const real *tab;          /* this slice's per-layer direction tables (lsqt_prepare) */
+    real *sum;                         /* the current path's point estimates */
     ulong *nee;                        /* this work-item's point-estimate sums, low words */
     volatile __local acc_word *acc;    /* the work-group's tallies, LSQT_ACC_WORDS each */
     volatile __global uint *flags;
@@ -35,36 +32,10 @@ inline void acc_add(const walk_ctx *c, int k, real v)
     }
 }
 
-inline dir4 wi_dir4(const walk_ctx *c, int k)
-{
-    dir4 d = {convert_real4(vload4(0, c->wi + k)), convert_real4(vload4(0, c->wi + LSQT_NWI_PAD + k)),
-              convert_real4(vload4(0, c->wi + 2 * LSQT_NWI_PAD + k))};
-    return d;
-}
-
-/* Adds, to directions k..k+3, model values f times the transmittance of the media the
- * light crosses on its way out (optical thickness tau_up above, tau_down below), only
- * where leaving that way is allowed. A work-item keeps only the low 64-bit words; a high
- * word (a contribution above 2^63 units, 8e6, or a carry out of the low word) is rare
- * and goes straight to the work-group's 128-bit sum, where it counts the same. */
-inline void nee_add4(const walk_ctx *c, int k, real4 f, real4 z, real tau_up, real tau_down, int up, int down)
-{
-    real4 t = (real4)(R(1.0));
-    if (tau_up > R(0.0) || tau_down > R(0.0))
-        t = exp(-select((real4)(tau_down), (real4)(tau_up), z > R(0.0)) / fabs(z));
-    mask4 ok = ((z > R(0.0)) & (mask4)(up ? -1 : 0)) | ((z < R(0.0)) & (mask4)(down ? -1 : 0));
-    if (!any(ok)) return;
-    fix4 q = to_fixed4(select((real4)(R(0.0)), f * t, ok), c->flags);
-    ulong4 old = vload4(0, c->nee + k), sum = old + q.lo;
-    vstore4(sum, 0, c->nee + k);
-    if (any(q.hi != 0) || any(sum < old)) {
-        ulong4 h = q.hi + select((ulong4)(0), (ulong4)(1), sum < old);
-        ulong hs[4];
-        vstore4(h, 0, hs);
-        for (int i = 0; i < 4; i++)
-            if (hs[i]) local_add128(c->acc + LSQT_ACC_WORDS * (k + i), 0, hs[i], c->flags);
-    }
-}
+/* A layer's direction table: T[pad] (transmittance of the media light crosses leaving
+ * that way, 0 where it may not leave), Lambda[pad] and lgamma(1 + Lambda)[pad] of the
+ * layer's microfacets. */
+#define LSQT_TAB_STRIDE (3 * LSQT_NWI_PAD)
 
 /* A contribution below 2^-41 rounds to 0 in fixed point. Weights are at most 1 and
  * values at most 2^44 (a larger one fails the run), so light that must cross more than
@@ -77,20 +48,99 @@ inline int nee_visible(real tau_up, real tau_down, int up, int down)
     return (up && tau_up < LSQT_NEE_TAU_MAX) || (down && tau_down < LSQT_NEE_TAU_MAX);
 }
 
-/* Next-event estimates from a vertex on layer li reached along d with weight w: towards
- * upward directions if it is the topmost non-null layer, downward if the bottommost. */
-inline void nee_layer(const walk_ctx *c, int li, real3 d, real w)
+/* Transmittance towards directions z, 0 where leaving that way is not allowed. */
+inline real4 nee_transmittance4(real4 z, real tau_up, real tau_down, int up, int down)
+{
+    real4 t = (real4)(R(1.0));
+    if (tau_up > R(0.0) || tau_down > R(0.0))
+        t = exp(-select((real4)(tau_down), (real4)(tau_up), z > R(0.0)) / fabs(z));
+    mask4 ok = ((z > R(0.0)) & (mask4)(up && tau_up < LSQT_NEE_TAU_MAX ? -1 : 0)) |
+               ((z < R(0.0)) & (mask4)(down && tau_down < LSQT_NEE_TAU_MAX ? -1 : 0));
+    return select((real4)(R(0.0)), t, ok);
+}
+
+/* Per launch, per slice and layer: the direction table (the work that does not depend on
+ * the vertex). Global size (LSQT_NWI_PAD, n_slices). */
+__kernel void lsqt_prepare(__constant lsqt_dev_scene *scene, __global const lsqt_dev_medium *media,
+                           __global const lsqt_dev_layer *layers, __global const float *wi_dirs,
+                           __global real *tab)
+{
+    const int k = (int)get_global_id(0), slice = (int)get_global_id(1), n = scene->n_layers;
+    const real z = (real)wi_dirs[(3 * slice + 2) * LSQT_NWI_PAD + k];
+    for (int li = 0; li < n; li++) {
+        __global const lsqt_dev_layer *l = &layers[li];
+        __global const lsqt_dev_medium *above = &media[li], *below = &media[li + 1];
+        const int up = li == scene->top_nonnull, down = li == scene->bottom_nonnull;
+        real tau_up = above->tau_above + above->mut * above->thickness;
+        real tau_down = below->tau_below + below->mut * below->thickness;
+        int micro = l->kind == LSQT_BSDF_MS_LAMBERTIAN || l->kind == LSQT_BSDF_MS_DIELECTRIC ||
+                    l->kind == LSQT_BSDF_MS_CONDUCTIVE;
+        real lam = micro ? ggx_lambda(l->p[0], z) : R(0.0);
+        __global real *t = tab + ((size_t)slice * n + li) * LSQT_TAB_STRIDE;
+        t[k] = nee_transmittance4((real4)(z), tau_up, tau_down, up, down).x;
+        t[LSQT_NWI_PAD + k] = lam;
+        t[2 * LSQT_NWI_PAD + k] = lgamma(R(1.0) + lam);
+    }
+}
+
+/* Adds w * f * t to the path's sums of directions k..k+3 (t = 0: nothing, even where f is
+ * not finite, as for the zero vectors that pad the directions). */
+inline void nee_add4(const walk_ctx *c, int k, real4 f, real4 t)
+{
+    vstore4(vload4(0, c->sum + k) + select((real4)(R(0.0)), f * t, t > R(0.0)), 0, c->sum + k);
+}
+
+/* Converts the path's sums to fixed point and adds them to the work-item's (then clears
+ * them). A work-item keeps only the low 64-bit words; a high word (a sum above 2^63
+ * units, 8e6, or a carry out of the low word) is rare and goes straight to the
+ * work-group's 128-bit sum, where it counts the same. */
+inline void nee_flush(const walk_ctx *c)
+{
+    for (int k = 0; k < LSQT_NWI_PAD; k += 4) {
+        real4 v = vload4(0, c->sum + k);
+        if (!any(v != R(0.0))) continue;
+        vstore4((real4)(R(0.0)), 0, c->sum + k);
+        fix4 q = to_fixed4(v, c->flags);
+        ulong4 old = vload4(0, c->nee + k), sum = old + q.lo;
+        vstore4(sum, 0, c->nee + k);
+        if (any(q.hi != 0) || any(sum < old)) {
+            ulong4 h = q.hi + select((ulong4)(0), (ulong4)(1), sum < old);
+            ulong hs[4];
+            vstore4(h, 0, hs);
+            for (int i = 0; i < 4; i++)
+                if (hs[i]) local_add128(c->acc + LSQT_ACC_WORDS * (k + i), 0, hs[i], c->flags);
+        }
+    }
+}
+
+inline int layer_is_micro(__global const lsqt_dev_layer *l)
+{
+    return l->kind == LSQT_BSDF_MS_LAMBERTIAN || l->kind == LSQT_BSDF_MS_DIELECTRIC ||
+           l->kind == LSQT_BSDF_MS_CONDUCTIVE;
+}
+
+/* A vertex on layer li reached along d with weight w: next-event estimates towards upward
+ * directions if it is the topmost non-null layer, downward if the bottommost, then the
+ * sample that continues the path. Returns the weight factor and sets *wi. */
+inline real layer_vertex(const walk_ctx *c, int li, real3 d, real w, rng_t *rng, real3 *wi)
 {
     const int up = li == c->scene->top_nonnull, down = li == c->scene->bottom_nonnull;
     __global const lsqt_dev_layer *l = &c->layers[li];
     __global const lsqt_dev_medium *above = &c->media[li], *below = &c->media[li + 1];
     real tau_up = above->tau_above + above->mut * above->thickness;
     real tau_down = below->tau_below + below->mut * below->thickness;
-    if (!nee_visible(tau_up, tau_down, up, down)) return;
-    for (int k = 0; k < LSQT_NWI_PAD; k += 4) {
-        dir4 wi = wi_dir4(c, k);
-        nee_add4(c, k, w * bsdf_eval4(l, -d, wi), wi.z, tau_up, tau_down, up, down);
+    const int visible = nee_visible(tau_up, tau_down, up, down);
+    __global const real *tab = c->tab + li * LSQT_TAB_STRIDE;
+#if defined(LSQT_HAS_BSDF_MS_LAMBERTIAN) || defined(LSQT_HAS_BSDF_MS_DIELECTRIC) || defined(LSQT_HAS_BSDF_MS_CONDUCTIVE)
+    if (layer_is_micro(l)) {
+        ms_sink k = {c->sum, c->wi, tab};
+        return ms_vertex_walks(l, d, rng, w, visible, &k, wi);
     }
+#endif
+    if (visible)
+        for (int k = 0; k < LSQT_NWI_PAD; k += 4)
+            nee_add4(c, k, w * bsdf_eval4(l, -d, load_dir4(c->wi, k)), vload4(0, tab + k));
+    return bsdf_sample(l, -d, rng, wi);
 }
 
 /* Next-event estimates from a scattering vertex at height h in interior medium mi. */
@@ -103,8 +153,8 @@ inline void nee_medium(const walk_ctx *c, int mi, real h, real3 d, real w)
     real tau_down = m->tau_below + m->mut * h;
     if (!nee_visible(tau_up, tau_down, up, down)) return;
     for (int k = 0; k < LSQT_NWI_PAD; k += 4) {
-        dir4 wi = wi_dir4(c, k);
-        nee_add4(c, k, w * phase_eval4(m, -d, wi), wi.z, tau_up, tau_down, up, down);
+        dir4 wi = load_dir4(c->wi, k);
+        nee_add4(c, k, w * phase_eval4(m, -d, wi), nee_transmittance4(wi.z, tau_up, tau_down, up, down));
     }
 }
 
@@ -144,9 +194,8 @@ inline void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulong *hi
             __global const lsqt_dev_layer *l = &c->layers[layer];
             const int bounced = l->kind != LSQT_BSDF_NULL;
             if (bounced) {
-                nee_layer(c, layer, d, w);
                 real3 wi;
-                w *= bsdf_sample(l, -d, rng, &wi);
+                w *= layer_vertex(c, layer, d, w, rng, &wi);
                 scattered = 1;
                 if (!(w > R(0.0))) return;
                 d = wi;
@@ -208,7 +257,7 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
                         __global const lsqt_dev_medium *media,
                         __global const lsqt_dev_layer *layers,
                         __global const float *wo_dirs,
-                        __global const float *wi_dirs,
+                        __global const float *wi_dirs, __global const real *tab,
                         ulong path_begin, ulong path_end, ulong chunk_first,
                         __global ulong *nee, __global ulong *scalars, __global ulong *hist,
                         volatile __global uint *flags)
@@ -225,12 +274,15 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
     barrier(CLK_LOCAL_MEM_FENCE);
 
     ulong nee_priv[LSQT_NWI_PAD];
-    for (int k = 0; k < LSQT_NWI_PAD; k++) nee_priv[k] = 0;
-    walk_ctx c = {scene, media, layers, wi_dirs + 3 * LSQT_NWI_PAD * slice, nee_priv, acc, flags};
+    real path_sum[LSQT_NWI_PAD];
+    for (int k = 0; k < LSQT_NWI_PAD; k++) nee_priv[k] = 0, path_sum[k] = R(0.0);
+    walk_ctx c = {scene, media, layers, wi_dirs + 3 * LSQT_NWI_PAD * slice,
+                  tab + (size_t)slice * scene->n_layers * LSQT_TAB_STRIDE, path_sum, nee_priv, acc, flags};
     real3 wo = make_real3(wo_dirs[4 * slice], wo_dirs[4 * slice + 1], wo_dirs[4 * slice + 2]);
     for (ulong p = begin + (ulong)lid; p < end; p += (ulong)lsz) {
         rng_t rng = rng_init(scene->seed_lo, scene->seed_hi, slice, p, RNG_PURPOSE_WALK);
         run_path(&c, wo, &rng, hist + 2 * (ulong)slice * LSQT_HIST_BINS);
+        nee_flush(&c);
     }
     for (int k = 0; k < LSQT_NWI; k++)
         if (nee_priv[k]) local_add128(acc + LSQT_ACC_WORDS * k, nee_priv[k], 0, flags);

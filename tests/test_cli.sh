@@ -192,8 +192,6 @@ expect 0 "-cl-std=CL1.2" -- "$BIN" -v -R -p 300 -wo 4 -wi 16 -o v.raw --lss v.ls
 # Models the kernels do not run yet are refused clearly (exit 1), not simulated wrongly.
 printf 'Medium\nLayer z=0 OrenNayarDiffuseBrdf\nMedium\n' > on.lsqt
 expect 1 "on.lsqt:2: error: OrenNayarDiffuseBrdf is parsed but not simulated" -- "$BIN" on.lsqt
-printf 'Medium\nLayer z=0 MicrosurfaceConductive use_multiple_scattering=true\nMedium eta=0.05 mua=3.9\n' > ms.lsqt
-expect 1 "ms.lsqt:2: error: MicrosurfaceConductiveBrdf use_multiple_scattering=true is parsed but not simulated" -- "$BIN" ms.lsqt
 # The Silver example runs end to end: RAW values finite and non-negative.
 expect 0 "wrote" -- "$BIN" -p 2000 -wo 4 -wi 16 -o silver.raw --lss silver.lss "$EX/tutorial/Silver.lsqt"
 awk 'NR > 3 { if (!($5 >= 0 && $5 < 1e30)) bad++; n++ } END { exit !(n == 4 * 16 * 2 && bad == 0) }' silver.raw && ok \

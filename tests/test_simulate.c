@@ -1,40 +1,9 @@
 /* End-to-end physics of the walk on the device, against closed forms (SPEC §9). */
 #include "cl_fixture.h"
+#include "nee_albedo.h"
 
 #define PI 3.14159265358979323846
 
-static double sqr_d(double x) { return x * x; }
-
-/* Reflectance from the point estimates: the directions are an equal-area midpoint
- * lattice on the half hemisphere (area pi), mirrored in y, so each stands for 2 pi / n sr
- * of the upper hemisphere (times 2 when the set covers the sphere). */
-/* The NEE albedo A = integral of f cos over one hemisphere by the direction rule (each
- * direction stands for 2 pi / n sr of the upper hemisphere, 4 pi / n when the set covers
- * the sphere), minus c times the analog R (c = 0 or 1), with its batch-means standard
- * error: per batch, A_b - c R_b from the same paths, so the covariance of the two
- * estimators is in the error (they share paths, and the difference is far less noisy
- * than either). */
-static lsqt_est nee_albedo_minus(const lsqt_state *st, int s, int upper, double c)
-{
-    const size_t nw = (size_t)st->n_wi;
-    const double w = (st->transmits ? 4.0 : 2.0) * PI / st->n_wi, n = (double)st->paths;
-    double d[LSQT_BATCHES], total = 0;
-    for (int b = 0; b < LSQT_BATCHES; b++) {
-        const lsqt_u128 *nee = st->nee + ((size_t)s * LSQT_BATCHES + (size_t)b) * nw;
-        double a = 0;
-        for (size_t k = 0; k < nw; k++)
-            if ((st->wi[((size_t)s * nw + k) * 4 + 2] > 0) == upper)
-                a += w * lsqt_u128_to_double(nee[k]); /* cosine included */
-        double r = lsqt_u128_to_double(st->scalars[((size_t)s * LSQT_BATCHES + (size_t)b) * LSQT_T_COUNT + LSQT_T_R]);
-        d[b] = (a - c * r) / LSQT_FIX_SCALE;
-        total += d[b];
-    }
-    lsqt_est e = {total / n, 0};
-    double ss = 0;
-    for (int b = 0; b < LSQT_BATCHES; b++) ss += sqr_d(d[b] - (double)lsqt_batch_paths(st->paths, b) * e.mean);
-    e.err = sqrt(ss * LSQT_BATCHES / (LSQT_BATCHES - 1)) / n;
-    return e;
-}
 
 /* Exact sum of fixed-point tallies over batches (or bins) of one slice. */
 static lsqt_u128 sum_u128(const lsqt_u128 *p, size_t n, size_t stride)
@@ -165,8 +134,8 @@ static void test_slab(void)
          * error falls at least as 1/n: the difference between the 256- and the
          * 64-direction rules (same paths, so the noise mostly cancels) bounds the error
          * of the 256 one. */
-        lsqt_est diff = nee_albedo_minus(&st, s, 1, 1.0);
-        double rn = nee_albedo_minus(&st, s, 1, 0.0).mean, quad = fabs(rn - nee_albedo_minus(&coarse, s, 1, 0.0).mean);
+        lsqt_est diff = nee_albedo_minus(&st, s, 1, 1.0, LSQT_T_R);
+        double rn = nee_albedo_minus(&st, s, 1, 0.0, LSQT_T_R).mean, quad = fabs(rn - nee_albedo_minus(&coarse, s, 1, 0.0, LSQT_T_R).mean);
         CHECK(fabs(diff.mean) <= 4 * diff.err + quad, "slice %d: NEE albedo - R = %.3g +- %.2g (quadrature %.2g)", s,
               diff.mean, diff.err, quad);
         CHECK(quad < 0.01 * rn, "slice %d: the 64- and 256-direction rules differ by %.3g", s, quad);
@@ -203,7 +172,7 @@ static void test_adding(void)
         CHECK(e[s].T.mean == 0.0, "T = %g", e[s].T.mean);
         /* f is constant here and the directions are a midpoint rule in cos theta_i, exact
          * for f cos: only the noise is left. */
-        lsqt_est rn = nee_albedo_minus(&st, s, 1, 0.0);
+        lsqt_est rn = nee_albedo_minus(&st, s, 1, 0.0, LSQT_T_R);
         CHECK_Z(rn.mean, expect, rn.err, 4.0);
     }
     lsqt_estimates_free(e, 3);

@@ -1,0 +1,135 @@
+/* MicrosurfaceDielectricBsdf: GGX facets that are Fresnel mirrors between the medium
+ * above (index n_a) and the one below (n_b). Light from above meets relative index
+ * e = n_b / n_a, light from below 1 / e; kR and kT scale the facets' reflection and
+ * transmission (values below 1 absorb). Parameters p[0] = alpha, p[1] = n_b / n_a,
+ * p[2] = kR, p[3] = kT.
+ *
+ * Normalisation: the walk conserves energy, so f (cosine of wi included) integrates over
+ * wi to the fraction of the light that leaves each way, and a lossless stack has
+ * R + T = 1. This is the flux form of the BSDF; it obeys, with n_o and n_i the indices on
+ * the sides of wo and wi,  n_o^2 f(wo -> wi) / |cos i| = n_i^2 f(wi -> wo) / |cos o|
+ * (for reflection plain reciprocity). Single scattering, in the frame of wo's side:
+ *   reflection   f = kR F(wo.h) D(h) / (4 cos o) / (1 + Lo + Li),  h = normalize(wo + wi)
+ *   transmission f = kT (1 - F(wo.h)) D(h) e^2 |wi.h| wo.h / (cos o (wo.h + e wi.h)^2)
+ *                    * B(1 + Lo, 1 + Li),  h = -normalize(wo + e wi) turned up,
+ * B the Beta function: uniform heights make the height-correlated G2 of transmission
+ * E[(1 - C1(h))^Li] over the first hit's height, (1 + Lo) B(1 + Lo, 1 + Li) / (1 + Lo). */
+
+/* Unpolarised Fresnel reflectance of a dielectric interface for cos(incidence) c >= 0 on
+ * the incident side and relative index e = n2 / n1; 1 under total internal reflection. */
+inline real4 fresnel_dielectric4(real e, real4 c)
+{
+    c = clamp(c, (real4)(R(0.0)), (real4)(R(1.0)));
+    real4 g2 = e * e - R(1.0) + c * c;
+    real4 g = safe_sqrt4(g2);
+    real4 a = (g - c) / (g + c);
+    real4 b = (c * (g + c) - R(1.0)) / (c * (g - c) + R(1.0));
+    return select(R(0.5) * a * a * (R(1.0) + b * b), (real4)(R(1.0)), g2 <= R(0.0));
+}
+
+/* The facets' phase function towards u, in the frame of the ray's side (z up): towards
+ * this side reflection kR F D_v(m) / (4 v.m), towards the other side refraction
+ * kT (1 - F) D_v(m) e^2 |u.m| / (v.m + e u.m)^2, m the half vector of each. */
+inline real4 dielectric_phase4(__global const lsqt_dev_layer *l, const ms_vtx *x, dir4 u)
+{
+    const real e = x->e;
+    mask4 up = u.z > R(0.0);
+    dir4 m;
+    real4 n2 = ms_half4(x->v, u, select((real4)(e), (real4)(R(1.0)), up), &m);
+    real4 vm = x->v.x * m.x + x->v.y * m.y + x->v.z * m.z;
+    real4 um = u.x * m.x + u.y * m.y + u.z * m.z;
+    real4 fr = fresnel_dielectric4(e, vm);
+    real4 k = select((real4)(l->p[3]) * (R(1.0) - fr) * (e * e) * fabs(um), (real4)(l->p[2]) * fr * vm, up);
+    real4 f = ggx_d4(l->p[0], m.x, m.y, m.z) * vm * k * (x->inv_area / n2);
+    return select((real4)(R(0.0)), f, (vm > R(0.0)) & (up | (um < R(0.0))));
+}
+
+/* Reflects or refracts at the vertex's visible normal, in proportion kR F : kT (1 - F);
+ * returns the albedo kR F + kT (1 - F) and sets *cross when the ray went through. */
+inline real dielectric_scatter(__global const lsqt_dev_layer *l, const ms_vtx *x, real u, real3 *r, int *cross)
+{
+    const real e = x->e, vm = dot(x->v, x->m);
+    if (!(vm > R(0.0))) return R(0.0);
+    real fr = fresnel_dielectric4(e, (real4)(vm)).x;
+    real pr = l->p[2] * fr, tot = pr + l->p[3] * (R(1.0) - fr);
+    if (u * tot < pr) {
+        *r = normalize(R(2.0) * vm * x->m - x->v);
+        *cross = 0;
+    } else {
+        real ct = safe_sqrt(R(1.0) - (R(1.0) - vm * vm) / (e * e));
+        *r = normalize(-x->v / e + (vm / e - ct) * x->m);
+        *cross = 1;
+    }
+    return tot;
+}
+
+/* Escape of the single-scattered light, averaged over the first hit's height:
+ * (1 + Lv) / (1 + Lv + Lu) to this side, (1 + Lv) B(1 + Lv, 1 + Lu) to the other
+ * (lg_u = lgamma(1 + Lu), from the per-direction table). */
+inline real4 ms_single_escape4(const ms_vtx *x, mask4 up, real4 lam_u, real4 lg_u)
+{
+    real4 a = R(1.0) + x->lam_v;
+    real4 t = a * exp(x->lg_v + lg_u - lgamma(R(2.0) + x->lam_v + lam_u));
+    return select(t, a / (a + lam_u), up);
+}
+
+inline real4 dielectric_single4(__global const lsqt_dev_layer *l, const ms_vtx *x, dir4 u, real4 lam_u, real4 lg_u)
+{
+    return dielectric_phase4(l, x, u) * ms_single_escape4(x, u.z > R(0.0), lam_u, lg_u);
+}
+
+/* The frame of wo's side: z flipped below, and the relative index seen from there. */
+inline real ms_side(real3 wo) { return wo.z >= R(0.0) ? R(1.0) : R(-1.0); }
+inline real dielectric_index(__global const lsqt_dev_layer *l, real side)
+{
+    return side > R(0.0) ? l->p[1] : R(1.0) / l->p[1];
+}
+
+inline real4 dielectric_eval4(__global const lsqt_dev_layer *l, real3 wo, dir4 wi)
+{
+    const real s = ms_side(wo), alpha = l->p[0];
+    ms_vtx x = ms_vertex(alpha, make_real3(wo.x, wo.y, s * wo.z), R(1.0), dielectric_index(l, s), R(0.5), R(0.5));
+    wi.z *= s;
+    real4 lam = ggx_lambda4(alpha, wi.z);
+    return dielectric_single4(l, &x, wi, lam, lgamma(R(1.0) + lam));
+}
+
+/* Density of dielectric_sample's directions: both branches (a reflection may point into
+ * the surface and a refraction out of it; those carry weight 0), each D_v(m) times its
+ * Jacobian times the chance of choosing it. */
+inline real dielectric_pdf(__global const lsqt_dev_layer *l, real3 wo, real3 wi)
+{
+    const real s = ms_side(wo), alpha = l->p[0], e = dielectric_index(l, s);
+    real3 v = make_real3(wo.x, wo.y, s * wo.z), u = make_real3(wi.x, wi.y, s * wi.z);
+    real inv_area = R(1.0) / fmax(ggx_area(alpha, v.z), R(1e-30)), pdf = R(0.0);
+    for (int branch = 0; branch < 2; branch++) {
+        real k = branch ? e : R(1.0);
+        real3 q = v + k * u;
+        real n2 = dot(q, q);
+        if (!(n2 > R(1e-30))) continue;
+        real3 m = q * (rsqrt(n2) * (q.z < R(0.0) ? R(-1.0) : R(1.0)));
+        real vm = dot(v, m), um = dot(u, m);
+        if (!(vm > R(0.0)) || (branch && !(um < R(0.0)))) continue;
+        real fr = fresnel_dielectric4(e, (real4)(vm)).x;
+        real pr = l->p[2] * fr, pt = l->p[3] * (R(1.0) - fr);
+        if (!(pr + pt > R(0.0))) continue;
+        real d = ggx_d4(alpha, (real4)(m.x), (real4)(m.y), (real4)(m.z)).x * vm * inv_area;
+        pdf += branch ? pt / (pr + pt) * d * e * e * fabs(um) / n2 : pr / (pr + pt) * d * R(0.25) / vm;
+    }
+    return pdf;
+}
+
+/* Single scattering: a visible normal, reflection or refraction by kR F : kT (1 - F), and
+ * the escape averaged over heights; 0 when the direction points the wrong way. */
+inline real dielectric_sample(__global const lsqt_dev_layer *l, real3 wo, real u0, real u1, real u2, real3 *wi)
+{
+    const real s = ms_side(wo), alpha = l->p[0];
+    ms_vtx x = ms_vertex(alpha, make_real3(wo.x, wo.y, s * wo.z), R(1.0), dielectric_index(l, s), u1, u2);
+    real3 r;
+    int cross;
+    real w = dielectric_scatter(l, &x, u0, &r, &cross);
+    *wi = make_real3(r.x, r.y, s * r.z);
+    if (!(w > R(0.0)) || (cross ? !(r.z < R(0.0)) : !(r.z > R(0.0)))) return R(0.0);
+    real lam = ggx_lambda(alpha, r.z);
+    return w * ms_single_escape4(&x, (mask4)(cross ? 0 : -1), (real4)(lam), (real4)(lgamma(R(1.0) + lam))).x;
+}

@@ -1,0 +1,28 @@
+/* MicrosurfaceLambertianBrdf: GGX facets that reflect diffusely with fR and transmit
+ * diffusely with fT (to the other side of the microsurface, as a dielectric facet
+ * refracts). It has no closed-form single scattering: every order comes from the walk
+ * (microsurface.cl), the first one too. Parameters p[0] = alpha, p[1] = fR, p[2] = fT. */
+
+/* Phase function of the vertex's facet (normal x->m) towards u: fR max(0, u.m) / pi
+ * to this side, fT max(0, -u.m) / pi to the other. */
+inline real4 mslambert_phase4(__global const lsqt_dev_layer *l, const ms_vtx *x, dir4 u)
+{
+    real4 um = u.x * x->m.x + u.y * x->m.y + u.z * x->m.z;
+    return select(l->p[2] * fmax(-um, (real4)(R(0.0))), l->p[1] * fmax(um, (real4)(R(0.0))), u.z > R(0.0)) *
+           LSQT_INV_PI;
+}
+
+/* Diffuse reflection about m or transmission about -m, in proportion fR : fT; returns
+ * the albedo fR + fT. */
+inline real mslambert_scatter(__global const lsqt_dev_layer *l, const ms_vtx *x, real u0, real u1, real u2,
+                              real3 *r, int *cross)
+{
+    real fr = l->p[1], tot = fr + l->p[2];
+    if (!(tot > R(0.0))) return R(0.0);
+    *cross = u0 * tot >= fr;
+    real3 t, b, n = *cross ? -x->m : x->m;
+    make_frame(n, &t, &b);
+    real3 c = sample_cosine_hemisphere(u1, u2);
+    *r = normalize(c.x * t + c.y * b + c.z * n);
+    return tot;
+}

@@ -1,0 +1,193 @@
+/* The random walk on a microsurface (Heitz, Hanika, d'Eon, Dachsbacher 2016), shared by
+ * the three facet models. A ray arrives along d; it meets the microsurface at a random
+ * height, scatters off a visible facet (the model's phase function), and goes on until it
+ * escapes above (reflection) or below (transmission, after crossing a facet). Its exit
+ * is an exact sample of the BSDF, with weight the product of the facet albedos.
+ *
+ * One walk serves every incident direction: each vertex adds, towards every direction u
+ * of the slice, its phase function value times the chance G1(u, h) that light leaving
+ * that way escapes. Evaluation and sampling are the same walk, so the same walk's exit
+ * continues the path. Where single scattering is analytic (conductor, dielectric) it is
+ * added exactly once and the walks add orders >= 2 only: the same expectation, less noise.
+ * Work per direction that does not depend on the vertex (Lambda(u), lgamma(1 + Lambda(u)),
+ * the media's transmittance) comes from a table made once per launch (lsqt_prepare). */
+
+/* A walk longer than this is cut (absorbed): in the furnace tests no walk comes close. */
+#define LSQT_MS_MAX_ORDER 1024
+
+/* Where a vertex's terms go: per-direction sums, the slice's directions and this
+ * layer's table (transmittance T, 0 where light may not leave that way; Lambda;
+ * lgamma(1 + Lambda)), each LSQT_NWI_PAD long. */
+typedef struct {
+    real *sum;
+    __global const float *wi;
+    __global const real *tab;
+} ms_sink;
+
+inline dir4 load_dir4(__global const float *wi, int k)
+{
+    dir4 d = {convert_real4(vload4(0, wi + k)), convert_real4(vload4(0, wi + LSQT_NWI_PAD + k)),
+              convert_real4(vload4(0, wi + 2 * LSQT_NWI_PAD + k))};
+    return d;
+}
+
+/* sum += w * T * EXPR over every block of four directions that light may leave by;
+ * u (this side's frame), lam and lg are in scope for EXPR. */
+#define MS_NEE_LOOP(EXPR)                                                        \
+    for (int b = 0; b < LSQT_NWI_PAD; b += 4) {                                  \
+        real4 t = vload4(0, k->tab + b);                                         \
+        if (!any(t > R(0.0))) continue;                                          \
+        dir4 u = load_dir4(k->wi, b);                                            \
+        u.z *= side;                                                             \
+        real4 lam = vload4(0, k->tab + LSQT_NWI_PAD + b);                        \
+        real4 lg = vload4(0, k->tab + 2 * LSQT_NWI_PAD + b);                     \
+        (void)lg;                                                                \
+        vstore4(vload4(0, k->sum + b) + (w * t) * (EXPR), 0, k->sum + b);         \
+    }
+
+/* A walk vertex: the facet's phase function times G1 = C1^Lambda(u) to this side,
+ * (1 - C1)^Lambda(u) to the other. */
+inline void ms_nee_vertex(__global const lsqt_dev_layer *l, const ms_vtx *x, real side, real w, const ms_sink *k)
+{
+#define MS_G1 exp(lam * select((real4)(x->log_cbar), (real4)(x->log_c), u.z > R(0.0)))
+    switch (l->kind) {
+#ifdef LSQT_HAS_BSDF_MS_CONDUCTIVE
+    case LSQT_BSDF_MS_CONDUCTIVE: MS_NEE_LOOP(conductor_phase4(l, x, u) * MS_G1) break;
+#endif
+#ifdef LSQT_HAS_BSDF_MS_DIELECTRIC
+    case LSQT_BSDF_MS_DIELECTRIC: MS_NEE_LOOP(dielectric_phase4(l, x, u) * MS_G1) break;
+#endif
+#ifdef LSQT_HAS_BSDF_MS_LAMBERTIAN
+    case LSQT_BSDF_MS_LAMBERTIAN: MS_NEE_LOOP(mslambert_phase4(l, x, u) * MS_G1) break;
+#endif
+    default: break;
+    }
+#undef MS_G1
+}
+
+/* The analytic single-scattering term at the first hit (v.z > 0). */
+inline void ms_nee_single(__global const lsqt_dev_layer *l, const ms_vtx *x, real side, real w, const ms_sink *k)
+{
+    switch (l->kind) {
+#ifdef LSQT_HAS_BSDF_MS_CONDUCTIVE
+    case LSQT_BSDF_MS_CONDUCTIVE: MS_NEE_LOOP(conductor_single4(l, x, u, lam)) break;
+#endif
+#ifdef LSQT_HAS_BSDF_MS_DIELECTRIC
+    case LSQT_BSDF_MS_DIELECTRIC: MS_NEE_LOOP(dielectric_single4(l, x, u, lam, lg)) break;
+#endif
+    default: break;
+    }
+}
+
+/* Relative index across the facets from side s (only the dielectric refracts). */
+inline real ms_index(__global const lsqt_dev_layer *l, real s)
+{
+    return l->kind == LSQT_BSDF_MS_DIELECTRIC ? (s > R(0.0) ? l->p[1] : R(1.0) / l->p[1]) : R(1.0);
+}
+
+inline real ms_scatter(__global const lsqt_dev_layer *l, const ms_vtx *x, rng_t *rng, real3 *r, int *cross)
+{
+    *cross = 0;
+    switch (l->kind) {
+#ifdef LSQT_HAS_BSDF_MS_CONDUCTIVE
+    case LSQT_BSDF_MS_CONDUCTIVE: return conductor_scatter(l, x, r);
+#endif
+#ifdef LSQT_HAS_BSDF_MS_DIELECTRIC
+    case LSQT_BSDF_MS_DIELECTRIC: return dielectric_scatter(l, x, rng_uniform(rng), r, cross);
+#endif
+#ifdef LSQT_HAS_BSDF_MS_LAMBERTIAN
+    case LSQT_BSDF_MS_LAMBERTIAN: {
+        real u0 = rng_uniform(rng), u1 = rng_uniform(rng);
+        return mslambert_scatter(l, x, u0, u1, rng_uniform(rng), r, cross);
+    }
+#endif
+    default: return R(0.0);
+    }
+}
+
+/* One walk from direction d (world frame). Vertices of order >= nee_from add their terms,
+ * weighted w, to the sink. With max_order 1 (single scattering only) the walk stops after
+ * its first vertex and the weight takes the chance of escaping from there. Returns the
+ * exit weight (product of the albedos) and sets *out to the exit direction (world). */
+inline real ms_walk(__global const lsqt_dev_layer *l, real3 d, rng_t *rng, int max_order, int nee_from, real w,
+                    const ms_sink *k, real3 *out)
+{
+    const real alpha = l->p[0];
+    real s = d.z < R(0.0) ? R(1.0) : R(-1.0); /* the side the ray is on */
+    real3 r = make_real3(d.x, d.y, s * d.z);  /* its direction, in that side's frame */
+    real c = R(1.0), weight = R(1.0);
+    for (int order = 1;; order++) {
+        if (!ms_next_height(alpha, r, &c, R(1.0) - rng_uniform(rng))) break;
+        if (order > LSQT_MS_MAX_ORDER) return R(0.0);
+        real u1 = rng_uniform(rng), u2 = rng_uniform(rng);
+        ms_vtx x = ms_vertex(alpha, -r, c, ms_index(l, s), u1, u2);
+        if (order >= nee_from) ms_nee_vertex(l, &x, s, w * weight, k);
+        int cross;
+        weight *= ms_scatter(l, &x, rng, &r, &cross);
+        if (!(weight > R(0.0))) return R(0.0);
+        if (cross) s = -s, r.z = -r.z, c = R(1.0) - c;
+        if (max_order == 1) {
+            /* single scattering: only light that escapes now counts */
+            if (!(r.z > R(0.0))) return R(0.0);
+            weight *= exp(ggx_lambda(alpha, r.z) * log(fmax(c, LSQT_MS_C_MIN)));
+            break;
+        }
+        if (weight < LSQT_RR_WEIGHT) { /* roulette inside the walk, unbiased */
+            if (rng_uniform(rng) * LSQT_RR_WEIGHT >= weight) return R(0.0);
+            weight = LSQT_RR_WEIGHT;
+        }
+    }
+    *out = make_real3(r.x, r.y, s * r.z);
+    return weight;
+}
+
+/* The analytic single scatterers' samplers (use_multiple_scattering=false). */
+inline real ms_single_sample(__global const lsqt_dev_layer *l, real3 wo, rng_t *rng, real3 *wi)
+{
+    real u0 = rng_uniform(rng), u1 = rng_uniform(rng), u2 = rng_uniform(rng);
+    switch (l->kind) {
+#ifdef LSQT_HAS_BSDF_MS_CONDUCTIVE
+    case LSQT_BSDF_MS_CONDUCTIVE: return conductor_sample(l, wo, u1, u2, wi);
+#endif
+#ifdef LSQT_HAS_BSDF_MS_DIELECTRIC
+    case LSQT_BSDF_MS_DIELECTRIC: return dielectric_sample(l, wo, u0, u1, u2, wi);
+#endif
+    default: return R(0.0);
+    }
+}
+
+inline int ms_analytic(__global const lsqt_dev_layer *l) { return l->kind != LSQT_BSDF_MS_LAMBERTIAN; }
+
+/* A microsurface vertex reached along d with weight w: iter_count walks each add their
+ * terms (weighted w / iter_count) to every direction of the sink, after the analytic
+ * single scattering where there is one; walk 0's exit continues the path. Returns the
+ * factor for the path's weight and sets *out. With nee 0 only the sample is made. */
+inline real ms_vertex_walks(__global const lsqt_dev_layer *l, real3 d, rng_t *rng, real w, int nee,
+                            const ms_sink *k, real3 *out)
+{
+    const int ms = l->multiple_scattering, analytic = ms_analytic(l);
+    const int n = nee ? l->iter_count : 1, max_order = ms ? LSQT_MS_MAX_ORDER : 1;
+    if (analytic) {
+        const real side = d.z < R(0.0) ? R(1.0) : R(-1.0);
+        if (nee) {
+            ms_vtx x = ms_vertex(l->p[0], make_real3(-d.x, -d.y, side * -d.z), R(1.0), ms_index(l, side), R(0.5), R(0.5));
+            ms_nee_single(l, &x, side, w, k);
+        }
+        if (!ms) return ms_single_sample(l, -d, rng, out);
+    }
+    const int nee_from = nee ? (analytic ? 2 : 1) : LSQT_MS_MAX_ORDER + 1;
+    real weight = R(0.0), wn = w / (real)n;
+    for (int it = 0; it < n; it++) {
+        real3 o = make_real3(R(0.0), R(0.0), R(1.0));
+        real wt = ms_walk(l, d, rng, max_order, nee_from, wn, k, &o);
+        if (it == 0) weight = wt, *out = o;
+    }
+    return weight;
+}
+
+/* Sampling alone (a vertex with no point estimate, and the test harness). */
+inline real ms_sample(__global const lsqt_dev_layer *l, real3 wo, rng_t *rng, real3 *wi)
+{
+    ms_sink none = {0, 0, 0};
+    return ms_vertex_walks(l, -wo, rng, R(0.0), 0, &none, wi);
+}
