@@ -54,7 +54,7 @@ inline real4 conductor_single4(__global const lsqt_dev_layer *l, const ms_vtx *x
 inline real4 conductor_eval4(__global const lsqt_dev_layer *l, real3 wo, dir4 wi)
 {
     if (!(wo.z > R(0.0))) return (real4)(R(0.0));
-    ms_vtx x = ms_vertex(l->p[0], wo, R(1.0), R(1.0), R(0.5), R(0.5));
+    ms_vtx x = ms_vertex_single(l->p[0], wo, R(1.0));
     return conductor_single4(l, &x, wi, ggx_lambda4(l->p[0], wi.z));
 }
 
@@ -79,6 +79,7 @@ inline real conductor_sample(__global const lsqt_dev_layer *l, real3 wo, real u1
     const real alpha = l->p[0];
     if (!(wo.z > R(0.0))) return R(0.0);
     ms_vtx x = ms_vertex(alpha, wo, R(1.0), R(1.0), u1, u2);
+    x.lam_v = ggx_lambda(alpha, wo.z);
     real f = conductor_scatter(l, &x, wi);
     if (!(wi->z > R(0.0))) return R(0.0);
     return f * (R(1.0) + x.lam_v) / (R(1.0) + x.lam_v + ggx_lambda(alpha, wi->z));

@@ -68,9 +68,10 @@ inline real dielectric_scatter(__global const lsqt_dev_layer *l, const ms_vtx *x
  * (lg_u = lgamma(1 + Lu), from the per-direction table). */
 inline real4 ms_single_escape4(const ms_vtx *x, mask4 up, real4 lam_u, real4 lg_u)
 {
-    real4 a = R(1.0) + x->lam_v;
-    real4 t = a * exp(x->lg_v + lg_u - lgamma(R(2.0) + x->lam_v + lam_u));
-    return select(t, a / (a + lam_u), up);
+    real4 a = R(1.0) + x->lam_v, r = a / (a + lam_u);
+    if (!all(up)) /* the Beta function only where some light goes through */
+        r = select(a * exp(x->lg_v + lg_u - lgamma_ge1_4(R(2.0) + x->lam_v + lam_u)), r, up);
+    return r;
 }
 
 inline real4 dielectric_single4(__global const lsqt_dev_layer *l, const ms_vtx *x, dir4 u, real4 lam_u, real4 lg_u)
@@ -88,7 +89,7 @@ inline real dielectric_index(__global const lsqt_dev_layer *l, real side)
 inline real4 dielectric_eval4(__global const lsqt_dev_layer *l, real3 wo, dir4 wi)
 {
     const real s = ms_side(wo), alpha = l->p[0];
-    ms_vtx x = ms_vertex(alpha, make_real3(wo.x, wo.y, s * wo.z), R(1.0), dielectric_index(l, s), R(0.5), R(0.5));
+    ms_vtx x = ms_vertex_single(alpha, make_real3(wo.x, wo.y, s * wo.z), dielectric_index(l, s));
     wi.z *= s;
     real4 lam = ggx_lambda4(alpha, wi.z);
     return dielectric_single4(l, &x, wi, lam, lgamma(R(1.0) + lam));
@@ -125,6 +126,8 @@ inline real dielectric_sample(__global const lsqt_dev_layer *l, real3 wo, real u
 {
     const real s = ms_side(wo), alpha = l->p[0];
     ms_vtx x = ms_vertex(alpha, make_real3(wo.x, wo.y, s * wo.z), R(1.0), dielectric_index(l, s), u1, u2);
+    x.lam_v = ggx_lambda(alpha, x.v.z);
+    x.lg_v = lgamma(R(1.0) + x.lam_v);
     real3 r;
     int cross;
     real w = dielectric_scatter(l, &x, u0, &r, &cross);

@@ -52,3 +52,17 @@ inline real4 safe_sqrt4(real4 x) { return sqrt(fmax(x, (real4)(R(0.0)))); }
 #define LSQT_NWI 1
 #endif
 #define LSQT_NWI_PAD LSQT_PAD4(LSQT_NWI)
+
+/* lgamma(x) for x >= 1, four at once, without the library's general (and, on PoCL,
+ * scalar) lgamma: the Stirling series to 1/x^7 for x >= 8, error below 3e-11, after
+ * lgamma(x) = lgamma(x + 6) - log(x (x+1) ... (x+5)) for smaller x. */
+inline real4 lgamma_ge1_4(real4 x)
+{
+    mask4 small = x < R(8.0);
+    real4 p = x * (x + R(1.0)) * (x + R(2.0)) * (x + R(3.0)) * (x + R(4.0)) * (x + R(5.0));
+    real4 y = select(x, x + R(6.0), small);
+    real4 r = R(1.0) / y, r2 = r * r;
+    real4 series = r * (R(1.0) / R(12.0) - r2 * (R(1.0) / R(360.0) - r2 * (R(1.0) / R(1260.0) - r2 * (R(1.0) / R(1680.0)))));
+    real4 lg = (y - R(0.5)) * log(y) - y + R(0.91893853320467274178) + series;
+    return lg - select((real4)(R(0.0)), log(p), small);
+}

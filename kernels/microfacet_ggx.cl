@@ -80,8 +80,8 @@ typedef struct {
     real3 v;          /* towards where the ray came from (v.z < 0 when it arrived going up) */
     real3 m;          /* a visible normal sampled for this vertex (D_v) */
     real inv_area;    /* 1 / A(v) */
-    real lam_v;       /* Lambda(v): analytic single scattering (v.z > 0 there) */
-    real lg_v;        /* lgamma(1 + Lambda(v)) */
+    real lam_v;       /* Lambda(v) and lgamma(1 + Lambda(v)): analytic single */
+    real lg_v;        /* scattering only (ms_vertex_single; v.z > 0 there) */
     real log_c;       /* log C1(h): escape to this side is exp(Lambda(u) log_c) */
     real log_cbar;    /* log (1 - C1(h)): escape to the other side */
     real e;           /* relative index across the facets seen from this side */
@@ -93,11 +93,20 @@ inline ms_vtx ms_vertex(real alpha, real3 v, real c, real e, real u1, real u2)
     x.v = v;
     x.m = ggx_sample_vndf(alpha, v, u1, u2);
     x.inv_area = R(1.0) / fmax(ggx_area(alpha, v.z), R(1e-30));
-    x.lam_v = ggx_lambda(alpha, v.z);
-    x.lg_v = lgamma(R(1.0) + x.lam_v);
+    x.lam_v = x.lg_v = R(0.0);
     x.log_c = log(fmax(c, LSQT_MS_C_MIN));
     x.log_cbar = log(fmax(R(1.0) - c, LSQT_MS_C_MIN));
     x.e = e;
+    return x;
+}
+
+/* The first hit of light arriving along -v from above (c = 1), for the analytic single
+ * scattering terms. */
+inline ms_vtx ms_vertex_single(real alpha, real3 v, real e)
+{
+    ms_vtx x = ms_vertex(alpha, v, R(1.0), e, R(0.5), R(0.5));
+    x.lam_v = ggx_lambda(alpha, v.z);
+    x.lg_v = lgamma(R(1.0) + x.lam_v);
     return x;
 }
 

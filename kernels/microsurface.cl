@@ -170,7 +170,7 @@ inline real ms_vertex_walks(__global const lsqt_dev_layer *l, real3 d, rng_t *rn
     if (analytic) {
         const real side = d.z < R(0.0) ? R(1.0) : R(-1.0);
         if (nee) {
-            ms_vtx x = ms_vertex(l->p[0], make_real3(-d.x, -d.y, side * -d.z), R(1.0), ms_index(l, side), R(0.5), R(0.5));
+            ms_vtx x = ms_vertex_single(l->p[0], make_real3(-d.x, -d.y, side * -d.z), ms_index(l, side));
             ms_nee_single(l, &x, side, w, k);
         }
         if (!ms) return ms_single_sample(l, -d, rng, out);

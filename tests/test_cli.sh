@@ -192,10 +192,13 @@ expect 0 "-cl-std=CL1.2" -- "$BIN" -v -R -p 300 -wo 4 -wi 16 -o v.raw --lss v.ls
 # Models the kernels do not run yet are refused clearly (exit 1), not simulated wrongly.
 printf 'Medium\nLayer z=0 OrenNayarDiffuseBrdf\nMedium\n' > on.lsqt
 expect 1 "on.lsqt:2: error: OrenNayarDiffuseBrdf is parsed but not simulated" -- "$BIN" on.lsqt
-# The Silver example runs end to end: RAW values finite and non-negative.
-expect 0 "wrote" -- "$BIN" -p 2000 -wo 4 -wi 16 -o silver.raw --lss silver.lss "$EX/tutorial/Silver.lsqt"
-awk 'NR > 3 { if (!($5 >= 0 && $5 < 1e30)) bad++; n++ } END { exit !(n == 4 * 16 * 2 && bad == 0) }' silver.raw && ok \
-  || bad "Silver RAW has non-finite or negative values"
+# The microsurface examples run end to end: RAW values finite and non-negative, every
+# slice and direction present (4 slices x 16 directions, mirrored in y).
+for ex in Rough Substr Dusty Silver; do
+  expect 0 "wrote" -- "$BIN" -p 1000 -wo 4 -wi 16 -o "$ex.raw" --lss "$ex.lss" "$EX/tutorial/$ex.lsqt"
+  awk 'NR > 3 { if (!($5 >= 0 && $5 < 1e30)) bad++; n++ } END { exit !(n == 4 * 16 * 2 && bad == 0) }' "$ex.raw" && ok \
+    || bad "$ex RAW has missing, non-finite or negative values"
+done
 
 # A kernel that fails to compile: exit 1 with the compiler's build log.
 mkdir -p broken && cp -r "$EX/../kernels" "$EX/../include" broken/
