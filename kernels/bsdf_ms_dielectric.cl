@@ -63,17 +63,6 @@ inline real dielectric_scatter(__global const lsqt_dev_layer *l, const ms_vtx *x
     return tot;
 }
 
-/* Escape of the single-scattered light, averaged over the first hit's height:
- * (1 + Lv) / (1 + Lv + Lu) to this side, (1 + Lv) B(1 + Lv, 1 + Lu) to the other
- * (lg_u = lgamma(1 + Lu), from the per-direction table). */
-inline real4 ms_single_escape4(const ms_vtx *x, mask4 up, real4 lam_u, real4 lg_u)
-{
-    real4 a = R(1.0) + x->lam_v, r = a / (a + lam_u);
-    if (!all(up)) /* the Beta function only where some light goes through */
-        r = select(a * exp(x->lg_v + lg_u - lgamma_ge1_4(R(2.0) + x->lam_v + lam_u)), r, up);
-    return r;
-}
-
 inline real4 dielectric_single4(__global const lsqt_dev_layer *l, const ms_vtx *x, dir4 u, real4 lam_u, real4 lg_u)
 {
     return dielectric_phase4(l, x, u) * ms_single_escape4(x, u.z > R(0.0), lam_u, lg_u);

@@ -110,6 +110,17 @@ inline ms_vtx ms_vertex_single(real alpha, real3 v, real e)
     return x;
 }
 
+/* Escape of the single-scattered light, averaged over the first hit's height:
+ * (1 + Lv) / (1 + Lv + Lu) to this side, (1 + Lv) B(1 + Lv, 1 + Lu) to the other
+ * (lg_u = lgamma(1 + Lu), from the per-direction table). */
+inline real4 ms_single_escape4(const ms_vtx *x, mask4 up, real4 lam_u, real4 lg_u)
+{
+    real4 a = R(1.0) + x->lam_v, r = a / (a + lam_u);
+    if (!all(up)) /* the Beta function only where some light goes through */
+        r = select(a * exp(x->lg_v + lg_u - lgamma_ge1_4(R(2.0) + x->lam_v + lam_u)), r, up);
+    return r;
+}
+
 /* Half vector of wo and u for reflection (k = 1) or refraction (k = relative index),
  * oriented up: q = v + k u, m = q / |q|; returns |q|^2. Four directions at once. */
 inline real4 ms_half4(real3 v, dir4 u, real4 k, dir4 *m)

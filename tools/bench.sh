@@ -3,23 +3,44 @@
 # wall and CPU seconds (user + sys: the machine is shared, so CPU time is the fair
 # measure) and the efficiency 1 / (max rel err^2 * s).
 # usage: tools/bench.sh [PATHS] [lsqt-cl options...]; prints one line per example.
+#        tools/bench.sh micro [lsqt-cl options...]: the microsurface examples at the issue's
+#        settings (-p 1e4; Rough -wi 320, Substr -wi 600), multiple scattering on and off.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 P=${1:-1e6}
 shift || true
+MICRO=0
+if [ "$P" = micro ]; then MICRO=1; P=1e4; fi
 BIN=./build/lsqt-cl
 [ -x "$BIN" ] || bash tools/build.sh
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 # wall_s: the simulation (launch loop); cpu_s: the whole process, user + sys
 printf "%-34s %10s %12s %9s %9s %12s %12s\n" example paths/slice "paths/s" wall_s cpu_s "max rel err" efficiency
-for ex in examples/tutorial/Lambertian.lsqt examples/tutorial/Dust.lsqt examples/tutorial/Silver.lsqt \
-          examples/slab.lsqt examples/two-lambertian.lsqt; do
+if [ "$MICRO" = 1 ]; then
+  # "file|options": each also as a copy with use_multiple_scattering flipped off/on
+  cases=()
+  for c in "examples/tutorial/Rough.lsqt|-wi 320" "examples/tutorial/Substr.lsqt|-wi 600" \
+           "examples/tutorial/Dusty.lsqt|" "examples/tutorial/Silver.lsqt|"; do
+    f=${c%%|*} o=${c#*|} b=$(basename "$f" .lsqt)
+    sed -E '/^(#|$)/d; s/use_multiple_scattering=[a-z]+//; s/^(Layer .*Microsurface[A-Za-z]*)/\1 use_multiple_scattering=true/' "$f" > "$work/$b-ms.lsqt"
+    sed -E '/^(#|$)/d; s/use_multiple_scattering=[a-z]+//; s/^(Layer .*Microsurface[A-Za-z]*)/\1 use_multiple_scattering=false/' "$f" > "$work/$b-ss.lsqt"
+    cases+=("$work/$b-ms.lsqt|$o" "$work/$b-ss.lsqt|$o")
+  done
+else
+  cases=()
+  for f in examples/tutorial/Lambertian.lsqt examples/tutorial/Dust.lsqt examples/tutorial/Silver.lsqt \
+           examples/slab.lsqt examples/two-lambertian.lsqt; do cases+=("$f|"); done
+fi
+for c in "${cases[@]}"; do
+  ex=${c%%|*}
+  read -r -a opts <<< "${c#*|}"
+  name="$(basename "$ex") ${c#*|}"
   # a short run first, so the kernel build is not timed
-  "$BIN" -q -R -p 1000 --lss "$work/b.lss" -o "$work/b.raw" "$@" "$ex"
+  "$BIN" -q -R -p 1000 --lss "$work/b.lss" -o "$work/b.raw" "${opts[@]}" "$@" "$ex"
   TIMEFORMAT='%U %S'
-  { time "$BIN" -q -R -p "$P" --lss "$work/b.lss" -o "$work/b.raw" --json "$work/b.json" "$@" "$ex" ; } 2>"$work/t"
-  python3 - "$ex" "$P" "$work/b.json" "$work/t" <<'PY'
+  { time "$BIN" -q -R -p "$P" --lss "$work/b.lss" -o "$work/b.raw" --json "$work/b.json" "${opts[@]}" "$@" "$ex" ; } 2>"$work/t"
+  python3 - "$name" "$P" "$work/b.json" "$work/t" <<'PY'
 import json, sys
 j = json.load(open(sys.argv[3]))
 user, sys_ = (float(x) for x in open(sys.argv[4]).read().split()[-2:])
