@@ -215,13 +215,14 @@ int lsqt_simulate(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint
     lsqt_dev_layer_d *layers = calloc((size_t)n, sizeof *layers);
     lsqt_dev_medium *media_f = calloc((size_t)n + 1, sizeof *media_f);
     lsqt_dev_layer *layers_f = calloc((size_t)n, sizeof *layers_f);
-    float *wo = calloc((size_t)st->n_slices * 4, sizeof *wo);
-    const size_t pad = LSQT_PAD4((size_t)st->n_wi);
-    float *wi = calloc((size_t)st->n_slices * 3 * pad, sizeof *wi);
+    /* Directions go to the device in the kernel's precision: double for --double. */
+    const size_t pad = LSQT_PAD4((size_t)st->n_wi), n_wo = (size_t)st->n_slices * 4, n_wi = (size_t)st->n_slices * 3 * pad;
+    double *wo = calloc(n_wo, sizeof *wo), *wi = calloc(n_wi, sizeof *wi);
+    float *wo_f = calloc(n_wo, sizeof *wo_f), *wi_f = calloc(n_wi, sizeof *wi_f);
     sim_buffers b;
     memset(&b, 0, sizeof b);
     int rc = 1;
-    if (!media || !layers || !media_f || !layers_f || !wo || !wi) {
+    if (!media || !layers || !media_f || !layers_f || !wo || !wi || !wo_f || !wi_f) {
         snprintf(err, errcap, "out of memory");
         goto done;
     }
@@ -236,20 +237,30 @@ int lsqt_simulate(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint
     scene.seed_lo = (lsqt_u32)st->seed;
     scene.seed_hi = (lsqt_u32)(st->seed >> 32);
     for (int s = 0; s < st->n_slices; s++) {
-        wo[4 * s] = (float)sin(st->theta_o[s]);
-        wo[4 * s + 2] = (float)cos(st->theta_o[s]);
-        /* Incident directions as coordinate arrays, zero-padded to fours. */
-        for (size_t i = 0; i < (size_t)st->n_wi; i++)
-            for (size_t j = 0; j < 3; j++)
-                wi[((size_t)s * 3 + j) * pad + i] = st->wi[((size_t)s * (size_t)st->n_wi + i) * 4 + j];
+        wo[4 * s] = sin(st->theta_o[s]);
+        wo[4 * s + 2] = cos(st->theta_o[s]);
+        /* Incident directions as coordinate arrays, zero-padded to fours. The state holds
+         * them in float; in double they are normalised again (float leaves |wi| - 1 at
+         * 1e-7), in float they go as they are. */
+        for (size_t i = 0; i < (size_t)st->n_wi; i++) {
+            const float *d = st->wi + ((size_t)s * (size_t)st->n_wi + i) * 4;
+            double len = sqrt((double)d[0] * d[0] + (double)d[1] * d[1] + (double)d[2] * d[2]);
+            for (size_t j = 0; j < 3; j++) {
+                wi[((size_t)s * 3 + j) * pad + i] = st->use_double && len > 0 ? d[j] / len : d[j];
+                wi_f[((size_t)s * 3 + j) * pad + i] = d[j];
+            }
+        }
     }
+    for (size_t i = 0; i < n_wo; i++) wo_f[i] = (float)wo[i];
+    const size_t dir_size = st->use_double ? sizeof(double) : sizeof(float);
+    void *wo_up = st->use_double ? (void *)wo : (void *)wo_f, *wi_up = st->use_double ? (void *)wi : (void *)wi_f;
     cl_mem_flags ro = CL_MEM_READ_ONLY, rw = CL_MEM_READ_WRITE;
     cl_uint flags0 = 0;
     b.scene = make_buffer(cx, ro, sizeof scene, &scene, &e);
     b.media = make_buffer(cx, ro, ((size_t)n + 1) * media_size, (void *)media_up, &e);
     b.layers = make_buffer(cx, ro, (size_t)n * layer_size, (void *)layers_up, &e);
-    b.wo = make_buffer(cx, ro, (size_t)st->n_slices * 4 * sizeof *wo, wo, &e);
-    b.wi = make_buffer(cx, ro, (size_t)st->n_slices * 3 * LSQT_PAD4((size_t)st->n_wi) * sizeof(float), wi, &e);
+    b.wo = make_buffer(cx, ro, n_wo * dir_size, wo_up, &e);
+    b.wi = make_buffer(cx, ro, n_wi * dir_size, wi_up, &e);
     /* per slice and layer: T, Lambda, lgamma(1 + Lambda) of every direction */
     const size_t tab_size = (size_t)st->n_slices * (size_t)n * 3 * pad * (st->use_double ? sizeof(double) : sizeof(float));
     b.tab = make_buffer(cx, rw, tab_size, NULL, &e);
@@ -342,6 +353,8 @@ done:
     free(layers_f);
     free(wo);
     free(wi);
+    free(wo_f);
+    free(wi_f);
     clReleaseKernel(k);
     clReleaseKernel(kp);
     clReleaseProgram(prog);

@@ -64,7 +64,7 @@ __kernel void harness_tally(__global const float *v, __global ulong *out, volati
  * and writes its means, out[item * LSQT_NWI_PAD + k]; the spread across work-items gives
  * the noise. */
 __kernel void harness_ms_eval(__global const lsqt_dev_layer *layers, float wox, float woy, float woz,
-                              __global const float *wi, __global const real *tab, uint seed, int reps,
+                              __global const real *wi, __global const real *tab, uint seed, int reps,
                               __global float *out)
 {
     uint i = (uint)get_global_id(0);

@@ -20,14 +20,14 @@
  * lgamma(1 + Lambda)), each LSQT_NWI_PAD long. */
 typedef struct {
     real *sum;
-    __global const float *wi;
+    __global const real *wi;
     __global const real *tab;
 } ms_sink;
 
-inline dir4 load_dir4(__global const float *wi, int k)
+/* Directions are in `real`: --double is double end to end (the host normalises them). */
+inline dir4 load_dir4(__global const real *wi, int k)
 {
-    dir4 d = {convert_real4(vload4(0, wi + k)), convert_real4(vload4(0, wi + LSQT_NWI_PAD + k)),
-              convert_real4(vload4(0, wi + 2 * LSQT_NWI_PAD + k))};
+    dir4 d = {vload4(0, wi + k), vload4(0, wi + LSQT_NWI_PAD + k), vload4(0, wi + 2 * LSQT_NWI_PAD + k)};
     return d;
 }
 

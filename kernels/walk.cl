@@ -16,7 +16,7 @@ typedef struct {
     __constant lsqt_dev_scene *scene;
     __global const lsqt_dev_medium *media;
     __global const lsqt_dev_layer *layers;
-    __global const float *wi;          /* this slice's directions: x[pad], y[pad], z[pad] */
+    __global const real *wi;           /* this slice's directions: x[pad], y[pad], z[pad] */
     __global const real *tab;          /* this slice's per-layer direction tables (lsqt_prepare) */
     real *sum;                         /* the current path's point estimates */
     ulong *nee;                        /* this work-item's point-estimate sums, low words */
@@ -62,11 +62,11 @@ inline real4 nee_transmittance4(real4 z, real tau_up, real tau_down, int up, int
 /* Per launch, per slice and layer: the direction table (the work that does not depend on
  * the vertex). Global size (LSQT_NWI_PAD, n_slices). */
 __kernel void lsqt_prepare(__constant lsqt_dev_scene *scene, __global const lsqt_dev_medium *media,
-                           __global const lsqt_dev_layer *layers, __global const float *wi_dirs,
+                           __global const lsqt_dev_layer *layers, __global const real *wi_dirs,
                            __global real *tab)
 {
     const int k = (int)get_global_id(0), slice = (int)get_global_id(1), n = scene->n_layers;
-    const real z = (real)wi_dirs[(3 * slice + 2) * LSQT_NWI_PAD + k];
+    const real z = wi_dirs[(3 * slice + 2) * LSQT_NWI_PAD + k];
     for (int li = 0; li < n; li++) {
         __global const lsqt_dev_layer *l = &layers[li];
         __global const lsqt_dev_medium *above = &media[li], *below = &media[li + 1];
@@ -256,8 +256,8 @@ inline void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulong *hi
 __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
                         __global const lsqt_dev_medium *media,
                         __global const lsqt_dev_layer *layers,
-                        __global const float *wo_dirs,
-                        __global const float *wi_dirs, __global const real *tab,
+                        __global const real *wo_dirs,
+                        __global const real *wi_dirs, __global const real *tab,
                         ulong path_begin, ulong path_end, ulong chunk_first,
                         __global ulong *nee, __global ulong *scalars, __global ulong *hist,
                         volatile __global uint *flags)
