@@ -39,8 +39,10 @@ inline real4 dielectric_phase4(__global const lsqt_dev_layer *l, const ms_vtx *x
     real4 vm = x->v.x * m.x + x->v.y * m.y + x->v.z * m.z;
     real4 um = u.x * m.x + u.y * m.y + u.z * m.z;
     real4 fr = fresnel_dielectric4(e, vm);
-    real4 k = select((real4)(l->p[3]) * (R(1.0) - fr) * (e * e) * fabs(um), (real4)(l->p[2]) * fr * vm, up);
-    real4 f = ggx_d4(l->p[0], m.x, m.y, m.z) * vm * k * (x->inv_area / n2);
+    /* reflection: vm^2 / |q|^2 is 1/4 exactly, so no division by |q|^2, which rounding
+     * spoils where u is near -v (|q| -> 0); refraction has |q| >= |e - 1| */
+    real4 k = select((real4)(l->p[3]) * (R(1.0) - fr) * (e * e) * fabs(um) * vm / n2, (real4)(R(0.25) * l->p[2]) * fr, up);
+    real4 f = ggx_d4(l->p[0], m.x, m.y, m.z) * k * x->inv_area;
     return select((real4)(R(0.0)), f, (vm > R(0.0)) & (up | (um < R(0.0))));
 }
 

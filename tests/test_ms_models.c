@@ -1,0 +1,1332 @@
+/* The microsurface models' samplers (the random walk of Heitz, Hanika, d'Eon, Dachsbacher
+ * 2016, kernels/microsurface.cl) against their evaluations, through the harness kernels
+ * (the code the path loop runs). Release, 2 cores: about 80 s, nearly all of it kernels.
+ *
+ * 1. Goodness of fit of harness_sample (weights: the products of the facet albedos)
+ *    against the evaluation integrated over bins: Lambertian facets (fR 0.7, fT 0.25),
+ *    the conductor (silver) and the lossless dielectric (index ratio 1.5 with wo above,
+ *    i.e. 1/1.5 seen from below, and wo below), alpha 0.05, 0.3, 1, 2.4, theta_o 0, 60,
+ *    85 degrees, 10^6 exits each; with multiple scattering (the walk; its evaluation is
+ *    harness_ms_eval, stochastic) and, for the conductor and the dielectric, without
+ *    (single scattering: harness_eval, analytic; for the conductor also weight = f/pdf).
+ *    Bins: per hemisphere (wo's side and the other) a 16 x 16 product grid in
+ *    (|cos theta|, phi) with breakpoints at quantiles of 0.4 uniform + 0.6 an independent
+ *    pilot run's exits, so bins crowd where the lobe is (an alpha 0.05 lobe gets about
+ *    ten of the sixteen rows and columns); the horizon is a bin edge, and so is
+ *    |cos theta_i| = cos theta_o / e in the dielectric's transmission, where refraction's
+ *    half vector reaches the horizon and f jumps to 0 (GGX's D is finite there).
+ *    Expected content of bin i, E_i = N x the integral of f over it: the analytic single
+ *    scattering by adaptive Gauss-Legendre (8 x 8 rules against their quarters', to 2 %
+ *    of the bin's sigma; the error estimate is kept as a variance); the walks' part
+ *    (harness_ms_eval minus the single scattering) by 2 x 2 Gauss nodes per bin, 3 x 3
+ *    graded towards the plane of incidence at alpha 0.05, averaged over ITEMS independent
+ *    work-items of reps x iter_count walks. Observed O_i: the sum of the exits' weights.
+ *    Tests per case: (a) chi-square sum_i (O_i - E_i)^2 / (r_i E_i + var_eval_i), r_i =
+ *    sum w^2 / sum w in the bin (so r_i E_i is the weighted sampling variance), var_eval_i
+ *    from the items' spread, bins under 25 effective samples pooled, dof = bins (nothing
+ *    is fitted: E is absolute); (b) the same on 4 x 4 blocks of bins with the full
+ *    covariance (the walks add to all bins at once: their errors are correlated); (c)
+ *    the total, sum of all weights against N x the integral of f, variance N var(w) + the
+ *    evaluation's (per item) + the quadrature's: the furnace for lossless facets.
+ *    p-values: the regularized upper incomplete gamma (written here) and erfc.
+ *    Threshold: all p-values of the file form one family, Bonferroni corrected, reject
+ *    if p < 1e-3 / (number of tests) (about 3.4e-6 for 298).
+ *    Power, kept as a self-check: every case's exits reweighted by 1 + 0.02 wi.x (a 2 %
+ *    skew of the sampler) must be rejected wherever the data say the tests can see it
+ *    (noncentrality of the skew >= 100 for the total or >= 150 for the coarse test);
+ *    where they cannot (mostly theta_o = 0, where the skew averages out over a symmetric
+ *    lobe, and the noisiest evaluations) the p-values are printed.
+ * 2. The visible-normal sampler, also for directions below the horizon (a walk's vertex
+ *    reached going up): ms_vertex's normal, from a kernel of this file built on the
+ *    embedded sources, for v.z = 0.87, 0.17, -0.17, -0.71, -0.98 and the four alphas,
+ *    4 10^5 normals each, against D_v(m) = max(0, v.m) D(m) / A(v) written here
+ *    (integrated per bin exactly in azimuth, by Gauss-Legendre split at the kinks in
+ *    slope); and Lambertian facets with fR = 1 at 85 degrees (a furnace: every exit
+ *    weighs 1, the evaluation integrates to 1) in 1. The facets' reflection phase
+ *    function is bounded, kR D(normal) / (4 A(v)): checked next to u = -v, where v + u
+ *    vanishes (the conductor and the dielectric, alpha 0.05 and 0.3).
+ * 3. Reciprocity of the stochastic evaluations (multiple scattering on, alpha 0.3 and 1),
+ *    20 pairs per group, each value from its own launch (independent z): reflection
+ *    f(a->b)/|cos b| = f(b->a)/|cos a| above (all three models) and below (Lambertian
+ *    facets, dielectric), the Lambertian facets' transmission likewise, and the
+ *    dielectric's transmission n_a^2 f(a->b)/|cos b| = n_b^2 f(b->a)/|cos a|, n the
+ *    absolute index on each side (the walk conserves energy: flux normalisation). The
+ *    single scattering is exact and cancels; the noise is the walks'. Every |z| < 4.5
+ *    (3 sigma would fail one of 370 pairs by chance: 280 pairs here), and each group's
+ *    sum of z^2 is a chi-square in the family of 1. */
+#include <stdint.h>
+#include <time.h>
+
+#include "cl_fixture.h"
+#include "lsqt/util.h"
+#include "quadrature.h"
+
+extern const char lsqt_kernel_source[];
+extern const char *const lsqt_kernel_files[];
+
+#define PI 3.14159265358979323846
+#define NWI 4896      /* the program's LSQT_NWI: the most walk nodes (512 bins x 9, 32 of them split) */
+#define NMU 16        /* bins in |cos theta| per hemisphere */
+#define NPHI 16       /* bins in phi */
+#define NCELL (2 * NMU * NPHI)
+#define QA 8          /* Gauss nodes per bin side, analytic single scattering */
+#define ITEMS 128     /* independent evaluations (work-items) per case */
+#define NPILOT 40000  /* pilot exits that place the breakpoints */
+#define MIX 0.6       /* weight of the pilot's distribution in the breakpoint mixture */
+#define MIN_EFF 25.0  /* bins with fewer effective samples are pooled */
+#define SKEW 0.02
+
+static cl_program prog;
+static double t_kernel = 0;
+
+static double now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+/* ---------------------------------------------------------------- statistics */
+
+/* Regularized upper incomplete gamma Q(a, x) (series below a + 1, continued fraction
+ * above, as in Numerical Recipes' gammq). */
+static double gamma_q(double a, double x)
+{
+    if (x <= 0) return 1.0;
+    double gln = lgamma(a);
+    if (x < a + 1) {
+        double ap = a, sum = 1.0 / a, del = sum;
+        for (int n = 0; n < 100000; n++) {
+            ap += 1;
+            del *= x / ap;
+            sum += del;
+            if (fabs(del) < fabs(sum) * 1e-15) break;
+        }
+        double p = sum * exp(-x + a * log(x) - gln);
+        return p >= 1 ? 0.0 : 1.0 - p;
+    }
+    double b = x + 1 - a, c = 1e300, d = 1 / b, h = d;
+    for (int i = 1; i < 100000; i++) {
+        double an = -i * (i - a);
+        b += 2;
+        d = an * d + b;
+        if (fabs(d) < 1e-300) d = 1e-300;
+        c = b + an / c;
+        if (fabs(c) < 1e-300) c = 1e-300;
+        d = 1 / d;
+        double del = d * c;
+        h *= del;
+        if (fabs(del - 1) < 1e-15) break;
+    }
+    return exp(-x + a * log(x) - gln) * h;
+}
+
+static double chi2_p(double chi2, int dof) { return dof > 0 ? gamma_q(0.5 * dof, 0.5 * chi2) : 1.0; }
+
+/* Every test's p-value, judged together at the end (Bonferroni). */
+#define MAX_TESTS 512
+static struct {
+    char name[112];
+    double p;
+} tests[MAX_TESTS];
+static int n_tests = 0;
+#define FAMILY_ALPHA 1e-3
+
+static void record(const char *name, double p)
+{
+    if (n_tests < MAX_TESTS) {
+        snprintf(tests[n_tests].name, sizeof tests[n_tests].name, "%s", name);
+        tests[n_tests].p = p;
+    }
+    n_tests++;
+}
+
+/* ---------------------------------------------------------------- kernels */
+
+static void set_args(cl_kernel k, int n, const size_t *sz, const void *const *val)
+{
+    for (int i = 0; i < n; i++) {
+        cl_int e = clSetKernelArg(k, (cl_uint)i, sz[i], val[i]);
+        CHECK(e == CL_SUCCESS, "argument %d: %d", i, (int)e);
+    }
+}
+
+static void launch(cl_kernel k, size_t n, size_t local)
+{
+    double t0 = now();
+    cl_int e = clEnqueueNDRangeKernel(fixture_cx.queue, k, 1, NULL, &n, local ? &local : NULL, 0, NULL, NULL);
+    if (e == CL_SUCCESS) e = clFinish(fixture_cx.queue);
+    CHECK(e == CL_SUCCESS, "kernel launch of %zu: %d", n, (int)e);
+    t_kernel += now() - t0;
+}
+
+static cl_mem mem(size_t bytes, const void *host)
+{
+    cl_int e = CL_SUCCESS;
+    cl_mem m = clCreateBuffer(fixture_cx.ctx, host ? CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR : CL_MEM_READ_WRITE,
+                              bytes, (void *)host, &e);
+    CHECK(e == CL_SUCCESS, "clCreateBuffer(%zu): %d", bytes, (int)e);
+    return m;
+}
+
+static void get(cl_mem m, size_t bytes, void *dst)
+{
+    cl_int e = clEnqueueReadBuffer(fixture_cx.queue, m, CL_TRUE, 0, bytes, dst, 0, NULL, NULL);
+    CHECK(e == CL_SUCCESS, "clEnqueueReadBuffer: %d", (int)e);
+}
+
+/* harness_sample: n exits (x, y, z, weight) for wo. */
+static void k_sample(cl_mem bl, const double wo[3], cl_uint seed, size_t n, float *out)
+{
+    lsqt_dev_medium med;
+    memset(&med, 0, sizeof med);
+    cl_mem bm = mem(sizeof med, &med), bo = mem(n * 16, NULL);
+    cl_kernel k = clCreateKernel(prog, "harness_sample", NULL);
+    cl_int zero = 0;
+    float w[3] = {(float)wo[0], (float)wo[1], (float)wo[2]};
+    const size_t sz[] = {sizeof bl, sizeof bm, sizeof zero, 4, 4, 4, sizeof seed, sizeof bo};
+    const void *val[] = {&bl, &bm, &zero, &w[0], &w[1], &w[2], &seed, &bo};
+    set_args(k, 8, sz, val);
+    launch(k, n, 0);
+    get(bo, n * 16, out);
+    clReleaseKernel(k);
+    clReleaseMemObject(bm);
+    clReleaseMemObject(bo);
+}
+
+/* harness_eval: f and pdf (analytic single scattering) at n directions (x, y, z, 0). */
+static void k_eval(cl_mem bl, const double wo[3], const float *dirs, size_t n, float *out)
+{
+    lsqt_dev_medium med;
+    memset(&med, 0, sizeof med);
+    cl_mem bm = mem(sizeof med, &med), bd = mem(n * 16, dirs), bo = mem(n * 8, NULL);
+    cl_kernel k = clCreateKernel(prog, "harness_eval", NULL);
+    cl_int zero = 0;
+    float w[3] = {(float)wo[0], (float)wo[1], (float)wo[2]};
+    const size_t sz[] = {sizeof bl, sizeof bm, sizeof zero, 4, 4, 4, sizeof bd, sizeof bo};
+    const void *val[] = {&bl, &bm, &zero, &w[0], &w[1], &w[2], &bd, &bo};
+    set_args(k, 8, sz, val);
+    launch(k, n, 0);
+    get(bo, n * 8, out);
+    clReleaseKernel(k);
+    clReleaseMemObject(bm);
+    clReleaseMemObject(bd);
+    clReleaseMemObject(bo);
+}
+
+/* Directions of a stochastic evaluation: n (<= NWI) unit vectors as x[pad], y[pad],
+ * z[pad] (zero padded, pad = NWI rounded to 4: zero vectors add nothing) and the layer's
+ * direction table from lsqt_prepare for a one-layer scene. */
+#define PAD LSQT_PAD4(NWI)
+typedef struct {
+    cl_mem wi, tab;
+} ms_dirs;
+
+static ms_dirs ms_dirs_make(cl_mem bl, const double (*d)[3], int n)
+{
+    static float soa[3 * PAD];
+    memset(soa, 0, sizeof soa);
+    for (int i = 0; i < n; i++)
+        for (int c = 0; c < 3; c++) soa[c * PAD + i] = (float)d[i][c];
+    lsqt_dev_scene sc;
+    memset(&sc, 0, sizeof sc);
+    sc.n_layers = 1, sc.n_wi = NWI, sc.top_nonnull = 0, sc.bottom_nonnull = 0;
+    lsqt_dev_medium med[2];
+    memset(med, 0, sizeof med);
+    med[0].eta = med[1].eta = 1;
+    cl_mem bs = mem(sizeof sc, &sc), bm = mem(sizeof med, med);
+    ms_dirs r = {mem(sizeof soa, soa), mem(3 * PAD * sizeof(float), NULL)};
+    cl_kernel k = clCreateKernel(prog, "lsqt_prepare", NULL);
+    const size_t sz[] = {sizeof bs, sizeof bm, sizeof bl, sizeof r.wi, sizeof r.tab};
+    const void *val[] = {&bs, &bm, &bl, &r.wi, &r.tab};
+    set_args(k, 5, sz, val);
+    size_t g[2] = {PAD, 1};
+    cl_int e = clEnqueueNDRangeKernel(fixture_cx.queue, k, 2, NULL, g, NULL, 0, NULL, NULL);
+    if (e == CL_SUCCESS) e = clFinish(fixture_cx.queue);
+    CHECK(e == CL_SUCCESS, "lsqt_prepare: %d", (int)e);
+    clReleaseKernel(k);
+    clReleaseMemObject(bs);
+    clReleaseMemObject(bm);
+    return r;
+}
+
+static void ms_dirs_free(ms_dirs *d)
+{
+    clReleaseMemObject(d->wi);
+    clReleaseMemObject(d->tab);
+}
+
+/* harness_ms_eval: ITEMS independent means of `reps` vertex evaluations each, out[item *
+ * PAD + k] = f(wo -> wi_k). */
+static void k_ms_eval(cl_mem bl, const double wo[3], const ms_dirs *d, cl_uint seed, cl_int reps, float *out)
+{
+    cl_mem bo = mem((size_t)ITEMS * PAD * sizeof(float), NULL);
+    cl_kernel k = clCreateKernel(prog, "harness_ms_eval", NULL);
+    float w[3] = {(float)wo[0], (float)wo[1], (float)wo[2]};
+    const size_t sz[] = {sizeof bl, 4, 4, 4, sizeof d->wi, sizeof d->tab, sizeof seed, sizeof reps, sizeof bo};
+    const void *val[] = {&bl, &w[0], &w[1], &w[2], &d->wi, &d->tab, &seed, &reps, &bo};
+    set_args(k, 9, sz, val);
+    launch(k, ITEMS, 1); /* one work-item per group: each holds PAD private sums */
+    get(bo, (size_t)ITEMS * PAD * sizeof(float), out);
+    clReleaseKernel(k);
+    clReleaseMemObject(bo);
+}
+
+/* ---------------------------------------------------------------- bins */
+
+/* Bins: hemisphere h (0: wo's side, 1: the other), |cos theta| in mu[h][], phi in ph[h][]. */
+typedef struct {
+    int nh;
+    double side; /* +1 when wo is above, -1 below */
+    double mu[2][NMU + 1], ph[2][NPHI + 1];
+} grid_t;
+
+static int find_bin(const double *edges, int n, double x)
+{
+    int lo = 0, hi = n; /* edges[lo] <= x < edges[hi] */
+    while (hi - lo > 1) {
+        int mid = (lo + hi) / 2;
+        if (x >= edges[mid]) lo = mid;
+        else hi = mid;
+    }
+    return lo;
+}
+
+static void coords(const grid_t *g, const float *d, int *h, double *mu, double *phi)
+{
+    double z = g->side * d[2];
+    *h = z > 0 ? 0 : 1;
+    *mu = fabs(z);
+    if (*mu > 1) *mu = 1;
+    double p = atan2(d[1], d[0]);
+    *phi = p < 0 ? p + 2 * PI : p;
+}
+
+/* The bin of a direction, -1 for a hemisphere the grid does not cover. */
+static int cell_of(const grid_t *g, const float *d)
+{
+    int h;
+    double mu, phi;
+    coords(g, d, &h, &mu, &phi);
+    if (h >= g->nh) return -1;
+    return (h * NMU + find_bin(g->mu[h], NMU, mu)) * NPHI + find_bin(g->ph[h], NPHI, phi);
+}
+
+typedef struct {
+    double x, w;
+} xw;
+
+static int xw_cmp(const void *a, const void *b)
+{
+    double d = ((const xw *)a)->x - ((const xw *)b)->x;
+    return d < 0 ? -1 : d > 0;
+}
+
+/* Breakpoints on [lo, hi] at the quantiles of (1 - MIX) uniform + MIX the weighted
+ * pilot values (uniform alone when there are none). */
+static void breakpoints(xw *v, int n, double lo, double hi, int nb, double *edges)
+{
+    double tot = 0;
+    for (int i = 0; i < n; i++) tot += v[i].w;
+    qsort(v, (size_t)n, sizeof *v, xw_cmp);
+    double *cum = malloc(((size_t)n + 1) * sizeof *cum);
+    cum[0] = 0;
+    for (int i = 0; i < n; i++) cum[i + 1] = cum[i] + v[i].w;
+    const double mix = tot > 0 ? MIX : 0;
+    edges[0] = lo, edges[nb] = hi;
+    for (int k = 1; k < nb; k++) {
+        double target = (double)k / nb, a = lo, b = hi;
+        for (int it = 0; it < 60; it++) {
+            double x = 0.5 * (a + b);
+            int l = 0, r = n; /* values below x: v[0..l) */
+            while (l < r) {
+                int m = (l + r) / 2;
+                if (v[m].x < x) l = m + 1;
+                else r = m;
+            }
+            double g = (1 - mix) * (x - lo) / (hi - lo) + (tot > 0 ? mix * cum[l] / tot : 0);
+            if (g < target) a = x;
+            else b = x;
+        }
+        edges[k] = 0.5 * (a + b);
+    }
+    free(cum);
+}
+
+static void grid_from_pilot(grid_t *g, const float *s, int n)
+{
+    xw *v = malloc((size_t)n * sizeof *v);
+    for (int h = 0; h < g->nh; h++) {
+        int m = 0;
+        for (int i = 0; i < n; i++) {
+            int hh;
+            double mu, phi;
+            coords(g, s + 4 * i, &hh, &mu, &phi);
+            if (hh == h && s[4 * i + 3] > 0) v[m].x = mu, v[m++].w = s[4 * i + 3];
+        }
+        breakpoints(v, m, 0.0, 1.0, NMU, g->mu[h]);
+        m = 0;
+        for (int i = 0; i < n; i++) {
+            int hh;
+            double mu, phi;
+            coords(g, s + 4 * i, &hh, &mu, &phi);
+            if (hh == h && s[4 * i + 3] > 0) v[m].x = phi, v[m++].w = s[4 * i + 3];
+        }
+        breakpoints(v, m, 0.0, 2 * PI, NPHI, g->ph[h]);
+    }
+    free(v);
+}
+
+/* Gauss nodes, q x q, of the rectangle [m0, m1] x [p0, p1] in (|cos theta|, phi) of
+ * hemisphere h: directions (x, y, z) and weights (solid angle). */
+static int rect_nodes(double side, int h, double m0, double m1, double p0, double p1, int q, double (*d)[3],
+                      double *w)
+{
+    static double gx[16], gw[16];
+    static int gq = 0;
+    if (gq != q) gauss_legendre(q, gx, gw), gq = q;
+    int n = 0;
+    for (int a = 0; a < q; a++)
+        for (int b = 0; b < q; b++, n++) {
+            double mu = 0.5 * (m0 + m1) + 0.5 * (m1 - m0) * gx[a], phi = 0.5 * (p0 + p1) + 0.5 * (p1 - p0) * gx[b];
+            double st = sqrt(fmax(0.0, 1 - mu * mu));
+            d[n][0] = st * cos(phi), d[n][1] = st * sin(phi), d[n][2] = side * (h ? -mu : mu);
+            w[n] = 0.25 * (m1 - m0) * (p1 - p0) * gw[a] * gw[b];
+        }
+    return n;
+}
+
+/* Nodes for the walks' part of bin c: q x q Gauss nodes in |cos theta| and phi or, with
+ * `graded`, in s = asinh(|phi - pi| / beta) (the bin split at pi when it holds it), so the
+ * nodes crowd towards the plane of incidence: at small alpha the conductor's and the
+ * dielectric's orders >= 2 form a ridge there a few hundredths of a radian wide (plain
+ * Gauss nodes in phi, even 4 x 4 per bin, missed 0.1 % of the conductor's energy at alpha
+ * 0.05 and 85 degrees). For broad functions the grading only costs accuracy (the
+ * cosh(s) weight over a wide central bin), so it is used at alpha 0.05 only (3 x 3
+ * nodes). Returns the count, q^2 or 2 q^2. */
+#define MS_BETA 0.02
+static int ms_bin_nodes(const grid_t *g, int c, int q, int graded, double (*d)[3], double *w)
+{
+    double gx[16], gw[16];
+    gauss_legendre(q, gx, gw);
+    int h = c / (NMU * NPHI), i = c / NPHI % NMU, j = c % NPHI, n = 0;
+    double m0 = g->mu[h][i], m1 = g->mu[h][i + 1], p0 = g->ph[h][j], p1 = g->ph[h][j + 1];
+    double piece[2][2] = {{p0, p1}, {0, 0}};
+    int np = 1;
+    if (!graded) {
+        for (int a = 0; a < q; a++)
+            for (int b = 0; b < q; b++, n++) {
+                double mu = 0.5 * (m0 + m1) + 0.5 * (m1 - m0) * gx[a], phi = 0.5 * (p0 + p1) + 0.5 * (p1 - p0) * gx[b];
+                double st = sqrt(fmax(0.0, 1 - mu * mu));
+                d[n][0] = st * cos(phi), d[n][1] = st * sin(phi), d[n][2] = g->side * (h ? -mu : mu);
+                w[n] = 0.25 * (m1 - m0) * (p1 - p0) * gw[a] * gw[b];
+            }
+        return n;
+    }
+    if (p0 < PI && p1 > PI) piece[0][1] = PI, piece[1][0] = PI, piece[1][1] = p1, np = 2;
+    for (int k = 0; k < np; k++) {
+        double sgn = piece[k][0] >= PI ? 1 : -1; /* phi = pi + sgn psi */
+        double ps0 = fabs(piece[k][0] - PI), ps1 = fabs(piece[k][1] - PI);
+        if (ps0 > ps1) {
+            double tmp = ps0;
+            ps0 = ps1, ps1 = tmp;
+        }
+        double s0 = asinh(ps0 / MS_BETA), s1 = asinh(ps1 / MS_BETA);
+        for (int a = 0; a < q; a++)
+            for (int b = 0; b < q; b++, n++) {
+                double mu = 0.5 * (m0 + m1) + 0.5 * (m1 - m0) * gx[a], sv = 0.5 * (s0 + s1) + 0.5 * (s1 - s0) * gx[b];
+                double phi = PI + sgn * MS_BETA * sinh(sv), st = sqrt(fmax(0.0, 1 - mu * mu));
+                d[n][0] = st * cos(phi), d[n][1] = st * sin(phi), d[n][2] = g->side * (h ? -mu : mu);
+                w[n] = 0.25 * (m1 - m0) * (s1 - s0) * gw[a] * gw[b] * MS_BETA * cosh(sv);
+            }
+    }
+    return n;
+}
+
+/* The analytic single scattering integrated over every bin, adaptively: a rectangle's
+ * QA x QA rule is compared with its four quarters' and accepted when they agree to
+ * 2 % of the bin's sampling sigma (scaled by the square root of the rectangle's share of
+ * the bin, so the errors add up to at most that), or to 1e-6 relative (float); else the
+ * quarters are refined in turn, down to MAX_LEVEL. E[c] += N times the quarters' sum,
+ * EQ[c] += N |difference| (the error estimate, conservative: it is the coarser rule's). */
+#define MAX_LEVEL 7
+typedef struct {
+    int c, level;
+    double m0, m1, p0, p1;
+} rect_t;
+
+static void analytic_bins(cl_mem bl, const double wo[3], const grid_t *g, int nc, double N, double rg, double *E,
+                          double *EQ)
+{
+    const int nq = QA * QA, per = 5 * nq;
+    int np = nc, cap = nc;
+    rect_t *pend = malloc((size_t)cap * sizeof *pend);
+    double *sigma = malloc((size_t)nc * sizeof *sigma);
+    for (int c = 0; c < nc; c++) {
+        int h = c / (NMU * NPHI), i = c / NPHI % NMU, j = c % NPHI;
+        rect_t r = {c, 0, g->mu[h][i], g->mu[h][i + 1], g->ph[h][j], g->ph[h][j + 1]};
+        pend[c] = r;
+        sigma[c] = -1;
+    }
+    double(*d)[3] = malloc((size_t)nq * sizeof *d), *w = malloc((size_t)nq * sizeof *w);
+    while (np > 0) {
+        float *dirs = malloc((size_t)np * per * 16), *fp = malloc((size_t)np * per * 8);
+        double *wt = malloc((size_t)np * per * sizeof *wt);
+        for (int r = 0; r < np; r++) {
+            const rect_t *x = &pend[r];
+            const int h = x->c / (NMU * NPHI);
+            double mm = 0.5 * (x->m0 + x->m1), pm = 0.5 * (x->p0 + x->p1);
+            const double box[5][4] = {{x->m0, x->m1, x->p0, x->p1}, {x->m0, mm, x->p0, pm}, {mm, x->m1, x->p0, pm},
+                                      {x->m0, mm, pm, x->p1}, {mm, x->m1, pm, x->p1}};
+            for (int b = 0; b < 5; b++) {
+                rect_nodes(g->side, h, box[b][0], box[b][1], box[b][2], box[b][3], QA, d, w);
+                for (int q = 0; q < nq; q++) {
+                    size_t k = (size_t)r * per + (size_t)b * nq + q;
+                    dirs[4 * k] = (float)d[q][0], dirs[4 * k + 1] = (float)d[q][1], dirs[4 * k + 2] = (float)d[q][2];
+                    dirs[4 * k + 3] = 0, wt[k] = w[q];
+                }
+            }
+        }
+        k_eval(bl, wo, dirs, (size_t)np * per, fp);
+        /* the bins' sigma, from the first (whole-bin) pass */
+        for (int r = 0; r < np; r++)
+            if (sigma[pend[r].c] < 0) {
+                double v = 0;
+                for (int k = 0; k < nq; k++) v += wt[(size_t)r * per + k] * fp[2 * ((size_t)r * per + k)];
+                sigma[pend[r].c] = sqrt(rg * fmax(N * v, 1.0));
+            }
+        int nn = 0;
+        rect_t *next = malloc((size_t)np * 4 * sizeof *next);
+        for (int r = 0; r < np; r++) {
+            const rect_t *x = &pend[r];
+            const int h = x->c / (NMU * NPHI), i = x->c / NPHI % NMU, j = x->c % NPHI;
+            double share = (x->m1 - x->m0) * (x->p1 - x->p0) /
+                           ((g->mu[h][i + 1] - g->mu[h][i]) * (g->ph[h][j + 1] - g->ph[h][j]));
+            double ip = 0, ic[4] = {0, 0, 0, 0};
+            for (int b = 0; b < 5; b++)
+                for (int k = 0; k < nq; k++) {
+                    size_t q = (size_t)r * per + (size_t)b * nq + k;
+                    double v = wt[q] * fp[2 * q];
+                    if (b) ic[b - 1] += v;
+                    else ip += v;
+                }
+            double sum = ic[0] + ic[1] + ic[2] + ic[3], diff = N * fabs(sum - ip);
+            if (diff <= 0.02 * sigma[x->c] * sqrt(share) || diff <= 1e-6 * N * fabs(sum) || x->level >= MAX_LEVEL) {
+                E[x->c] += N * sum;
+                EQ[x->c] += diff;
+                continue;
+            }
+            double mm = 0.5 * (x->m0 + x->m1), pm = 0.5 * (x->p0 + x->p1);
+            rect_t q0 = {x->c, x->level + 1, x->m0, mm, x->p0, pm}, q1 = {x->c, x->level + 1, mm, x->m1, x->p0, pm};
+            rect_t q2 = {x->c, x->level + 1, x->m0, mm, pm, x->p1}, q3 = {x->c, x->level + 1, mm, x->m1, pm, x->p1};
+            next[nn++] = q0, next[nn++] = q1, next[nn++] = q2, next[nn++] = q3;
+        }
+        free(dirs), free(fp), free(wt), free(pend);
+        pend = next, np = nn;
+    }
+    free(pend), free(sigma), free(d), free(w);
+}
+
+/* ---------------------------------------------------------------- goodness of fit */
+
+typedef struct {
+    const char *name;
+    int kind;
+    double alpha, p1, p2, p3; /* the layer's p[1..3] */
+    int ms;                   /* multiple_scattering */
+    double theta;             /* degrees; wo = (sin, 0, side cos) */
+    double side;
+    int nh;        /* hemispheres with light: 1 (conductor, opaque Lambertian facets) or 2 */
+    size_t n;      /* samples */
+    int reps;      /* vertex evaluations per evaluation item */
+    int ic;        /* walks per vertex evaluation (iter_count) */
+    int qm;        /* Gauss nodes per bin side for the walks' part */
+} gof_case;
+
+/* The skewed copies' smallest p-values, judged at the end against the same threshold. */
+static struct {
+    char name[112];
+    double p;
+    int required;
+} skews[256];
+static int n_skews = 0;
+
+/* Bins per side of a coarse bin (a block of fine ones): smooth departures spread over
+ * few bins weigh more against fewer degrees of freedom. */
+#define COARSE 4
+#define NCOARSE (NCELL / (COARSE * COARSE))
+
+static int coarse_of(int c)
+{
+    int h = c / (NMU * NPHI), i = c / NPHI % NMU, j = c % NPHI;
+    return (h * (NMU / COARSE) + i / COARSE) * (NPHI / COARSE) + j / COARSE;
+}
+
+/* Pooled chi-square of observed O (sum w), S2 (sum w^2) against expected E with the
+ * evaluation's variance VE: bins with fewer than MIN_EFF effective samples (E / rg, rg
+ * the mean of w^2 / w) go into one. Returns the statistic, sets *dof (bins used). */
+static double chi2_of(int nc, const double *O, const double *S2, const double *E, const double *VE, double rg,
+                      int *dof)
+{
+    double chi2 = 0, po = 0, pe = 0, ps = 0, pv = 0;
+    int k = 0;
+    for (int c = 0; c < nc; c++) {
+        if (E[c] / rg < MIN_EFF) {
+            po += O[c], pe += E[c], ps += S2[c], pv += VE[c];
+            continue;
+        }
+        double r = O[c] > 0 ? S2[c] / O[c] : rg;
+        chi2 += (O[c] - E[c]) * (O[c] - E[c]) / (r * E[c] + VE[c]);
+        k++;
+    }
+    if (pe / rg >= 1.0 || po > 0) {
+        /* the pool: what it holds is rare; with (almost) nothing expected, a few
+         * observations must not divide by 0 */
+        double r = po > 0 ? ps / po : rg, v = r * fmax(pe, 1.0 * rg) + pv;
+        chi2 += (po - pe) * (po - pe) / v;
+        k++;
+    }
+    *dof = k;
+    return chi2;
+}
+
+/* The coarse bins' chi-square with the full covariance: the walks add to every bin at
+ * once (a walk that scatters more adds more everywhere), so the evaluation's errors of
+ * different bins are correlated, and for a sum of many fine bins that matters. Covariance:
+ * the sampling's (r E on the diagonal) + the items' sample covariance of the bins' walk
+ * integrals / ITEMS (ci, NULL when the evaluation is analytic) + the quadrature's error
+ * and the float floor on the diagonal. Bins with fewer than MIN_EFF effective samples are
+ * pooled into one (their items summed too). Statistic d^T C^-1 d by Cholesky. With
+ * shifted, also lambda: the noncentrality of the shift (shifted - O) in the same metric. */
+static double coarse_chi2(int ncc, const double *O, const double *S2, const double *E, const double *Q,
+                          double (*ci)[NCOARSE], double N, double rg, int *dof, double *lambda, const double *shifted)
+{
+    int grp[NCOARSE], ng = 0, pool = -1;
+    for (int c = 0; c < ncc; c++) {
+        if (E[c] / rg >= MIN_EFF) grp[c] = ng++;
+        else grp[c] = -1;
+    }
+    for (int c = 0; c < ncc; c++)
+        if (grp[c] < 0 && (O[c] > 0 || E[c] > 0)) {
+            if (pool < 0) pool = ng++;
+            grp[c] = pool;
+        }
+    double go[NCOARSE + 1] = {0}, gs[NCOARSE + 1] = {0}, ge[NCOARSE + 1] = {0}, gq[NCOARSE + 1] = {0},
+           gd[NCOARSE + 1] = {0};
+    static double C[NCOARSE + 1][NCOARSE + 1], gi[ITEMS][NCOARSE + 1];
+    memset(C, 0, sizeof C), memset(gi, 0, sizeof gi);
+    for (int c = 0; c < ncc; c++) {
+        int g = grp[c];
+        if (g < 0) continue;
+        go[g] += O[c], gs[g] += S2[c], ge[g] += E[c], gq[g] += Q[c];
+        if (shifted) gd[g] += shifted[c] - O[c];
+        if (ci)
+            for (int it = 0; it < ITEMS; it++) gi[it][g] += ci[it][c];
+    }
+    for (int a = 0; a < ng; a++) {
+        double r = go[a] > 0 ? gs[a] / go[a] : rg;
+        C[a][a] = r * fmax(ge[a], rg) + gq[a] * gq[a] + 1e-12 * ge[a] * ge[a];
+    }
+    if (ci) {
+        double m[NCOARSE + 1] = {0};
+        for (int it = 0; it < ITEMS; it++)
+            for (int a = 0; a < ng; a++) m[a] += gi[it][a] / ITEMS;
+        for (int it = 0; it < ITEMS; it++)
+            for (int a = 0; a < ng; a++)
+                for (int b = 0; b < ng; b++)
+                    C[a][b] += N * N * (gi[it][a] - m[a]) * (gi[it][b] - m[b]) / ((double)ITEMS * (ITEMS - 1));
+    }
+    /* Cholesky C = L L^T in place (lower triangle) */
+    for (int j = 0; j < ng; j++) {
+        double v = C[j][j];
+        for (int k = 0; k < j; k++) v -= C[j][k] * C[j][k];
+        C[j][j] = sqrt(fmax(v, 1e-300));
+        for (int i = j + 1; i < ng; i++) {
+            double u = C[i][j];
+            for (int k = 0; k < j; k++) u -= C[i][k] * C[j][k];
+            C[i][j] = u / C[j][j];
+        }
+    }
+    double chi2 = 0, lam = 0, y[NCOARSE + 1], yl[NCOARSE + 1];
+    for (int i = 0; i < ng; i++) {
+        double u = go[i] - ge[i], ul = gd[i];
+        for (int k = 0; k < i; k++) u -= C[i][k] * y[k], ul -= C[i][k] * yl[k];
+        y[i] = u / C[i][i], yl[i] = ul / C[i][i];
+        chi2 += y[i] * y[i], lam += yl[i] * yl[i];
+    }
+    *dof = ng;
+    if (lambda) *lambda = lam;
+    return chi2;
+}
+
+typedef struct {
+    double O[NCELL], S2[NCELL];
+} tally_t;
+
+static void gof(const gof_case *gc)
+{
+    const double th = gc->theta * PI / 180, wo[3] = {sin(th), 0.0, gc->side * cos(th)};
+    lsqt_dev_layer L;
+    memset(&L, 0, sizeof L);
+    L.kind = gc->kind, L.iter_count = 1, L.multiple_scattering = gc->ms;
+    L.p[0] = (float)gc->alpha, L.p[1] = (float)gc->p1, L.p[2] = (float)gc->p2, L.p[3] = (float)gc->p3;
+    cl_mem bl = mem(sizeof L, &L);
+    const int analytic = gc->kind != LSQT_BSDF_MS_LAMBERTIAN;
+    const double N = (double)gc->n;
+    char name[80];
+    snprintf(name, sizeof name, "%s%s a=%.2g th=%g%s", gc->name, gc->ms ? "" : " single", gc->alpha, gc->theta,
+             gc->side < 0 ? " below" : "");
+    const double t_case = now();
+
+    /* The bins, from an independent pilot run. */
+    grid_t g;
+    memset(&g, 0, sizeof g);
+    g.nh = gc->nh, g.side = gc->side;
+    float *smp = malloc((gc->n > NPILOT ? gc->n : NPILOT) * 16);
+    k_sample(bl, wo, 977u, NPILOT, smp);
+    grid_from_pilot(&g, smp, NPILOT);
+    if (gc->kind == LSQT_BSDF_MS_DIELECTRIC) {
+        /* Refraction's half vector is horizontal where |cos theta_i| = cos theta_o / e (e the
+         * relative index seen from wo): beyond it no visible facet refracts, and as GGX's
+         * D stays finite at the horizon f jumps to 0 there; a bin edge goes on it. */
+        double e = gc->side > 0 ? gc->p1 : 1 / gc->p1, mc = cos(th) / e;
+        if (mc > 0 && mc < 1) {
+            int k = 1;
+            for (int i = 2; i < NMU; i++)
+                if (fabs(g.mu[1][i] - mc) < fabs(g.mu[1][k] - mc)) k = i;
+            g.mu[1][k] = mc;
+        }
+    }
+    const int nc = g.nh * NMU * NPHI, ncc = nc / (COARSE * COARSE);
+
+    /* The samples, and their skewed copy. */
+    k_sample(bl, wo, 12345u, gc->n, smp);
+    static tally_t t[2]; /* plain, skewed */
+    memset(t, 0, sizeof t);
+    double sw[2] = {0, 0}, sw2[2] = {0, 0};
+    int bad_dir = 0, bad_w = 0, outside = 0;
+    for (size_t i = 0; i < gc->n; i++) {
+        const float *s = smp + 4 * i;
+        double w = s[3];
+        if (!(w >= 0 && w <= 1 + 1e-6)) bad_w++;
+        if (!(w > 0)) continue;
+        double len = sqrt((double)s[0] * s[0] + (double)s[1] * s[1] + (double)s[2] * s[2]);
+        if (!(fabs(len - 1) < 1e-4)) bad_dir++;
+        int c = cell_of(&g, s);
+        if (c < 0) outside++;
+        for (int k = 0; k < 2; k++) {
+            double v = k ? w * (1 + SKEW * s[0]) : w;
+            sw[k] += v, sw2[k] += v * v;
+            if (c >= 0) t[k].O[c] += v, t[k].S2[c] += v * v;
+        }
+    }
+    CHECK(bad_dir == 0, "%s: %d exits are not unit vectors", name, bad_dir);
+    CHECK(bad_w == 0, "%s: %d weights outside [0, 1]", name, bad_w);
+    CHECK(outside == 0, "%s: %d exits on a side with no light", name, outside);
+
+    /* Expected: the analytic single scattering, adaptively per bin. */
+    static double E[NCELL], VE[NCELL], EQ[NCELL], CI[ITEMS][NCOARSE];
+    memset(E, 0, sizeof E), memset(VE, 0, sizeof VE), memset(EQ, 0, sizeof EQ), memset(CI, 0, sizeof CI);
+    const double rg = sw[0] > 0 ? sw2[0] / sw[0] : 1;
+    if (analytic) analytic_bins(bl, wo, &g, nc, N, rg, E, EQ);
+    /* The conductor's single scattering: the samples' weights are f / pdf (the
+     * dielectric's are f / pdf of the branch sampled, reflection or refraction). */
+    if (!gc->ms && gc->kind == LSQT_BSDF_MS_CONDUCTIVE) {
+        float *fp = malloc(gc->n * 8);
+        k_eval(bl, wo, smp, gc->n, fp);
+        int bad = 0;
+        for (size_t i = 0; i < gc->n; i++) {
+            double ratio = fp[2 * i + 1] > 0 ? fp[2 * i] / fp[2 * i + 1] : 0, w = smp[4 * i + 3];
+            if (!(fabs(w - ratio) <= 1e-4 * ratio + 1e-6)) bad++;
+        }
+        CHECK(bad == 0, "%s: %d sample weights differ from f/pdf", name, bad);
+        free(fp);
+    }
+    /* The walks' part: harness_ms_eval minus the single scattering, qm x qm nodes per bin,
+     * per item (the spread of the items' bin integrals is the evaluation's noise; per
+     * coarse bin and for the total from the items too, so correlations count). The
+     * evaluation's layer runs ic walks per vertex (iter_count): the analytic single
+     * scattering, the same for all, is then computed once per ic walks. */
+    double tot_var_e = 0;
+    if (gc->ms) {
+        const int most = 2 * nc * gc->qm * gc->qm;
+        double(*d)[3] = malloc((size_t)most * sizeof *d), *wt = malloc((size_t)most * sizeof *wt);
+        static int off[NCELL + 1];
+        off[0] = 0;
+        for (int c = 0; c < nc; c++) off[c + 1] = off[c] + ms_bin_nodes(&g, c, gc->qm, analytic && gc->alpha < 0.1, d + off[c], wt + off[c]);
+        const int nn = off[nc];
+        CHECK(nn <= NWI, "%s: %d nodes", name, nn);
+        float *single = calloc((size_t)nn * 2, sizeof *single);
+        if (analytic) {
+            float *dirs = malloc((size_t)nn * 16);
+            for (int q = 0; q < nn; q++)
+                dirs[4 * q] = (float)d[q][0], dirs[4 * q + 1] = (float)d[q][1], dirs[4 * q + 2] = (float)d[q][2],
+                dirs[4 * q + 3] = 0;
+            k_eval(bl, wo, dirs, (size_t)nn, single);
+            free(dirs);
+        }
+        lsqt_dev_layer Le = L;
+        Le.iter_count = gc->ic;
+        cl_mem ble = mem(sizeof Le, &Le);
+        ms_dirs md = ms_dirs_make(ble, (const double(*)[3])d, nn);
+        float *out = malloc((size_t)ITEMS * PAD * sizeof *out);
+        k_ms_eval(ble, wo, &md, 4242u, gc->reps, out);
+        static double a1[NCELL], a2[NCELL];
+        memset(a1, 0, sizeof a1), memset(a2, 0, sizeof a2);
+        double t1 = 0, t2 = 0;
+        int nonfinite = 0;
+        for (int it = 0; it < ITEMS; it++) {
+            double tot = 0, *cc = CI[it];
+            for (int c = 0; c < nc; c++) {
+                double v = 0;
+                for (int q = off[c]; q < off[c + 1]; q++) {
+                    double f = out[(size_t)it * PAD + q];
+                    if (!isfinite(f)) nonfinite++;
+                    v += wt[q] * (f - single[2 * q]);
+                }
+                a1[c] += v, a2[c] += v * v, tot += v, cc[coarse_of(c)] += v;
+            }
+            t1 += tot, t2 += tot * tot;
+        }
+        CHECK(nonfinite == 0, "%s: %d non-finite evaluations", name, nonfinite);
+        /* mean and variance of the mean over the items, scaled to N samples */
+#define MEAN_VAR(s1, s2, m, v)                                                   \
+    do {                                                                         \
+        double mu_ = (s1) / ITEMS;                                               \
+        (m) += N * mu_;                                                          \
+        (v) = N * N * fmax(((s2) / ITEMS - mu_ * mu_) / (ITEMS - 1), 0.0);       \
+    } while (0)
+        double unused = 0;
+        for (int c = 0; c < nc; c++) MEAN_VAR(a1[c], a2[c], E[c], VE[c]);
+        MEAN_VAR(t1, t2, unused, tot_var_e);
+        ms_dirs_free(&md);
+        clReleaseMemObject(ble);
+        free(out), free(single), free(d), free(wt);
+    }
+
+    /* Chi-squares (fine, coarse) and totals, for the data and the skewed copy. The
+     * evaluation's variance: the walks' spread, the quadrature's error estimate, and
+     * 1e-6 relative for float (all as variances; the quadrature's errors added up with
+     * their signs unknown, i.e. in absolute value, for coarse bins and the total). */
+    double et = 0, ratio = 0, qt = 0, VEF[NCELL], QC[NCOARSE] = {0}, EC[NCOARSE] = {0};
+    for (int c = 0; c < nc; c++) {
+        et += E[c], qt += EQ[c], QC[coarse_of(c)] += EQ[c], EC[coarse_of(c)] += E[c];
+        ratio = fmax(ratio, VE[c] / fmax(rg * E[c], rg * MIN_EFF));
+        VEF[c] = VE[c] + EQ[c] * EQ[c] + 1e-12 * E[c] * E[c];
+    }
+    const double var_et = tot_var_e + qt * qt + 1e-12 * et * et;
+    double pmin[2] = {1, 1}, chi[2], chic[2], z[2], pf[2], pc[2], pz[2], lam_c = 0;
+    int dof[2], dofc[2];
+    double OC[2][NCOARSE] = {{0}}, SC[2][NCOARSE] = {{0}};
+    for (int k = 0; k < 2; k++)
+        for (int c = 0; c < nc; c++) OC[k][coarse_of(c)] += t[k].O[c], SC[k][coarse_of(c)] += t[k].S2[c];
+    for (int k = 0; k < 2; k++) {
+        chi[k] = chi2_of(nc, t[k].O, t[k].S2, E, VEF, rg, &dof[k]);
+        chic[k] = coarse_chi2(ncc, OC[k], SC[k], EC, QC, gc->ms ? CI : NULL, N, rg, &dofc[k], k ? NULL : &lam_c,
+                              OC[1]);
+        double var_t = fmax(sw2[k] - sw[k] * sw[k] / N, 0.0) + var_et;
+        z[k] = var_t > 0 ? (sw[k] - et) / sqrt(var_t) : (fabs(sw[k] - et) <= 1e-9 * N ? 0 : 1e9);
+        pf[k] = chi2_p(chi[k], dof[k]), pc[k] = chi2_p(chic[k], dofc[k]), pz[k] = erfc(fabs(z[k]) / sqrt(2.0));
+        pmin[k] = fmin(pf[k], fmin(pc[k], pz[k]));
+    }
+    char tn[112];
+    snprintf(tn, sizeof tn, "%s: chi2 (%d bins)", name, dof[0]);
+    record(tn, pf[0]);
+    snprintf(tn, sizeof tn, "%s: coarse chi2 (%d bins)", name, dofc[0]);
+    record(tn, pc[0]);
+    snprintf(tn, sizeof tn, "%s: total", name);
+    record(tn, pz[0]);
+    /* The skew's expected effect, from the data: its shift of each coarse bin and of the
+     * total against their sigmas (noncentralities). Where either is large the skewed copy
+     * must be rejected: a total shifted by 10 sigma, or a coarse chi-square by 150 on about
+     * 32 dof, falls below the threshold always. */
+    const double lam_t = (sw[1] - sw[0]) * (sw[1] - sw[0]) / (fmax(sw2[0] - sw[0] * sw[0] / N, 0.0) + var_et);
+    if (n_skews < 256) {
+        snprintf(skews[n_skews].name, sizeof skews[n_skews].name, "%s", name);
+        skews[n_skews].p = pmin[1];
+        skews[n_skews++].required = lam_t >= 100 || lam_c >= 150;
+    }
+    printf("%-32s chi2 %6.1f/%3d p=%.3f coarse %5.1f/%2d p=%.3f | mean w %.5f int f %.5f z=%+.2f | eval var/sample"
+           " var <= %.2f | skewed: p %.1e (lambda %.0f, %.0f) | %.2f s\n",
+           name, chi[0], dof[0], pf[0], chic[0], dofc[0], pc[0], sw[0] / N, et / N, z[0], ratio, pmin[1], lam_c,
+           lam_t, now() - t_case);
+    clReleaseMemObject(bl);
+    free(smp);
+}
+
+/* ---------------------------------------------------------------- visible normals */
+
+static const char *vndf_src =
+    "__kernel void test_vndf(float alpha, float vx, float vy, float vz, uint seed, __global float *out)\n"
+    "{\n"
+    "    uint i = (uint)get_global_id(0);\n"
+    "    rng_t rng = rng_init(seed, 0u, 3u, i, 9u);\n"
+    "    real u1 = rng_uniform(&rng), u2 = rng_uniform(&rng);\n"
+    "    real3 v = normalize(make_real3(vx, vy, vz));\n"
+    "    ms_vtx x = ms_vertex((real)alpha, v, R(0.5), R(1.0), u1, u2);\n"
+    "    out[4 * i] = (float)x.m.x; out[4 * i + 1] = (float)x.m.y; out[4 * i + 2] = (float)x.m.z;\n"
+    "    out[4 * i + 3] = (float)dot(v, x.m);\n"
+    "}\n"
+    "__kernel void test_phase(__global const lsqt_dev_layer *l, float vx, float vy, float vz,\n"
+    "                         __global const float *u, __global float *out)\n"
+    "{\n"
+    "    int i = (int)get_global_id(0);\n"
+    "    ms_vtx x = ms_vertex(l->p[0], make_real3(vx, vy, vz), R(0.5), ms_index(l, R(1.0)), R(0.5), R(0.5));\n"
+    "    dir4 d = dir4_broadcast(make_real3(u[3 * i], u[3 * i + 1], u[3 * i + 2]));\n"
+    "    real4 f = l->kind == LSQT_BSDF_MS_DIELECTRIC ? dielectric_phase4(l, &x, d) : conductor_phase4(l, &x, d);\n"
+    "    out[2 * i] = (float)f.x;\n"
+    "    out[2 * i + 1] = (float)x.inv_area;\n"
+    "}\n";
+
+/* The facets' reflection phase function (a walk vertex's point estimate) is
+ * kR F D(m) / (4 A(v)) <= kR D(normal) / (4 A(v)) = kR / (4 pi alpha^2 A(v)) for every u on
+ * the ray's side: bounded. Checked where it is hardest to compute, u next to -v (a vertex
+ * reached going up, v.z < 0, evaluated towards the way the ray was going): there v + u is
+ * tiny and a form that divides by |v + u|^2 loses everything to rounding. v from a walk
+ * that hit it (alpha 0.05, wo at 85 degrees: the first reflection blocked on its way out),
+ * and others; u = -v and -v turned by 1e-7 .. 1e-2. */
+static void test_phase_bound(cl_program vp)
+{
+    const double vs[][3] = {{0.997667551, -0.00477453042, -0.0680937693}, {0.9848078, 0.0, -0.1736482},
+                            {0.7071068, 0.3, -0.6403124}, {0.2, -0.1, -0.9746794}};
+    const int kinds[] = {LSQT_BSDF_MS_DIELECTRIC, LSQT_BSDF_MS_CONDUCTIVE};
+    const double as[] = {0.05, 0.3}, eta[] = {1.5, 1 / 1.5};
+    enum { NU = 1 + 6 * 8 };
+    cl_kernel k = clCreateKernel(vp, "test_phase", NULL);
+    float u[NU * 3], out[NU * 2];
+    int n_bad_all = 0;
+    double worst = 0;
+    for (int ik = 0; ik < 2; ik++)
+        for (int ia = 0; ia < 2; ia++)
+            for (int ie = 0; ie < (ik ? 1 : 2); ie++)
+            {
+                int n_bad = 0, n_all = 0;
+                double cw = 0, cv[3] = {0, 0, 0}, cu[3] = {0, 0, 0}, cf = 0, cb = 0;
+                for (int iv = 0; iv < 4; iv++) {
+                    lsqt_dev_layer L;
+                    memset(&L, 0, sizeof L);
+                    L.kind = kinds[ik], L.iter_count = 1, L.multiple_scattering = 1, L.p[0] = (float)as[ia];
+                    if (ik) L.p[1] = 0.051585f, L.p[2] = 3.9046f;
+                    else L.p[1] = (float)eta[ie], L.p[2] = 1, L.p[3] = 1;
+                    float v[3] = {(float)vs[iv][0], (float)vs[iv][1], (float)vs[iv][2]};
+                    int n = 0;
+                    for (int c = 0; c < 3; c++) u[c] = -v[c];
+                    n = 1;
+                    for (int e = 0; e < 6; e++)
+                        for (int j = 0; j < 8; j++, n++) {
+                            double t = pow(10.0, -7.0 + e), ph = 2 * PI * j / 8, p[3], q[3], len = 0;
+                            /* p: a unit vector normal to v, at azimuth ph */
+                            double a0[3] = {-vs[iv][1], vs[iv][0], 0}, an = hypot(a0[0], a0[1]);
+                            for (int c = 0; c < 3; c++) a0[c] /= an;
+                            double b0[3] = {vs[iv][1] * a0[2] - vs[iv][2] * a0[1], vs[iv][2] * a0[0] - vs[iv][0] * a0[2],
+                                            vs[iv][0] * a0[1] - vs[iv][1] * a0[0]};
+                            for (int c = 0; c < 3; c++) p[c] = cos(ph) * a0[c] + sin(ph) * b0[c];
+                            for (int c = 0; c < 3; c++) q[c] = -vs[iv][c] + t * p[c], len += q[c] * q[c];
+                            for (int c = 0; c < 3; c++) u[3 * n + c] = (float)(q[c] / sqrt(len));
+                        }
+                    cl_mem bl = mem(sizeof L, &L), bu = mem(sizeof u, u), bo = mem(sizeof out, NULL);
+                    const size_t sz[] = {sizeof bl, 4, 4, 4, sizeof bu, sizeof bo};
+                    const void *val[] = {&bl, &v[0], &v[1], &v[2], &bu, &bo};
+                    set_args(k, 6, sz, val);
+                    launch(k, NU, 0);
+                    get(bo, sizeof out, out);
+                    for (int i = 0; i < NU; i++) {
+                        if (!(u[3 * i + 2] > 0)) continue;
+                        double bound = out[2 * i + 1] / (4 * PI * as[ia] * as[ia]), r = out[2 * i] / bound;
+                        n_all++;
+                        if (!(r <= 1.001)) {
+                            n_bad++;
+                            if (!(r <= cw)) {
+                                cw = isfinite(r) ? r : 1e300, cf = out[2 * i], cb = bound;
+                                for (int c = 0; c < 3; c++) cv[c] = v[c], cu[c] = u[3 * i + c];
+                            }
+                        }
+                    }
+                    clReleaseMemObject(bl), clReleaseMemObject(bu), clReleaseMemObject(bo);
+                }
+                CHECK(n_bad == 0,
+                      "%s facets, alpha %.2g%s%.3g: the reflection phase function next to u = -v exceeds its bound "
+                      "kR D(normal) / (4 A(v)) in %d of %d directions, worst %.6g against %.6g (%.3g times) at "
+                      "v = (%.9f, %.9f, %.9f), u = (%.9f, %.9f, %.9f)",
+                      ik ? "conductor" : "dielectric", as[ia], ik ? "" : ", e ", ik ? 0.0 : eta[ie], n_bad, n_all, cf,
+                      cb, cw, cv[0], cv[1], cv[2], cu[0], cu[1], cu[2]);
+                n_bad_all += n_bad;
+                worst = fmax(worst, cw);
+            }
+    printf("reflection phase bound next to u = -v: %s (%d directions over it, largest ratio %.3g)\n",
+           n_bad_all ? "VIOLATED" : "holds", n_bad_all, worst);
+    clReleaseKernel(k);
+}
+
+/* Integral over phi in [p0, p1] of max(0, vz + b cos phi). */
+static double phi_integral(double vz, double b, double p0, double p1)
+{
+    double lo[2], hi[2];
+    int n = 0;
+    if (b <= 0 || -vz / b <= -1) {
+        lo[0] = p0, hi[0] = p1, n = 1;
+    } else if (-vz / b < 1) {
+        double psi = acos(-vz / b); /* positive on [0, psi) and (2 pi - psi, 2 pi] */
+        lo[0] = fmax(p0, 0.0), hi[0] = fmin(p1, psi);
+        lo[1] = fmax(p0, 2 * PI - psi), hi[1] = fmin(p1, 2 * PI);
+        n = 2;
+    }
+    double s = 0;
+    for (int i = 0; i < n; i++)
+        if (hi[i] > lo[i]) s += vz * (hi[i] - lo[i]) + b * (sin(hi[i]) - sin(lo[i]));
+    return s;
+}
+
+/* D_v over the bin [x0, x1] x [p0, p1], x = t / (1 + t), t = tan(theta_m) / alpha,
+ * v = (vx, 0, vz), vx > 0: D(m) cos(theta_m) dw = t / (pi (1 + t^2)^2) dt dphi, and
+ * v.m / m.z = vz + alpha t vx cos(phi). Split where the visible region's edge meets the
+ * bin's (kinks), 12 Gauss nodes per piece. */
+static double vndf_bin(double alpha, double vx, double vz, double x0, double x1, double p0, double p1)
+{
+    double gx[12], gw[12], cut[8];
+    gauss_legendre(12, gx, gw);
+    int nc = 0;
+    cut[nc++] = x0;
+    double tk[3] = {fabs(vz) / (alpha * vx), -vz / (alpha * vx * cos(p0)), -vz / (alpha * vx * cos(p1))};
+    for (int i = 0; i < 3; i++) {
+        if (!(tk[i] > 0) || !isfinite(tk[i])) continue;
+        double xk = tk[i] / (1 + tk[i]);
+        if (xk > x0 && xk < x1) cut[nc++] = xk;
+    }
+    cut[nc++] = x1;
+    for (int i = 1; i < nc; i++) /* sort the few cuts */
+        for (int j = i; j > 0 && cut[j] < cut[j - 1]; j--) {
+            double tmp = cut[j];
+            cut[j] = cut[j - 1], cut[j - 1] = tmp;
+        }
+    const double area = 0.5 * (vz + sqrt(vz * vz + alpha * alpha * (1 - vz * vz)));
+    double s = 0;
+    for (int k = 0; k + 1 < nc; k++) {
+        double a = cut[k], b = cut[k + 1];
+        for (int q = 0; q < 12; q++) {
+            double x = 0.5 * (a + b) + 0.5 * (b - a) * gx[q], t = x / (1 - x), dtdx = 1 / ((1 - x) * (1 - x));
+            double dens = t / (PI * (1 + t * t) * (1 + t * t));
+            s += 0.5 * (b - a) * gw[q] * dtdx * dens * phi_integral(vz, alpha * t * vx, p0, p1);
+        }
+    }
+    return s / area;
+}
+
+static int n_silhouette = 0;
+static double max_silhouette = 0;
+
+static void test_vndf(cl_program vp)
+{
+    const double alphas[] = {0.05, 0.3, 1.0, 2.4}, thv[] = {30, 80, 100, 135, 170};
+    const size_t n = 400000;
+    float *s = malloc(n * 16);
+    cl_mem bo = mem(n * 16, NULL);
+    cl_kernel k = clCreateKernel(vp, "test_vndf", NULL);
+    for (int ia = 0; ia < 4; ia++)
+        for (int iv = 0; iv < 5; iv++) {
+            const double th = thv[iv] * PI / 180, vx = sin(th), vz = cos(th);
+            float a = (float)alphas[ia], v[3] = {(float)vx, 0.0f, (float)vz};
+            double xs[NMU + 1], ps[NPHI + 1];
+            /* the float direction the kernel gets, for the reference */
+            double vxf = v[0], vzf = v[2], vn = sqrt(vxf * vxf + vzf * vzf);
+            vxf /= vn, vzf /= vn;
+            for (int pass = 0; pass < 2; pass++) {
+                cl_uint seed = pass ? 31337u + 10 * (cl_uint)(ia * 5 + iv) : 555u;
+                size_t m = pass ? n : NPILOT;
+                const size_t sz[] = {4, 4, 4, 4, sizeof seed, sizeof bo};
+                const void *val[] = {&a, &v[0], &v[1], &v[2], &seed, &bo};
+                set_args(k, 6, sz, val);
+                launch(k, m, 0);
+                get(bo, m * 16, s);
+                if (!pass) {
+                    xw *p = malloc(m * sizeof *p);
+                    for (size_t i = 0; i < m; i++) {
+                        double t = sqrt((double)s[4 * i] * s[4 * i] + (double)s[4 * i + 1] * s[4 * i + 1]) /
+                                   (alphas[ia] * s[4 * i + 2]);
+                        p[i].x = t / (1 + t), p[i].w = 1;
+                    }
+                    breakpoints(p, (int)m, 0.0, 1.0, NMU, xs);
+                    for (size_t i = 0; i < m; i++) {
+                        double ph = atan2(s[4 * i + 1], s[4 * i]);
+                        p[i].x = ph < 0 ? ph + 2 * PI : ph, p[i].w = 1;
+                    }
+                    breakpoints(p, (int)m, 0.0, 2 * PI, NPHI, ps);
+                    free(p);
+                }
+            }
+            static double O[NMU * NPHI], S2[NMU * NPHI], E[NMU * NPHI], VE[NMU * NPHI];
+            memset(O, 0, sizeof O), memset(VE, 0, sizeof VE);
+            int invisible = 0, behind = 0, below = 0;
+            for (size_t i = 0; i < n; i++) {
+                const float *m = s + 4 * i;
+                if (!(m[3] > 0)) invisible++;
+                if (!(m[3] > -1e-6)) behind++;
+                if (!(m[2] > 0)) below++;
+                double t = sqrt((double)m[0] * m[0] + (double)m[1] * m[1]) / (alphas[ia] * m[2]);
+                double ph = atan2(m[1], m[0]);
+                if (ph < 0) ph += 2 * PI;
+                O[find_bin(xs, NMU, t / (1 + t)) * NPHI + find_bin(ps, NPHI, ph)] += 1;
+            }
+            double tot = 0;
+            for (int i = 0; i < NMU; i++)
+                for (int j = 0; j < NPHI; j++) {
+                    E[i * NPHI + j] = n * vndf_bin(alphas[ia], vxf, vzf, xs[i], xs[i + 1], ps[j], ps[j + 1]);
+                    tot += E[i * NPHI + j];
+                }
+            memcpy(S2, O, sizeof O);
+            int dof;
+            double chi2 = chi2_of(NMU * NPHI, O, S2, E, VE, 1.0, &dof);
+            dof -= 1; /* the counts sum to n */
+            double p = chi2_p(chi2, dof);
+            char tn[112];
+            snprintf(tn, sizeof tn, "visible normals a=%.2g v.z=%.3f", alphas[ia], vz);
+            record(tn, p);
+            CHECK(fabs(tot / n - 1) < 1e-6, "%s: D_v integrates to %.9f", tn, tot / n);
+            /* Normals exactly on the silhouette (v.m = 0 to rounding) come out of the float
+             * sampler for v far below the horizon (the sliver it samples is then thin); a
+             * walk that draws one is absorbed (a loss, of order the count / n). */
+            CHECK(behind == 0 && below == 0 && invisible <= (int)(n / 1000),
+                  "%s: %d normals with v.m <= 0 (%d below -1e-6), %d with m.z <= 0", tn, invisible, behind, below);
+            n_silhouette += invisible;
+            max_silhouette = fmax(max_silhouette, (double)invisible / n);
+            printf("%-36s chi2 %6.1f/%3d p=%.3f  (D_v sums to %.8f; v.m <= 0: %d)\n", tn, chi2, dof, p, tot / n,
+                   invisible);
+        }
+    clReleaseKernel(k);
+    clReleaseMemObject(bo);
+    free(s);
+}
+
+/* ---------------------------------------------------------------- reciprocity */
+
+static void unit(double th_deg, double ph_deg, double z_sign, double d[3])
+{
+    double th = th_deg * PI / 180, ph = ph_deg * PI / 180;
+    d[0] = sin(th) * cos(ph), d[1] = sin(th) * sin(ph), d[2] = z_sign * cos(th);
+}
+
+/* f(wo -> wi) by harness_ms_eval with wi alone: the mean and the variance of the mean. */
+static void ms_value(cl_mem bl, const double wo[3], const double wi[3], cl_uint seed, int reps, double *m, double *v)
+{
+    ms_dirs md = ms_dirs_make(bl, (const double(*)[3])wi, 1);
+    static float out[ITEMS * PAD];
+    k_ms_eval(bl, wo, &md, seed, reps, out);
+    double s1 = 0, s2 = 0;
+    for (int i = 0; i < ITEMS; i++) s1 += out[(size_t)i * PAD], s2 += (double)out[(size_t)i * PAD] * out[(size_t)i * PAD];
+    *m = s1 / ITEMS;
+    *v = fmax((s2 / ITEMS - *m * *m) / (ITEMS - 1), 0.0);
+    ms_dirs_free(&md);
+}
+
+#define NPAIR 20
+#define Z_PAIR 4.5
+static int n_pairs = 0, n_over3 = 0;
+static double z_max = 0;
+
+/* NPAIR pairs (a, b), a on side sa and b on side sb (+1 above, -1 below), each value from
+ * its own launch (independent z): na^2 f(a->b)/|cos b| against nb^2 f(b->a)/|cos a|. */
+static void reciprocity(const char *name, const lsqt_dev_layer *L, double sa, double sb, double na, double nb,
+                        int reps, int ic, cl_uint seed)
+{
+    lsqt_dev_layer LL = *L;
+    LL.iter_count = ic;
+    cl_mem bl = mem(sizeof LL, &LL);
+    double chi2 = 0, rel = 0;
+    int over3 = 0;
+    for (int i = 0; i < NPAIR; i++) {
+        /* spread over the hemispheres: theta 8..86 degrees, golden-angle azimuths */
+        double a[3], b[3];
+        unit(8 + 78 * fmod(0.618034 * (i + 1), 1.0), 137.50776 * i, sa, a);
+        unit(8 + 78 * fmod(0.414214 * (i + 1) + 0.3, 1.0), 137.50776 * i + 73, sb, b);
+        double fab, vab, fba, vba;
+        ms_value(bl, a, b, seed + 2 * (cl_uint)i, reps, &fab, &vab);
+        ms_value(bl, b, a, seed + 2 * (cl_uint)i + 1, reps, &fba, &vba);
+        double x = na * na * fab / fabs(b[2]), y = nb * nb * fba / fabs(a[2]);
+        double sx = na * na * sqrt(vab) / fabs(b[2]), sy = nb * nb * sqrt(vba) / fabs(a[2]);
+        double s = sqrt(sx * sx + sy * sy), z = s > 0 ? (x - y) / s : 0;
+        CHECK(s > 0 && fabs(z) < Z_PAIR, "%s pair %d: a = (%.6f, %.6f, %.6f), b = (%.6f, %.6f, %.6f): %.6g vs %.6g, z = %.2f",
+              name, i, a[0], a[1], a[2], b[0], b[1], b[2], x, y, z);
+        chi2 += z * z;
+        rel += s / (0.5 * (x + y)) / NPAIR;
+        if (fabs(z) > 3) over3++;
+        z_max = fmax(z_max, fabs(z));
+    }
+    n_pairs += NPAIR, n_over3 += over3;
+    double p = chi2_p(chi2, NPAIR);
+    char tn[112];
+    snprintf(tn, sizeof tn, "reciprocity %s: sum z^2", name);
+    record(tn, p);
+    printf("%-44s sum z^2 %5.1f/%d p=%.3f, %d over 3 sigma, mean sigma/value %.2g\n", name, chi2, NPAIR, p, over3, rel);
+    clReleaseMemObject(bl);
+}
+
+/* The kernel sources as lsqt_program_build takes them: re-read from $LSQT_KERNEL_DIR when
+ * set (heap, caller frees), else NULL (the embedded text). */
+static char *kernel_dir_source(void)
+{
+    const char *dir = getenv("LSQT_KERNEL_DIR");
+    if (!dir || !*dir) return NULL;
+    size_t total = 0;
+    char *all = calloc(1, 1), err[256];
+    for (int i = 0; all && lsqt_kernel_files[i]; i++) {
+        char path[4096];
+        size_t len = 0;
+        snprintf(path, sizeof path, "%s/%s", dir, lsqt_kernel_files[i]);
+        char *part = lsqt_read_file(path, &len, err, sizeof err);
+        char *grown = part ? realloc(all, total + len + 2) : NULL;
+        if (!grown) {
+            CHECK(0, "%s", err);
+            free(part), free(all);
+            return NULL;
+        }
+        all = grown;
+        memcpy(all + total, part, len);
+        total += len;
+        all[total++] = '\n';
+        all[total] = '\0';
+        free(part);
+    }
+    return all;
+}
+
+/* ---------------------------------------------------------------- main */
+
+static lsqt_dev_layer layer(int kind, double alpha, double p1, double p2, double p3)
+{
+    lsqt_dev_layer L;
+    memset(&L, 0, sizeof L);
+    L.kind = kind, L.iter_count = 1, L.multiple_scattering = 1;
+    L.p[0] = (float)alpha, L.p[1] = (float)p1, L.p[2] = (float)p2, L.p[3] = (float)p3;
+    return L;
+}
+
+int main(void)
+{
+    double t_start = now();
+    fixture_open();
+    char err[1024], *log = NULL, opt[256];
+    snprintf(opt, sizeof opt,
+             "-cl-std=CL1.2 -DLSQT_HAS_BSDF_MS_LAMBERTIAN=1 -DLSQT_HAS_BSDF_MS_DIELECTRIC=1 "
+             "-DLSQT_HAS_BSDF_MS_CONDUCTIVE=1 -DLSQT_NWI=%d",
+             NWI);
+    prog = lsqt_program_build(&fixture_cx, opt, &log, err, sizeof err);
+    CHECK(prog != NULL, "%s\n%s", err, log ? log : "");
+    free(log);
+    if (!prog) return check_finish("test_ms_models");
+    /* The visible-normal sampler alone: the kernel sources plus one kernel of this test's
+     * (ms_vertex, as the walk calls it). */
+    cl_int e = CL_SUCCESS;
+    char *kdir_src = kernel_dir_source();
+    const char *srcs[] = {kdir_src ? kdir_src : lsqt_kernel_source, vndf_src};
+    cl_program vp = clCreateProgramWithSource(fixture_cx.ctx, 2, srcs, NULL, &e);
+    free(kdir_src);
+    if (e == CL_SUCCESS)
+        e = clBuildProgram(vp, 1, &fixture_cx.dev.id,
+                           "-cl-std=CL1.2 -DLSQT_HAS_BSDF_MS_DIELECTRIC=1 -DLSQT_HAS_BSDF_MS_CONDUCTIVE=1", NULL, NULL);
+    CHECK(e == CL_SUCCESS, "the visible-normal test kernel failed to build: %d", (int)e);
+    printf("builds %.1f s\n", now() - t_start);
+
+    /* The cases. Walks for the evaluations: Lambertian facets have no analytic part, so
+     * every vertex of every walk evaluates (ITEMS x 500 walks); for the conductor and the
+     * dielectric only orders >= 2 do, and at alpha 0.05 those are rare and sharp (a spike
+     * of width alpha around each second vertex's mirror direction), so it takes many walks
+     * (ITEMS x 320 x 32) and 3 x 3 nodes per bin; 20 x 32 per item at alpha >= 1. */
+    const double alphas[] = {0.05, 0.3, 1.0, 2.4}, thetas[] = {0, 60, 85};
+    const size_t NS = 1000000;
+    double t0 = now();
+    for (int ia = 0; ia < 4; ia++)
+        for (int it = 0; it < 3; it++) {
+            const double a = alphas[ia], th = thetas[it];
+            const int reps = a < 0.1 ? 320 : a < 0.5 ? 40 : 20, qm = a < 0.1 ? 3 : 2;
+            gof_case lam = {"Lambertian", LSQT_BSDF_MS_LAMBERTIAN, a, 0.7, 0.25, 0, 1, th, 1, 2, NS, 500, 1, 2};
+            gof(&lam);
+            gof_case con = {"Conductor", LSQT_BSDF_MS_CONDUCTIVE, a, 0.051585, 3.9046, 0, 1, th, 1, 1, NS, reps, 32, qm};
+            gof(&con);
+            con.ms = 0;
+            gof(&con);
+            for (int side = 1; side >= -1; side -= 2) {
+                gof_case die = {"Dielectric", LSQT_BSDF_MS_DIELECTRIC, a, 1.5, 1, 1, 1, th, side, 2, NS, reps, 32, qm};
+                gof(&die);
+                die.ms = 0;
+                gof(&die);
+            }
+        }
+    /* Lambertian facets that only reflect, fR = 1: a furnace (every weight is 1, the
+     * evaluation must integrate to 1), at 85 degrees. */
+    for (int ia = 0; ia < 4; ia++) {
+        gof_case lam = {"Lambertian fR=1", LSQT_BSDF_MS_LAMBERTIAN, alphas[ia], 1.0, 0.0, 0, 1, 85, 1, 1, NS, 500, 1, 2};
+        gof(&lam);
+    }
+    printf("goodness of fit %.1f s\n", now() - t0);
+    t0 = now();
+    if (e == CL_SUCCESS) test_vndf(vp), test_phase_bound(vp);
+    if (vp) clReleaseProgram(vp);
+    printf("visible normals %.1f s\n", now() - t0);
+    t0 = now();
+    /* walks per value: ITEMS x reps x iter_count (the dielectric's values are noisier) */
+    for (int ia = 1; ia <= 2; ia++) {
+        const double a = alphas[ia];
+        char nm[64];
+        lsqt_dev_layer lam = layer(LSQT_BSDF_MS_LAMBERTIAN, a, 0.7, 0.25, 0);
+        lsqt_dev_layer con = layer(LSQT_BSDF_MS_CONDUCTIVE, a, 0.051585, 3.9046, 0);
+        lsqt_dev_layer die = layer(LSQT_BSDF_MS_DIELECTRIC, a, 1.5, 1, 1);
+        snprintf(nm, sizeof nm, "Lambertian a=%.1f R above", a);
+        reciprocity(nm, &lam, 1, 1, 1, 1, 200, 1, 1000u * ia + 1);
+        snprintf(nm, sizeof nm, "Lambertian a=%.1f R below", a);
+        reciprocity(nm, &lam, -1, -1, 1, 1, 200, 1, 1000u * ia + 101);
+        snprintf(nm, sizeof nm, "Lambertian a=%.1f T", a);
+        reciprocity(nm, &lam, 1, -1, 1, 1, 200, 1, 1000u * ia + 201);
+        snprintf(nm, sizeof nm, "Conductor a=%.1f R", a);
+        reciprocity(nm, &con, 1, 1, 1, 1, 200, 1, 1000u * ia + 301);
+        snprintf(nm, sizeof nm, "Dielectric a=%.1f R above", a);
+        reciprocity(nm, &die, 1, 1, 1, 1, 150, 4, 1000u * ia + 401);
+        snprintf(nm, sizeof nm, "Dielectric a=%.1f R below", a);
+        reciprocity(nm, &die, -1, -1, 1.5, 1.5, 150, 4, 1000u * ia + 501);
+        snprintf(nm, sizeof nm, "Dielectric a=%.1f T (n^2 f)", a);
+        reciprocity(nm, &die, 1, -1, 1, 1.5, 150, 4, 1000u * ia + 601);
+    }
+    printf("reciprocity %.1f s: %d pairs, %d over 3 sigma (%.1f expected by chance), largest |z| %.2f\n", now() - t0,
+           n_pairs, n_over3, 0.0027 * n_pairs, z_max);
+
+    /* The family: Bonferroni over every p-value recorded. */
+    const double thr = FAMILY_ALPHA / n_tests;
+    double pmin = 1;
+    int failed = 0;
+    for (int i = 0; i < n_tests && i < MAX_TESTS; i++) {
+        pmin = fmin(pmin, tests[i].p);
+        CHECK(tests[i].p >= thr, "%s: p = %.3g below %.3g", tests[i].name, tests[i].p, thr);
+        failed += tests[i].p < thr;
+    }
+    CHECK(n_tests <= MAX_TESTS, "%d tests", n_tests);
+    int skew_req = 0, skew_caught = 0, skew_other = 0, skew_other_caught = 0;
+    double skew_pmax = 0;
+    for (int i = 0; i < n_skews; i++) {
+        if (skews[i].required) {
+            skew_req++;
+            skew_caught += skews[i].p < thr;
+            skew_pmax = fmax(skew_pmax, skews[i].p);
+            CHECK(skews[i].p < thr, "the 2 %% skewed sampler passed: %s, smallest p = %.3g", skews[i].name, skews[i].p);
+        } else {
+            skew_other++;
+            skew_other_caught += skews[i].p < thr;
+        }
+    }
+    int below01 = 0, below05 = 0, imin = 0;
+    for (int i = 0; i < n_tests && i < MAX_TESTS; i++) {
+        below01 += tests[i].p < 0.01, below05 += tests[i].p < 0.05;
+        if (tests[i].p < tests[imin].p) imin = i;
+    }
+    printf("%d tests, reject below p = %.3g (family 1e-3): smallest p %.3g (%s), %d rejected; p < 0.05: %d, "
+           "p < 0.01: %d (uniform: %.1f, %.1f)\n",
+           n_tests, thr, pmin, n_tests ? tests[imin].name : "", failed, below05, below01, 0.05 * n_tests,
+           0.01 * n_tests);
+    printf("2 %% skew (weights times 1 + 0.02 x): rejected in %d of %d cases with the power for it (largest p %.2g),"
+           " %d of %d others\n",
+           skew_caught, skew_req, skew_pmax, skew_other_caught, skew_other);
+    printf("visible normals on the silhouette (v.m <= 0): %d in all, at most a fraction %.2g\n", n_silhouette,
+           max_silhouette);
+    printf("total %.1f s, kernels %.1f s\n", now() - t_start, t_kernel);
+    clReleaseProgram(prog);
+    lsqt_context_release(&fixture_cx);
+    return check_finish("test_ms_models");
+}
