@@ -260,6 +260,13 @@ int main(int argc, char **argv)
         return 1;
     }
 
+    /* Over the sphere the equal-area lattice puts its middle direction of an odd count on
+     * the horizon, where a BSDF value (tally / |cos|) is 0 / 0. */
+    if (lsqt_assembly_transmits(&a) && c.wi_count % 2) {
+        lsqt_assembly_free(&a);
+        snprintf(err, sizeof err, "-wi %d: this stack transmits, so the directions cover the sphere", c.wi_count);
+        return fail(2, "%s%s", err, " and their count must be even");
+    }
     outputs out;
     int rc = plan_outputs(&c, from_stdin, lsqt_assembly_transmits(&a), &out, err, sizeof err);
     if (rc) {

@@ -32,7 +32,8 @@ inline dir4 load_dir4(__global const real *wi, int k)
 }
 
 /* sum += w * T * EXPR over every block of four directions that light may leave by;
- * u (this side's frame), lam and lg are in scope for EXPR. */
+ * u (this side's frame), lam and lg are in scope for EXPR. Lanes with T = 0 add nothing
+ * even where EXPR is not finite (the zero vectors that pad the directions). */
 #define MS_NEE_LOOP(EXPR)                                                        \
     for (int b = 0; b < LSQT_NWI_PAD; b += 4) {                                  \
         real4 t = vload4(0, k->tab + b);                                         \
@@ -42,7 +43,8 @@ inline dir4 load_dir4(__global const real *wi, int k)
         real4 lam = vload4(0, k->tab + LSQT_NWI_PAD + b);                        \
         real4 lg = vload4(0, k->tab + 2 * LSQT_NWI_PAD + b);                     \
         (void)lg;                                                                \
-        vstore4(vload4(0, k->sum + b) + (w * t) * (EXPR), 0, k->sum + b);         \
+        real4 v = select((real4)(R(0.0)), (w * t) * (EXPR), t > R(0.0));         \
+        vstore4(vload4(0, k->sum + b) + v, 0, k->sum + b);                       \
     }
 
 /* A walk vertex: the facet's phase function times G1 = C1^Lambda(u) to this side,
