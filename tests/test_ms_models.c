@@ -1200,6 +1200,35 @@ static lsqt_dev_layer layer(int kind, double alpha, double p1, double p2, double
     return L;
 }
 
+/* Roulette inside a walk: a walk whose weight falls below LSQT_RR_WEIGHT (0.25) survives
+ * with probability weight / 0.25 and then carries exactly 0.25. On Lambertian facets with
+ * fR = 0.5 (fT = 0) a walk's weight is 0.5 after one bounce, 0.25 after two, and every
+ * later bounce takes it below 0.25 and back to exactly 0.25 by roulette: every exit
+ * weight is 0.5 or 0.25, never less (a survivor left at its small weight is biased). */
+static void test_walk_roulette(void)
+{
+    lsqt_dev_layer L = layer(LSQT_BSDF_MS_LAMBERTIAN, 2.4, 0.5, 0.0, 0.0);
+    cl_mem bl = mem(sizeof L, &L);
+    const size_t n = 200000;
+    float *s = malloc(n * 16);
+    const double wo[3] = {sin(1.0), 0.0, cos(1.0)};
+    k_sample(bl, wo, 77u, n, s);
+    size_t below = 0, at_half = 0, at_quarter = 0, zero = 0;
+    for (size_t i = 0; i < n; i++) {
+        float w = s[4 * i + 3];
+        if (w == 0.0f) zero++;
+        else if (w == 0.5f) at_half++;
+        else if (w == 0.25f) at_quarter++;
+        else below++;
+    }
+    CHECK(below == 0, "walk roulette: %zu of %zu exits weigh neither 0.5 nor 0.25 (nor 0)", below, n);
+    CHECK(at_half > n / 10 && at_quarter > n / 20 && zero > 0,
+          "walk roulette: %zu exits of weight 0.5, %zu of 0.25, %zu absorbed: all kinds expected", at_half,
+          at_quarter, zero);
+    free(s);
+    clReleaseMemObject(bl);
+}
+
 int main(void)
 {
     double t_start = now();
@@ -1225,6 +1254,7 @@ int main(void)
                            "-cl-std=CL1.2 -DLSQT_HAS_BSDF_MS_DIELECTRIC=1 -DLSQT_HAS_BSDF_MS_CONDUCTIVE=1", NULL, NULL);
     CHECK(e == CL_SUCCESS, "the visible-normal test kernel failed to build: %d", (int)e);
     printf("builds %.1f s\n", now() - t_start);
+    test_walk_roulette();
 
     /* The cases. Walks for the evaluations: Lambertian facets have no analytic part, so
      * every vertex of every walk evaluates (ITEMS x 500 walks); for the conductor and the
