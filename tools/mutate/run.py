@@ -339,7 +339,7 @@ def main():
         print("error: no release build in %s (run bash tools/build.sh first)" % bdir)
         return 2
     jobs = int(os.environ.get("LSQT_MUTATE_JOBS") or 2)
-    limit = int(os.environ.get("LSQT_MUTATE_TIMEOUT") or 60)
+    limit = int(os.environ.get("LSQT_MUTATE_TIMEOUT") or 300)
     build_jobs = str(os.environ.get("LSQT_MUTATE_BUILD_JOBS") or os.cpu_count() or 2)
 
     scratch = tempfile.mkdtemp(prefix="lsqt-mutate.")
