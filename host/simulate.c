@@ -12,9 +12,13 @@
 static int bsdf_supported(const lsqt_layer *l)
 {
     return l->kind == LSQT_BSDF_NULL || l->kind == LSQT_BSDF_LAMBERTIAN || l->kind == LSQT_BSDF_MS_LAMBERTIAN ||
-           l->kind == LSQT_BSDF_MS_DIELECTRIC || l->kind == LSQT_BSDF_MS_CONDUCTIVE;
+           l->kind == LSQT_BSDF_MS_DIELECTRIC || l->kind == LSQT_BSDF_MS_CONDUCTIVE || l->kind == LSQT_BSDF_OREN_NAYAR;
 }
-static int phase_supported(int kind) { return kind == LSQT_PHASE_NONE || kind == LSQT_PHASE_HG; }
+static int phase_supported(int kind)
+{
+    return kind == LSQT_PHASE_NONE || kind == LSQT_PHASE_HG || kind == LSQT_PHASE_HG2 || kind == LSQT_PHASE_RAYLEIGH ||
+           kind == LSQT_PHASE_SGGX;
+}
 
 const char *lsqt_unsupported_model(const lsqt_assembly *a, int *line)
 {
@@ -39,6 +43,25 @@ static double medium_thickness(const lsqt_assembly *a, int m)
 static double medium_tau(const lsqt_assembly *a, int m)
 {
     return (a->media[m].mua + a->media[m].mus) * medium_thickness(a, m);
+}
+
+/* A phase model's parameters as the kernels read them (kernels/phase_*.cl). */
+static void phase_params(const lsqt_phase *p, double pp[4])
+{
+    switch (p->kind) {
+    case LSQT_PHASE_HG: pp[0] = p->g; break;
+    case LSQT_PHASE_HG2: pp[0] = p->g0, pp[1] = p->g1, pp[2] = p->b; break;
+    case LSQT_PHASE_RAYLEIGH: pp[0] = p->rho / (2.0 - p->rho); break; /* gamma, as in the seed */
+    case LSQT_PHASE_SGGX: {
+        /* S = diag(Apara^2, Apara^2, Aperp^2), scaled to a largest entry of 1 (the phase
+         * function does not change with the scale of S, and float keeps its range) */
+        double a = p->apara > p->aperp ? p->apara : p->aperp;
+        pp[0] = (p->apara / a) * (p->apara / a), pp[1] = (p->aperp / a) * (p->aperp / a);
+        pp[2] = p->sggx_diffuse ? 1.0 : 0.0;
+        break;
+    }
+    default: break;
+    }
 }
 
 void lsqt_device_tables(const lsqt_assembly *a, lsqt_dev_scene *scene, lsqt_dev_medium_d *media,
@@ -70,6 +93,9 @@ void lsqt_device_tables(const lsqt_assembly *a, lsqt_dev_scene *scene, lsqt_dev_
             layers[i].p[0] = l->alpha;
             layers[i].p[1] = l->fR;
             layers[i].p[2] = l->fT;
+        } else if (l->kind == LSQT_BSDF_OREN_NAYAR) {
+            layers[i].p[0] = l->fR;
+            layers[i].p[1] = l->sigma;
         } else {
             layers[i].p[0] = l->fR;
             layers[i].p[1] = l->fT;
@@ -89,7 +115,7 @@ void lsqt_device_tables(const lsqt_assembly *a, lsqt_dev_scene *scene, lsqt_dev_
         d->mut = src->mua + src->mus;
         d->thickness = medium_thickness(a, m);
         d->phase_kind = src->mus > 0 ? src->phase.kind : LSQT_PHASE_NONE;
-        d->pp[0] = src->phase.g;
+        phase_params(&src->phase, d->pp);
     }
     /* Optical thickness of the interior media strictly above / below each medium. */
     double acc = 0.0;

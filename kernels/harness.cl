@@ -20,7 +20,8 @@ __kernel void harness_sample(__global const lsqt_dev_layer *layers,
     uint i = (uint)get_global_id(0);
     rng_t rng = rng_init(seed, 0u, 0u, i, 7u);
     real3 wo = normalize(make_real3(wox, woy, woz)), wi = make_real3(R(0.0), R(0.0), R(1.0));
-    real w = use_phase ? phase_sample(media, wo, &rng, &wi) : bsdf_sample(layers, wo, &rng, &wi);
+    phase_vtx pv = phase_vertex(media, wo, &rng);
+    real w = use_phase ? phase_sample(media, &pv, wo, &rng, &wi) : bsdf_sample(layers, wo, &rng, &wi);
     out[4 * i] = (float)wi.x; out[4 * i + 1] = (float)wi.y; out[4 * i + 2] = (float)wi.z;
     out[4 * i + 3] = (float)w;
 }
@@ -34,7 +35,8 @@ __kernel void harness_eval(__global const lsqt_dev_layer *layers,
     int i = (int)get_global_id(0);
     real3 wo = normalize(make_real3(wox, woy, woz));
     real3 d = make_real3(wi[4 * i], wi[4 * i + 1], wi[4 * i + 2]);
-    out[2 * i] = (float)(use_phase ? phase_eval(media, wo, d) : bsdf_eval(layers, wo, d));
+    phase_vtx pv = {make_real3(R(0.0), R(0.0), R(1.0))}; /* deterministic phases ignore it */
+    out[2 * i] = (float)(use_phase ? phase_eval(media, &pv, wo, d) : bsdf_eval(layers, wo, d));
     out[2 * i + 1] = (float)(use_phase ? phase_pdf(media, wo, d) : bsdf_pdf(layers, wo, d));
 }
 
@@ -78,4 +80,21 @@ __kernel void harness_ms_eval(__global const lsqt_dev_layer *layers, float wox, 
         ms_vertex_walks(layers, -wo, &rng, R(1.0) / (real)reps, 1, &sink, &o);
     }
     for (int k = 0; k < LSQT_NWI_PAD; k++) out[(size_t)i * LSQT_NWI_PAD + k] = (float)sum[k];
+}
+
+/* Stochastic phase evaluation (diffuse SGGX): work-item i averages `reps` vertices (each
+ * one visible normal, as the path loop draws) towards direction i; out[i] = the mean. */
+__kernel void harness_phase_mc(__global const lsqt_dev_medium *media, float wox, float woy, float woz,
+                               __global const float *wi, uint seed, int reps, __global float *out)
+{
+    int i = (int)get_global_id(0);
+    rng_t rng = rng_init(seed, 0u, 2u, (ulong)i, 7u);
+    real3 wo = normalize(make_real3(wox, woy, woz));
+    real3 d = make_real3(wi[4 * i], wi[4 * i + 1], wi[4 * i + 2]);
+    real sum = R(0.0);
+    for (int r = 0; r < reps; r++) {
+        phase_vtx pv = phase_vertex(media, wo, &rng);
+        sum += phase_eval(media, &pv, wo, d);
+    }
+    out[i] = (float)(sum / (real)reps);
 }

@@ -19,6 +19,9 @@ inline real4 bsdf_eval4(__global const lsqt_dev_layer *l, real3 wo, dir4 wi)
 #ifdef LSQT_HAS_BSDF_MS_DIELECTRIC
     case LSQT_BSDF_MS_DIELECTRIC: return dielectric_eval4(l, wo, wi);
 #endif
+#ifdef LSQT_HAS_BSDF_OREN_NAYAR
+    case LSQT_BSDF_OREN_NAYAR: return oren_nayar_eval4(l, wo, wi);
+#endif
     default: return (real4)(R(0.0));
     }
 }
@@ -40,6 +43,9 @@ inline real bsdf_sample(__global const lsqt_dev_layer *l, real3 wo, rng_t *rng, 
 #ifdef LSQT_HAS_BSDF_LAMBERTIAN
     case LSQT_BSDF_LAMBERTIAN: return lambertian_sample(l, wo, u0, u1, u2, wi);
 #endif
+#ifdef LSQT_HAS_BSDF_OREN_NAYAR
+    case LSQT_BSDF_OREN_NAYAR: return oren_nayar_sample(l, wo, u1, u2, wi);
+#endif
     default: return R(0.0);
     }
 }
@@ -56,42 +62,85 @@ inline real bsdf_pdf(__global const lsqt_dev_layer *l, real3 wo, real3 wi)
 #ifdef LSQT_HAS_BSDF_MS_DIELECTRIC
     case LSQT_BSDF_MS_DIELECTRIC: return dielectric_pdf(l, wo, wi);
 #endif
+#ifdef LSQT_HAS_BSDF_OREN_NAYAR
+    case LSQT_BSDF_OREN_NAYAR: return oren_nayar_pdf(l, wo, wi);
+#endif
     default: return R(0.0);
     }
 }
 
-inline real4 phase_eval4(__global const lsqt_dev_medium *m, real3 wo, dir4 wi)
+/* What a phase function fixes at a vertex for every direction it is evaluated towards
+ * and for the sample that continues the path: for diffuse SGGX flakes one visible normal,
+ * so the point estimate's cost does not grow with its stochastic evaluation. */
+typedef struct {
+    real3 m;
+} phase_vtx;
+
+inline phase_vtx phase_vertex(__global const lsqt_dev_medium *m, real3 wo, rng_t *rng)
 {
+    phase_vtx v = {make_real3(R(0.0), R(0.0), R(1.0))};
+#ifdef LSQT_HAS_PHASE_SGGX
+    if (m->phase_kind == LSQT_PHASE_SGGX && m->pp[2] > R(0.5)) {
+        real u1 = rng_uniform(rng), u2 = rng_uniform(rng);
+        v.m = sggx_sample_vndf(m->pp[0], m->pp[1], wo, u1, u2);
+    }
+#else
+    (void)m, (void)wo, (void)rng;
+#endif
+    return v;
+}
+
+inline real4 phase_eval4(__global const lsqt_dev_medium *m, const phase_vtx *v, real3 wo, dir4 wi)
+{
+    (void)v;
     switch (m->phase_kind) {
 #ifdef LSQT_HAS_PHASE_HG
     case LSQT_PHASE_HG: return hg_eval4(m->pp[0], wo, wi);
+#endif
+#ifdef LSQT_HAS_PHASE_HG2
+    case LSQT_PHASE_HG2: return hg2_eval4(m, wo, wi);
+#endif
+#ifdef LSQT_HAS_PHASE_RAYLEIGH
+    case LSQT_PHASE_RAYLEIGH: return rayleigh_eval4(m, wo, wi);
+#endif
+#ifdef LSQT_HAS_PHASE_SGGX
+    case LSQT_PHASE_SGGX: return m->pp[2] > R(0.5) ? sggx_diffuse_eval4(v->m, wi) : sggx_specular_eval4(m, wo, wi);
 #endif
     default: return (real4)(R(0.0));
     }
 }
 
-inline real phase_eval(__global const lsqt_dev_medium *m, real3 wo, real3 wi)
+inline real phase_eval(__global const lsqt_dev_medium *m, const phase_vtx *v, real3 wo, real3 wi)
 {
-    return phase_eval4(m, wo, dir4_broadcast(wi)).x;
+    return phase_eval4(m, v, wo, dir4_broadcast(wi)).x;
 }
 
+/* Density of phase_sample's directions: the phase function itself for the exact
+ * samplers; 0 for diffuse SGGX, whose density has no closed form. */
 inline real phase_pdf(__global const lsqt_dev_medium *m, real3 wo, real3 wi)
 {
-    switch (m->phase_kind) {
-#ifdef LSQT_HAS_PHASE_HG
-    case LSQT_PHASE_HG: return hg_pdf(m->pp[0], wo, wi);
-#endif
-    default: return R(0.0);
-    }
+    phase_vtx none = {make_real3(R(0.0), R(0.0), R(1.0))};
+    if (m->phase_kind == LSQT_PHASE_SGGX && m->pp[2] > R(0.5)) return R(0.0);
+    return phase_eval(m, &none, wo, wi);
 }
 
-/* Samples wi given wo; returns the weight p / pdf (1 for exact samplers). */
-inline real phase_sample(__global const lsqt_dev_medium *m, real3 wo, rng_t *rng, real3 *wi)
+/* Samples wi given wo; returns the weight p / pdf (1: every sampler here is exact). */
+inline real phase_sample(__global const lsqt_dev_medium *m, const phase_vtx *v, real3 wo, rng_t *rng, real3 *wi)
 {
-    real u1 = rng_uniform(rng), u2 = rng_uniform(rng);
+    real u0 = rng_uniform(rng), u1 = rng_uniform(rng), u2 = rng_uniform(rng);
+    (void)u0, (void)v;
     switch (m->phase_kind) {
 #ifdef LSQT_HAS_PHASE_HG
     case LSQT_PHASE_HG: *wi = hg_sample(m->pp[0], wo, u1, u2); return R(1.0);
+#endif
+#ifdef LSQT_HAS_PHASE_HG2
+    case LSQT_PHASE_HG2: *wi = hg2_sample(m, wo, u0, u1, u2); return R(1.0);
+#endif
+#ifdef LSQT_HAS_PHASE_RAYLEIGH
+    case LSQT_PHASE_RAYLEIGH: *wi = rayleigh_sample(m, wo, u1, u2); return R(1.0);
+#endif
+#ifdef LSQT_HAS_PHASE_SGGX
+    case LSQT_PHASE_SGGX: *wi = sggx_sample(m, wo, v->m, u1, u2); return R(1.0);
 #endif
     default: return R(0.0);
     }

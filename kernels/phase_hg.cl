@@ -1,26 +1,51 @@
-/* Henyey-Greenstein phase function. Directions point away from the vertex: wo back
- * towards where the path came from, wi where it goes, so the scattering angle has
- * cosine -dot(wo, wi) (the seed's 1 + g^2 + 2 g wo.wi). */
+/* Henyey-Greenstein phase function, and its two-lobe mixture. Directions point away from
+ * the vertex: wo back towards where the path came from, wi where it goes, so the
+ * scattering angle has cosine cos t = -dot(wo, wi) (the seed's 1 + g^2 + 2 g wo.wi).
+ *
+ * Float at the extremes (g = +-0.999, a peak 1e-3 wide): 1 + g^2 - 2 g cos t cancels to
+ * nothing at the peak, so it is written (1 - |g|)^2 + 2 |g| q with q = 1 -+ cos t taken
+ * from the vectors, q = |wo +- wi|^2 / 2, exact to rounding near the peak. */
 
 inline real4 hg_eval4(real g, real3 wo, dir4 wi)
 {
-    real4 cos_t = -(wo.x * wi.x + wo.y * wi.y + wo.z * wi.z);
-    real4 denom = R(1.0) + g * g - R(2.0) * g * cos_t;
-    return LSQT_INV_4PI * (R(1.0) - g * g) / (denom * sqrt(fmax(denom, R(0.0))));
+    const real ag = fabs(g), s = g >= R(0.0) ? R(1.0) : R(-1.0);
+    real4 qx = wo.x + s * wi.x, qy = wo.y + s * wi.y, qz = wo.z + s * wi.z;
+    real4 q = R(0.5) * (qx * qx + qy * qy + qz * qz); /* 1 - cos t towards the peak */
+    real4 denom = (R(1.0) - ag) * (R(1.0) - ag) + R(2.0) * ag * q;
+    return LSQT_INV_4PI * ((R(1.0) - ag) * (R(1.0) + ag)) / (denom * sqrt(denom));
 }
 
 inline real hg_pdf(real g, real3 wo, real3 wi) { return hg_eval4(g, wo, dir4_broadcast(wi)).x; }
 
-/* Samples wi exactly proportional to the phase function: the weight eval/pdf is 1. */
+/* Samples wi exactly proportional to the phase function (weight 1): the inverse CDF of
+ * the standard form, cos t = (1 + g^2 - s^2) / (2 g), s = (1 - g^2) / (1 - g + 2 g u),
+ * rewritten for q = 1 - cos t about the peak, q = (1 - g)(1 - u)(s + 1 - g) / (1 - g + 2 g u)
+ * (|g| in place of g, the peak axis reversed for g < 0), which keeps angles down to
+ * (1 - g) 2^-12 rad in float. */
 inline real3 hg_sample(real g, real3 wo, real u1, real u2)
 {
-    real cos_t;
-    if (fabs(g) < R(1e-3)) {
-        cos_t = R(1.0) - R(2.0) * u1;
+    const real ag = fabs(g);
+    real3 axis = g >= R(0.0) ? -wo : wo;
+    real q;
+    if (ag < R(1e-3)) {
+        q = R(2.0) * u1; /* isotropic: cos t uniform */
     } else {
-        real s = (R(1.0) - g * g) / (R(1.0) - g + R(2.0) * g * u1);
-        cos_t = (R(1.0) + g * g - s * s) / (R(2.0) * g);
+        real t = R(1.0) - ag + R(2.0) * ag * u1;
+        real s = (R(1.0) - ag) * (R(1.0) + ag) / t;
+        q = (R(1.0) - ag) * (R(1.0) - u1) * (s + R(1.0) - ag) / t;
     }
-    cos_t = clamp(cos_t, R(-1.0), R(1.0));
-    return direction_around(-wo, cos_t, u2);
+    return direction_around_q(axis, clamp(q, R(0.0), R(2.0)), u2);
+}
+
+/* Two lobes: (1 - b) HG(g0) + b HG(g1); pp = {g0, g1, b}. The sampler picks lobe 1 with
+ * probability b, so the weight is exactly 1. */
+inline real4 hg2_eval4(__global const lsqt_dev_medium *m, real3 wo, dir4 wi)
+{
+    const real b = m->pp[2];
+    return (R(1.0) - b) * hg_eval4(m->pp[0], wo, wi) + b * hg_eval4(m->pp[1], wo, wi);
+}
+
+inline real3 hg2_sample(__global const lsqt_dev_medium *m, real3 wo, real u0, real u1, real u2)
+{
+    return hg_sample(u0 < m->pp[2] ? m->pp[1] : m->pp[0], wo, u1, u2);
 }

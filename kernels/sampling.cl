@@ -25,3 +25,13 @@ inline real3 direction_around(real3 n, real mu, real u)
     real s = safe_sqrt(R(1.0) - mu * mu), phi = R(2.0) * LSQT_PI * u;
     return normalize(s * cos(phi) * t + s * sin(phi) * b + mu * n);
 }
+
+/* Direction at angle t from the unit axis n, given q = 1 - cos t (accurate near t = 0,
+ * where 1 - q would lose it: sin t = sqrt(q (2 - q))), and uniform azimuth. */
+inline real3 direction_around_q(real3 n, real q, real u)
+{
+    real3 t, b;
+    make_frame(n, &t, &b);
+    real s = safe_sqrt(q * (R(2.0) - q)), phi = R(2.0) * LSQT_PI * u;
+    return normalize(s * cos(phi) * t + s * sin(phi) * b + (R(1.0) - q) * n);
+}

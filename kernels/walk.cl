@@ -144,7 +144,7 @@ inline real layer_vertex(const walk_ctx *c, int li, real3 d, real w, rng_t *rng,
 }
 
 /* Next-event estimates from a scattering vertex at height h in interior medium mi. */
-inline void nee_medium(const walk_ctx *c, int mi, real h, real3 d, real w)
+inline void nee_medium(const walk_ctx *c, int mi, real h, real3 d, real w, const phase_vtx *pv)
 {
     __global const lsqt_dev_medium *m = &c->media[mi];
     const int top = c->scene->top_nonnull, bottom = c->scene->bottom_nonnull;
@@ -154,7 +154,7 @@ inline void nee_medium(const walk_ctx *c, int mi, real h, real3 d, real w)
     if (!nee_visible(tau_up, tau_down, up, down)) return;
     for (int k = 0; k < LSQT_NWI_PAD; k += 4) {
         dir4 wi = load_dir4(c->wi, k);
-        nee_add4(c, k, w * phase_eval4(m, -d, wi), nee_transmittance4(wi.z, tau_up, tau_down, up, down));
+        nee_add4(c, k, w * phase_eval4(m, pv, -d, wi), nee_transmittance4(wi.z, tau_up, tau_down, up, down));
     }
 }
 
@@ -237,9 +237,10 @@ inline void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulong *hi
                 w *= (real)m->mus / (real)m->mut;
                 scattered = 1;
                 if (!(w > R(0.0))) return;
-                nee_medium(c, medium, h, d, w);
+                phase_vtx pv = phase_vertex(m, -d, rng);
+                nee_medium(c, medium, h, d, w, &pv);
                 real3 wi;
-                w *= phase_sample(m, -d, rng, &wi);
+                w *= phase_sample(m, &pv, -d, rng, &wi);
                 if (!(w > R(0.0)) || !roulette(&w, rng)) return;
                 d = wi;
                 continue;

@@ -1,0 +1,40 @@
+/* OrenNayarDiffuseBrdf, the "simpler expression" of the later user's guide (section
+ * 3.2.5), with the cosine of wi included:
+ *   f = fR |cos i| / pi [A + B max(wo'.wi', 0) / max(|cos o|, |cos i|)],
+ * wo'.wi' = wo.x wi.x + wo.y wi.y (the tangential parts), A = 1 - 0.5 s^2 / (s^2 + 0.33),
+ * B = 0.45 s^2 / (s^2 + 0.09), s = sigma (radians). It reflects only. The formula is
+ * reproduced as published: it is not energy conserving at grazing angles (albedo about
+ * 1.005 at sigma 0.1, 80 degrees), and nothing is clamped. p[0] = fR, p[1] = sigma. */
+
+inline real oren_nayar_a(real s) { return R(1.0) - R(0.5) * s * s / (s * s + R(0.33)); }
+inline real oren_nayar_b(real s) { return R(0.45) * s * s / (s * s + R(0.09)); }
+
+/* The bracket [A + B ...] for four directions on wo's side. */
+inline real4 oren_nayar_bracket4(__global const lsqt_dev_layer *l, real3 wo, dir4 wi)
+{
+    const real s = l->p[1];
+    real4 t = fmax(wo.x * wi.x + wo.y * wi.y, (real4)(R(0.0)));
+    real4 mx = fmax(fabs(wi.z), (real4)(fabs(wo.z)));
+    return oren_nayar_a(s) + oren_nayar_b(s) * t / fmax(mx, (real4)(R(1e-30)));
+}
+
+inline real4 oren_nayar_eval4(__global const lsqt_dev_layer *l, real3 wo, dir4 wi)
+{
+    real4 f = l->p[0] * fabs(wi.z) * LSQT_INV_PI * oren_nayar_bracket4(l, wo, wi);
+    return select((real4)(R(0.0)), f, wo.z * wi.z > R(0.0));
+}
+
+inline real oren_nayar_pdf(__global const lsqt_dev_layer *l, real3 wo, real3 wi)
+{
+    (void)l;
+    return wo.z * wi.z > R(0.0) ? fabs(wi.z) * LSQT_INV_PI : R(0.0);
+}
+
+/* Cosine-weighted on wo's side; the weight f / pdf = fR [A + B ...]. */
+inline real oren_nayar_sample(__global const lsqt_dev_layer *l, real3 wo, real u1, real u2, real3 *wi)
+{
+    real3 w = sample_cosine_hemisphere(u1, u2);
+    w.z *= wo.z >= R(0.0) ? R(1.0) : R(-1.0);
+    *wi = w;
+    return l->p[0] * oren_nayar_bracket4(l, wo, dir4_broadcast(w)).x;
+}

@@ -1,0 +1,66 @@
+/* SGGX microflakes (Heitz, Dupuy, Crassin, Dachsbacher 2015) as a medium's phase function,
+ * with S = diag(Apara^2, Apara^2, Aperp^2) in the layer frame; pp = {Apara^2, Aperp^2,
+ * type (0 Specular, 1 Diffuse)}. The medium's mus stays direction independent (as in the
+ * original tool): only the phase function comes from the flakes.
+ *   sigma(w) = sqrt(w^T S w) (projected area), D(m) = 1 / (pi sqrt|S| (m^T S^-1 m)^2),
+ *   specular: p(wo -> wi) = D(h) / (4 sigma(wo)), h = normalize(wo + wi);
+ *   diffuse:  p(wo -> wi) = E_m[max(0, wi.m)] / pi over normals m visible from wo.
+ * Both depend on absolute directions, not only on the scattering angle. S is symmetric
+ * under y -> -y (and rotations about z), so the phi = 0 slices and the y-mirroring of RAW
+ * stay valid. Flakes are two-sided: D(m) = D(-m). */
+
+inline real sggx_sigma(real sxx, real szz, real3 w)
+{
+    return sqrt(sxx * (w.x * w.x + w.y * w.y) + szz * w.z * w.z);
+}
+
+inline real4 sggx_d4(real sxx, real szz, real4 mx, real4 my, real4 mz)
+{
+    real4 q = (mx * mx + my * my) / sxx + mz * mz / szz; /* sqrt|S| = sxx sqrt(szz) */
+    return R(1.0) / (((LSQT_PI * sxx) * sqrt(szz)) * q * q);
+}
+
+/* A normal visible from w, density max(0, w.m) D(m) / sigma(w). The flakes are the
+ * ellipsoid x^T S x = 1, the image of the unit sphere under S^-1/2, whose normal at
+ * S^-1/2 y is along S^1/2 y: a uniform point of the unit sphere's disk as seen from
+ * S^1/2 w, lifted onto the sphere, maps to a uniform point of the ellipsoid's projection
+ * (a linear map has a constant Jacobian), so m = normalize(S^1/2 y). */
+inline real3 sggx_sample_vndf(real sxx, real szz, real3 w, real u1, real u2)
+{
+    const real sp = sqrt(sxx), sn = sqrt(szz);
+    real3 v = normalize(make_real3(sp * w.x, sp * w.y, sn * w.z)), t, b;
+    make_frame(v, &t, &b);
+    real r = sqrt(u1), phi = R(2.0) * LSQT_PI * u2;
+    real x = r * cos(phi), y = r * sin(phi);
+    real3 p = x * t + y * b + safe_sqrt(R(1.0) - x * x - y * y) * v;
+    return normalize(make_real3(sp * p.x, sp * p.y, sn * p.z));
+}
+
+inline real4 sggx_specular_eval4(__global const lsqt_dev_medium *m, real3 wo, dir4 wi)
+{
+    const real sxx = m->pp[0], szz = m->pp[1];
+    real4 hx = wo.x + wi.x, hy = wo.y + wi.y, hz = wo.z + wi.z;
+    real4 inv = rsqrt(fmax(hx * hx + hy * hy + hz * hz, (real4)(R(1e-30))));
+    return sggx_d4(sxx, szz, hx * inv, hy * inv, hz * inv) / (R(4.0) * sggx_sigma(sxx, szz, wo));
+}
+
+/* Diffuse flakes: the value towards wi given the vertex's visible normal m (one sample
+ * serves every direction of the point estimate, and the path's next direction). */
+inline real4 sggx_diffuse_eval4(real3 m, dir4 wi)
+{
+    return fmax(wi.x * m.x + wi.y * m.y + wi.z * m.z, (real4)(R(0.0))) * LSQT_INV_PI;
+}
+
+/* Specular: reflect wo about a visible normal (weight 1). Diffuse: a cosine lobe about
+ * the vertex's normal (weight 1). */
+inline real3 sggx_sample(__global const lsqt_dev_medium *m, real3 wo, real3 normal, real u1, real u2)
+{
+    if (m->pp[2] > R(0.5)) {
+        real3 t, b;
+        make_frame(normal, &t, &b);
+        real3 c = sample_cosine_hemisphere(u1, u2);
+        return normalize(c.x * t + c.y * b + c.z * normal);
+    }
+    real3 h = sggx_sample_vndf(m->pp[0], m->pp[1], wo, u1, u2);
+    return normalize(R(2.0) * dot(wo, h) * h - wo);
+}
