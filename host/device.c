@@ -199,7 +199,7 @@ void lsqt_context_release(lsqt_context *cx)
 
 /* The kernel text: embedded, or re-read from $LSQT_KERNEL_DIR (the repository root) so a
  * kernel can be edited without rebuilding the host. */
-static char *kernel_source(char *err, size_t errcap)
+char *lsqt_kernel_text(char *err, size_t errcap)
 {
     const char *dir = getenv("LSQT_KERNEL_DIR");
     if (!dir || !*dir) {
@@ -234,7 +234,7 @@ cl_program lsqt_program_build(lsqt_context *cx, const char *options, char **log,
                               size_t errcap)
 {
     *log = NULL;
-    char *src = kernel_source(err, errcap);
+    char *src = lsqt_kernel_text(err, errcap);
     if (!src) return NULL;
     cl_int e = CL_SUCCESS;
     const char *srcs[] = {src};

@@ -1160,35 +1160,6 @@ static void reciprocity(const char *name, const lsqt_dev_layer *L, double sa, do
     clReleaseMemObject(bl);
 }
 
-/* The kernel sources as lsqt_program_build takes them: re-read from $LSQT_KERNEL_DIR when
- * set (heap, caller frees), else NULL (the embedded text). */
-static char *kernel_dir_source(void)
-{
-    const char *dir = getenv("LSQT_KERNEL_DIR");
-    if (!dir || !*dir) return NULL;
-    size_t total = 0;
-    char *all = calloc(1, 1), err[256];
-    for (int i = 0; all && lsqt_kernel_files[i]; i++) {
-        char path[4096];
-        size_t len = 0;
-        snprintf(path, sizeof path, "%s/%s", dir, lsqt_kernel_files[i]);
-        char *part = lsqt_read_file(path, &len, err, sizeof err);
-        char *grown = part ? realloc(all, total + len + 2) : NULL;
-        if (!grown) {
-            CHECK(0, "%s", err);
-            free(part), free(all);
-            return NULL;
-        }
-        all = grown;
-        memcpy(all + total, part, len);
-        total += len;
-        all[total++] = '\n';
-        all[total] = '\0';
-        free(part);
-    }
-    return all;
-}
-
 /* ---------------------------------------------------------------- main */
 
 static lsqt_dev_layer layer(int kind, double alpha, double p1, double p2, double p3)
@@ -1245,8 +1216,9 @@ int main(void)
     /* The visible-normal sampler alone: the kernel sources plus one kernel of this test's
      * (ms_vertex, as the walk calls it). */
     cl_int e = CL_SUCCESS;
-    char *kdir_src = kernel_dir_source();
-    const char *srcs[] = {kdir_src ? kdir_src : lsqt_kernel_source, vndf_src};
+    char *kdir_src = lsqt_kernel_text(err, sizeof err);
+    CHECK(kdir_src != NULL, "%s", err);
+    const char *srcs[] = {kdir_src ? kdir_src : "", vndf_src};
     cl_program vp = clCreateProgramWithSource(fixture_cx.ctx, 2, srcs, NULL, &e);
     free(kdir_src);
     if (e == CL_SUCCESS)

@@ -47,6 +47,10 @@ void lsqt_context_release(lsqt_context *cx);
  * (exit status "no usable OpenCL device") with err naming the device and what it lacks. */
 int lsqt_device_check(const lsqt_device_info *d, int use_double, char *err, size_t errcap);
 
+/* The kernel text (heap, caller frees; NULL on error, with err set): the embedded
+ * sources, or the files under $LSQT_KERNEL_DIR (the repository root) when it is set. */
+char *lsqt_kernel_text(char *err, size_t errcap);
+
 /* Builds the kernel program (embedded sources, or the files under $LSQT_KERNEL_DIR for
  * development) with OPTIONS. On a compile failure the build log goes into *log (heap,
  * caller frees) and NULL is returned. */
