@@ -1,0 +1,1552 @@
+/* The phase functions (Henyey-Greenstein and its two-lobe mixture, Rayleigh with
+ * depolarisation, SGGX specular and diffuse microflakes) and the Oren-Nayar BRDF, through
+ * the harness kernels (the code the walk runs), and lossless stacks end to end. Release,
+ * 2 cores: about 60 s (half of it the stochastic diffuse SGGX evaluations).
+ *
+ * 1. Goodness of fit of every sampler (harness_sample) against its own evaluation:
+ *    HG2 (g0, g1, b) = (0.9, -0.5, 0.3), (0, 0.95, 0.5), (-0.95, 0.95, 1); Rayleigh
+ *    rho = -1, 0, 0.5, 1; SGGX specular and diffuse with Apara / Aperp = 0.1, 1, 10 at
+ *    0, 60, 89 degrees from the z axis (the flakes' phase depends on absolute
+ *    directions); Oren-Nayar (fR 0.7) sigma = 0, 0.3, 0.8 at 0, 60, 85 degrees, and 0.3
+ *    at 120 degrees (from below). 10^6 samples each. Bins: a 16 x 16 product grid in
+ *    (mu, phi) about an axis (-wo, the forward direction, for HG2 and Rayleigh; z for
+ *    SGGX; for Oren-Nayar the normal on wo's side, the grid covering that hemisphere),
+ *    with breakpoints at quantiles of 0.4 uniform + 0.6 an independent pilot run's
+ *    samples, so bins crowd where the lobe is; forced edges where the value has a kink
+ *    (SGGX: the horizon; Oren-Nayar: |cos theta_i| = |cos theta_o| and the azimuths where
+ *    wo'.wi' changes sign). Expected content of a bin, E = N x the integral
+ *    of the evaluation over it: for the deterministic evaluations (harness_eval) by
+ *    adaptive Gauss-Legendre (8 x 8 rules against their quarters', to 2 % of the bin's
+ *    sampling sigma; the difference is kept as the quadrature's error); for diffuse SGGX
+ *    (one visible normal per vertex: stochastic) by 3 x 3 Gauss nodes per bin of
+ *    harness_phase_mc, each node 8 independent work-items of 2000 normals, whose spread
+ *    gives the evaluation's variance, added to the denominators (3 x 3 nodes leave a
+ *    quadrature bias of about 1e-4 of the total, 2 x 2 left 5e-4: small against a bin's
+ *    1.6 % sampling sigma). Observed: the sum of the weights per bin (1 for the exact
+ *    phase samplers; f / pdf for Oren-Nayar, whose sampler is cosine weighted). Tests per
+ *    case: chi-square on the fine bins, sum (O - E)^2 / (r E + var_E) with
+ *    r = sum w^2 / sum w (bins under 25 effective samples pooled; dof = bins, less 1 where
+ *    every weight is 1 and the total is fixed), the same on 4 x 4 blocks of bins, and for
+ *    Oren-Nayar the total (sum of weights against N x the albedo). The weight equals
+ *    f / pdf at every sample (deterministic evaluations; 1 for every phase sampler). All
+ *    p-values of the file form one family, Bonferroni corrected: reject below
+ *    1e-3 / (number of tests).
+ *    Power, kept as a self-check: the samples reweighted by a 2 % tilt along the grid's mu
+ *    axis, 1 + 0.02 (2 c - 1) with c the pilot's distribution function at the sample's mu
+ *    (about uniform under the sampler, whatever the lobe), renormalised so that the total
+ *    stays (a skewed sampler, not a scaled one), must be rejected wherever its
+ *    noncentrality on the coarse bins is 100 or more (every case here: about 115-125).
+ * 2. Normalisation: every phase integrates to 1 over the sphere within 1e-4 (deterministic
+ *    evaluations, by the adaptive rule over the bins, whose error estimate is printed; HG
+ *    and HG2 at g = +-0.999 on panels in log q) or 1e-3 (diffuse SGGX, by the stochastic
+ *    evaluation, whose standard error must be 2.5e-4 or less: 1e-3 is 4 sigma). Oren-Nayar
+ *    integrates to its directional albedo, equal to an independent double-precision
+ *    integral of the formula written here (Gauss-Legendre in theta and phi split at the
+ *    kinks, 24 and 48 nodes agreeing to 1e-10), within 2e-5 relative. The formula, as
+ *    published, is not energy conserving at grazing angles: its albedo at sigma 0.1,
+ *    80 degrees is 1.005 (fR = 1), reproduced by the formula and by the kernel.
+ * 3. Limits and closed forms: HG2 with b = 0 is HG(g0) exactly (values and samples, bit
+ *    for bit); Rayleigh rho = 1 is isotropic 1/(4 pi), rho = 0 is 3 / (16 pi) (1 + cos^2)
+ *    (relative 1e-6); SGGX specular with Apara = Aperp is 1/(4 pi) (1e-5); SGGX diffuse
+ *    with Apara = Aperp is the diffuse sphere, p = 2 / (3 pi^2) (sin a + (pi - a) cos a), a
+ *    the angle between wo and wi, both pointing away from the vertex (a = 0 straight
+ *    back), whose closed form is first checked to integrate to 1 (within 4 sigma of the
+ *    stochastic evaluation, 64 items of 5000 normals per value, relative sigma < 1 %);
+ *    Oren-Nayar with sigma = 0 is Lambertian fR |cos theta_i| / pi, and 0 on the other
+ *    side. SGGX specular next to the forward direction wi = -wo (1e-7 .. 1e-2 rad from it,
+ *    where h = wo + wi nearly vanishes) stays finite and below its bound
+ *    max D / (4 sigma(wo)); at wi = -wo exactly (h = 0, no limit) the value is only printed.
+ * 4. Peaks in float, g = +-0.999: HG and HG2 values at the forward and backward peaks and
+ *    1e-4 .. pi rad from them against the textbook formula in double (relative 1e-4), and
+ *    the samplers' distribution of q = 1 - cos t about each peak axis, binned 4 per decade
+ *    down to 1e-9 (about 1000 of the 10^6 samples fall below 1e-9), against the exact CDF
+ *    (chi-square): the peak is resolved.
+ * 5. Rayleigh sampler: the CDF at the sampled mu is uniform (Kolmogorov-Smirnov, 10^6
+ *    samples) for rho = -1, -0.5, 0, 0.5, 1.
+ * 6. Reciprocity: Oren-Nayar f(a->b) / |cos b| = f(b->a) / |cos a| (relative 1e-5, 300
+ *    pairs above and below); SGGX specular sigma(a) p(a->b) = sigma(b) p(b->a) (= D(h) / 4:
+ *    the microflake reciprocity, with the projected area sigma; p(a->b) = p(b->a) only
+ *    where sigma is constant, which the test also shows: up to 0.9 apart at Apara / Aperp
+ *    0.1 and 10); SGGX diffuse the same with the stochastic evaluation (each value from
+ *    its own launch, 64 items of 2500 normals: |z| < 4, and the sum of z^2 in the family).
+ * 7. Lossless stacks conserve energy: a slab of HG2 (0.8, -0.3, 0.3) and one of diffuse
+ *    SGGX (Apara 0.3) between null layers, 10^5 paths at 0, 45, 80 degrees: R + T = 1
+ *    within 4 sigma (exit tallies), and the point estimates agree with the exits: NEE
+ *    reflectance = R, NEE transmittance = T - delta_T (the unscattered forward delta is no
+ *    point estimate), within 4 sigma (batch means of the difference on the same paths)
+ *    plus the quadrature error of the direction rule, bounded by the difference between
+ *    1024 and 256 directions on the same paths (required below 2 % of the value).
+ * usage: test_phases [SECTION...] (all by default; sections: hg2 rayleigh sggx-specular
+ * sggx-diffuse oren-nayar peaks rayleigh-ks limits reciprocity stacks). */
+#include <stdint.h>
+#include <time.h>
+
+#include "cl_fixture.h"
+#include "nee_albedo.h"
+#include "quadrature.h"
+#include "stats.h"
+
+#define PI 3.14159265358979323846
+#define NMU 16       /* grid rows in mu */
+#define NPHI 16      /* grid columns in phi */
+#define NCELL (NMU * NPHI)
+#define COARSE 4     /* fine bins per coarse bin side */
+#define NCOARSE (NCELL / (COARSE * COARSE))
+#define QA 8         /* Gauss nodes per side, adaptive rule */
+#define MAX_LEVEL 7
+#ifndef QM
+#define QM 3 /* Gauss nodes per bin side, stochastic evaluation */
+#endif
+#ifndef MC_K
+#define MC_K 8 /* independent items per direction, stochastic evaluation */
+#endif
+#define NPILOT 40000
+#define MIX 0.6
+#define MIN_EFF 25.0
+#define SKEW 0.02
+#define NS 1000000
+#define FAMILY_ALPHA 1e-3
+
+static cl_program prog;
+static double t_kernel = 0;
+
+static double now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+/* ---------------------------------------------------------------- the family */
+
+#define MAX_TESTS 512
+static struct {
+    char name[200];
+    double p;
+} tests[MAX_TESTS];
+static int n_tests = 0;
+
+static void record(const char *name, double p)
+{
+    if (n_tests < MAX_TESTS) {
+        snprintf(tests[n_tests].name, sizeof tests[n_tests].name, "%s", name);
+        tests[n_tests].p = p;
+    }
+    n_tests++;
+}
+
+static struct {
+    char name[200];
+    double p, lambda;
+    int required;
+} skews[128];
+static int n_skews = 0;
+
+/* ---------------------------------------------------------------- kernels */
+
+typedef struct {
+    char name[96];
+    int use_phase; /* 1: the medium's phase function, 0: the layer's BSDF */
+    int mc;        /* evaluation by harness_phase_mc (diffuse SGGX) */
+    lsqt_dev_layer L;
+    lsqt_dev_medium M;
+    float wo[3];
+} model_t;
+
+static void set_args(cl_kernel k, int n, const size_t *sz, const void *const *val)
+{
+    for (int i = 0; i < n; i++) {
+        cl_int e = clSetKernelArg(k, (cl_uint)i, sz[i], val[i]);
+        CHECK(e == CL_SUCCESS, "argument %d: %d", i, (int)e);
+    }
+}
+
+static void launch(cl_kernel k, size_t n)
+{
+    double t0 = now();
+    cl_int e = clEnqueueNDRangeKernel(fixture_cx.queue, k, 1, NULL, &n, NULL, 0, NULL, NULL);
+    if (e == CL_SUCCESS) e = clFinish(fixture_cx.queue);
+    CHECK(e == CL_SUCCESS, "kernel launch of %zu: %d", n, (int)e);
+    t_kernel += now() - t0;
+}
+
+static cl_mem mem(size_t bytes, const void *host)
+{
+    cl_int e = CL_SUCCESS;
+    cl_mem m = clCreateBuffer(fixture_cx.ctx, host ? CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR : CL_MEM_READ_WRITE,
+                              bytes, (void *)host, &e);
+    CHECK(e == CL_SUCCESS, "clCreateBuffer(%zu): %d", bytes, (int)e);
+    return m;
+}
+
+static void get(cl_mem m, size_t bytes, void *dst)
+{
+    cl_int e = clEnqueueReadBuffer(fixture_cx.queue, m, CL_TRUE, 0, bytes, dst, 0, NULL, NULL);
+    CHECK(e == CL_SUCCESS, "clEnqueueReadBuffer: %d", (int)e);
+}
+
+/* harness_sample: n samples (x, y, z, weight) for m->wo. */
+static void k_sample(const model_t *m, cl_uint seed, size_t n, float *out)
+{
+    cl_mem bl = mem(sizeof m->L, &m->L), bm = mem(sizeof m->M, &m->M), bo = mem(n * 16, NULL);
+    cl_kernel k = clCreateKernel(prog, "harness_sample", NULL);
+    cl_int up = m->use_phase;
+    const size_t sz[] = {sizeof bl, sizeof bm, sizeof up, 4, 4, 4, sizeof seed, sizeof bo};
+    const void *val[] = {&bl, &bm, &up, &m->wo[0], &m->wo[1], &m->wo[2], &seed, &bo};
+    set_args(k, 8, sz, val);
+    launch(k, n);
+    get(bo, n * 16, out);
+    clReleaseKernel(k);
+    clReleaseMemObject(bl), clReleaseMemObject(bm), clReleaseMemObject(bo);
+}
+
+/* harness_eval: (value, pdf) at n directions (x, y, z, 0) for wo. */
+static void k_eval(const model_t *m, const float wo[3], const float *dirs, size_t n, float *out)
+{
+    cl_mem bl = mem(sizeof m->L, &m->L), bm = mem(sizeof m->M, &m->M), bd = mem(n * 16, dirs), bo = mem(n * 8, NULL);
+    cl_kernel k = clCreateKernel(prog, "harness_eval", NULL);
+    cl_int up = m->use_phase;
+    const size_t sz[] = {sizeof bl, sizeof bm, sizeof up, 4, 4, 4, sizeof bd, sizeof bo};
+    const void *val[] = {&bl, &bm, &up, &wo[0], &wo[1], &wo[2], &bd, &bo};
+    set_args(k, 8, sz, val);
+    launch(k, n);
+    get(bo, n * 8, out);
+    clReleaseKernel(k);
+    clReleaseMemObject(bl), clReleaseMemObject(bm), clReleaseMemObject(bd), clReleaseMemObject(bo);
+}
+
+/* harness_phase_mc: out[i] = the mean of reps vertex evaluations towards direction i. */
+static void k_mc(const model_t *m, const float wo[3], const float *dirs, size_t n, cl_uint seed, cl_int reps,
+                 float *out)
+{
+    cl_mem bm = mem(sizeof m->M, &m->M), bd = mem(n * 16, dirs), bo = mem(n * 4, NULL);
+    cl_kernel k = clCreateKernel(prog, "harness_phase_mc", NULL);
+    const size_t sz[] = {sizeof bm, 4, 4, 4, sizeof bd, sizeof seed, sizeof reps, sizeof bo};
+    const void *val[] = {&bm, &wo[0], &wo[1], &wo[2], &bd, &seed, &reps, &bo};
+    set_args(k, 8, sz, val);
+    launch(k, n);
+    get(bo, n * 4, out);
+    clReleaseKernel(k);
+    clReleaseMemObject(bm), clReleaseMemObject(bd), clReleaseMemObject(bo);
+}
+
+static cl_uint mc_seed = 1000;
+
+/* The stochastic evaluation towards nd directions (x, y, z, 0): MC_K independent
+ * work-items of reps normals each per direction; the mean and the variance of the mean. */
+static void mc_eval_k(const model_t *m, const float wo[3], const float *dirs, size_t nd, int K, int reps,
+                      double *mean, double *var)
+{
+    const size_t n = nd * (size_t)K;
+    float *d = malloc(n * 16), *o = malloc(n * 4);
+    for (size_t k = 0; k < (size_t)K; k++) memcpy(d + 4 * k * nd, dirs, nd * 16);
+    k_mc(m, wo, d, n, mc_seed++, reps, o);
+    for (size_t j = 0; j < nd; j++) {
+        double s = 0, ss = 0;
+        for (size_t k = 0; k < (size_t)K; k++) s += o[k * nd + j];
+        s /= K;
+        for (size_t k = 0; k < (size_t)K; k++) ss += (o[k * nd + j] - s) * (o[k * nd + j] - s);
+        mean[j] = s;
+        var[j] = ss / (K - 1) / K;
+    }
+    free(d), free(o);
+}
+
+static void mc_eval(const model_t *m, const float wo[3], const float *dirs, size_t nd, int reps, double *mean,
+                    double *var)
+{
+    mc_eval_k(m, wo, dirs, nd, MC_K, reps, mean, var);
+}
+
+/* ---------------------------------------------------------------- models */
+
+static model_t phase_model(const char *name, int kind, double p0, double p1, double p2, const double wo[3])
+{
+    model_t m;
+    memset(&m, 0, sizeof m);
+    snprintf(m.name, sizeof m.name, "%s", name);
+    m.use_phase = 1;
+    m.M.eta = 1, m.M.mus = 1, m.M.mut = 1, m.M.phase_kind = kind;
+    m.M.pp[0] = (float)p0, m.M.pp[1] = (float)p1, m.M.pp[2] = (float)p2;
+    for (int i = 0; i < 3; i++) m.wo[i] = (float)wo[i];
+    return m;
+}
+
+static model_t hg2_model(double g0, double g1, double b, const double wo[3])
+{
+    char nm[96];
+    snprintf(nm, sizeof nm, "HG2 (%g, %g, %g)", g0, g1, b);
+    return phase_model(nm, LSQT_PHASE_HG2, g0, g1, b, wo);
+}
+
+static model_t rayleigh_model(double rho, const double wo[3])
+{
+    char nm[96];
+    snprintf(nm, sizeof nm, "Rayleigh rho=%g", rho);
+    return phase_model(nm, LSQT_PHASE_RAYLEIGH, rho / (2 - rho), 0, 0, wo); /* gamma, as the host passes it */
+}
+
+/* Apara / Aperp = ratio; the table holds S / a^2 with a = max(Apara, Aperp), as the host
+ * makes it. */
+static model_t sggx_model(double ratio, int diffuse, double theta_deg)
+{
+    double th = theta_deg * PI / 180, wo[3] = {sin(th), 0.0, cos(th)};
+    double ap = ratio <= 1 ? ratio : 1, an = ratio <= 1 ? 1 : 1 / ratio;
+    char nm[96];
+    snprintf(nm, sizeof nm, "SGGX %s Apara/Aperp=%g th=%g", diffuse ? "diffuse" : "specular", ratio, theta_deg);
+    model_t m = phase_model(nm, LSQT_PHASE_SGGX, ap * ap, an * an, diffuse ? 1 : 0, wo);
+    m.mc = diffuse;
+    return m;
+}
+
+static model_t oren_nayar_model(double fr, double sigma, double theta_deg)
+{
+    model_t m;
+    memset(&m, 0, sizeof m);
+    snprintf(m.name, sizeof m.name, "Oren-Nayar sigma=%g th=%g", sigma, theta_deg);
+    m.L.kind = LSQT_BSDF_OREN_NAYAR, m.L.iter_count = 1;
+    m.L.p[0] = (float)fr, m.L.p[1] = (float)sigma;
+    double th = theta_deg * PI / 180;
+    m.wo[0] = (float)sin(th), m.wo[1] = 0, m.wo[2] = (float)cos(th);
+    return m;
+}
+
+/* The formula of the Oren-Nayar "simpler expression", written here in double (the
+ * reference): f = fR |cos i| / pi [A + B max(wo'.wi', 0) / max(|cos o|, |cos i|)], on wo's
+ * side only. */
+static double oren_nayar_ref(double fr, double s, const double o[3], const double i[3])
+{
+    if (!(o[2] * i[2] > 0)) return 0;
+    double A = 1 - 0.5 * s * s / (s * s + 0.33), B = 0.45 * s * s / (s * s + 0.09);
+    double t = fmax(o[0] * i[0] + o[1] * i[1], 0.0);
+    return fr * fabs(i[2]) / PI * (A + B * t / fmax(fabs(o[2]), fabs(i[2])));
+}
+
+static double dot3(const double *a, const double *b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+/* wo as the kernel gets it (float), normalised in double */
+static void wo_double(const float *wo, double *o)
+{
+    double n = sqrt((double)wo[0] * wo[0] + (double)wo[1] * wo[1] + (double)wo[2] * wo[2]);
+    for (int i = 0; i < 3; i++) o[i] = wo[i] / n;
+}
+
+/* ---------------------------------------------------------------- the grid */
+
+typedef struct {
+    double axis[3], u[3], v[3], lo, hi;
+    double mu[NMU + 1], ph[NPHI + 1];
+} grid_t;
+
+static void grid_frame(grid_t *g, const double a[3])
+{
+    double n = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+    for (int i = 0; i < 3; i++) g->axis[i] = a[i] / n;
+    double t[3] = {fabs(g->axis[0]) < 0.9 ? 1.0 : 0.0, fabs(g->axis[0]) < 0.9 ? 0.0 : 1.0, 0.0};
+    double d = t[0] * g->axis[0] + t[1] * g->axis[1] + t[2] * g->axis[2], un = 0;
+    for (int i = 0; i < 3; i++) g->u[i] = t[i] - d * g->axis[i], un += g->u[i] * g->u[i];
+    for (int i = 0; i < 3; i++) g->u[i] /= sqrt(un);
+    const double *x = g->axis, *y = g->u;
+    g->v[0] = x[1] * y[2] - x[2] * y[1], g->v[1] = x[2] * y[0] - x[0] * y[2], g->v[2] = x[0] * y[1] - x[1] * y[0];
+}
+
+static void grid_coords(const grid_t *g, const float *d, double *mu, double *phi)
+{
+    double x = d[0], y = d[1], z = d[2], n = sqrt(x * x + y * y + z * z);
+    x /= n, y /= n, z /= n;
+    double m = x * g->axis[0] + y * g->axis[1] + z * g->axis[2];
+    *mu = m > 1 ? 1 : m < -1 ? -1 : m;
+    double p = atan2(x * g->v[0] + y * g->v[1] + z * g->v[2], x * g->u[0] + y * g->u[1] + z * g->u[2]);
+    *phi = p < 0 ? p + 2 * PI : p;
+}
+
+static void grid_dir(const grid_t *g, double mu, double phi, double d[3])
+{
+    double s = sqrt(fmax(0.0, 1 - mu * mu)), c = cos(phi), sn = sin(phi);
+    for (int i = 0; i < 3; i++) d[i] = mu * g->axis[i] + s * (c * g->u[i] + sn * g->v[i]);
+}
+
+static int find_bin(const double *edges, int n, double x)
+{
+    int lo = 0, hi = n;
+    while (hi - lo > 1) {
+        int mid = (lo + hi) / 2;
+        if (x >= edges[mid]) lo = mid;
+        else hi = mid;
+    }
+    return lo;
+}
+
+/* The bin of a direction, -1 outside the grid's mu range. */
+static int cell_of(const grid_t *g, const float *d)
+{
+    double mu, phi;
+    grid_coords(g, d, &mu, &phi);
+    if (mu < g->lo - 1e-6 || mu > g->hi + 1e-6) return -1;
+    mu = fmin(fmax(mu, g->lo), g->hi);
+    int i = find_bin(g->mu, NMU, mu), j = find_bin(g->ph, NPHI, phi);
+    return i * NPHI + j;
+}
+
+/* The fraction of the (sorted) pilot values mu below the direction's: about uniform on
+ * 0 .. 1 under the sampler, whatever the lobe's shape. */
+static double skew_c(const grid_t *g, const double *pmu, int n, const float *d)
+{
+    double mu, phi;
+    grid_coords(g, d, &mu, &phi);
+    int lo = 0, hi = n;
+    while (lo < hi) {
+        int mid = (lo + hi) / 2;
+        if (pmu[mid] < mu) lo = mid + 1;
+        else hi = mid;
+    }
+    return n > 0 ? (double)lo / n : 0.5;
+}
+
+typedef struct {
+    double x, w;
+} xw;
+
+static int xw_cmp(const void *a, const void *b)
+{
+    double d = ((const xw *)a)->x - ((const xw *)b)->x;
+    return d < 0 ? -1 : d > 0;
+}
+
+/* Breakpoints on [lo, hi] at the quantiles of (1 - MIX) uniform + MIX the weighted pilot
+ * values (as test_ms_models). */
+static void breakpoints(xw *v, int n, double lo, double hi, int nb, double *edges)
+{
+    double tot = 0;
+    for (int i = 0; i < n; i++) tot += v[i].w;
+    qsort(v, (size_t)n, sizeof *v, xw_cmp);
+    double *cum = malloc(((size_t)n + 1) * sizeof *cum);
+    cum[0] = 0;
+    for (int i = 0; i < n; i++) cum[i + 1] = cum[i] + v[i].w;
+    const double mix = tot > 0 ? MIX : 0;
+    edges[0] = lo, edges[nb] = hi;
+    for (int k = 1; k < nb; k++) {
+        double target = (double)k / nb, a = lo, b = hi;
+        for (int it = 0; it < 60; it++) {
+            double x = 0.5 * (a + b);
+            int l = 0, r = n;
+            while (l < r) {
+                int m = (l + r) / 2;
+                if (v[m].x < x) l = m + 1;
+                else r = m;
+            }
+            double gg = (1 - mix) * (x - lo) / (hi - lo) + (tot > 0 ? mix * cum[l] / tot : 0);
+            if (gg < target) a = x;
+            else b = x;
+        }
+        edges[k] = 0.5 * (a + b);
+    }
+    free(cum);
+}
+
+static int dbl_cmp(const void *a, const void *b)
+{
+    double d = *(const double *)a - *(const double *)b;
+    return d < 0 ? -1 : d > 0;
+}
+
+/* Moves the interior edge nearest to x onto it (where x is inside the range). */
+static void force_edge(double *edges, int nb, double x)
+{
+    if (!(x > edges[0] + 1e-3 && x < edges[nb] - 1e-3)) return;
+    int k = 1;
+    for (int i = 2; i < nb; i++)
+        if (fabs(edges[i] - x) < fabs(edges[k] - x)) k = i;
+    edges[k] = x;
+    qsort(edges + 1, (size_t)nb - 1, sizeof *edges, dbl_cmp);
+}
+
+typedef struct {
+    model_t m;
+    double axis[3];
+    double lo;          /* -1: the sphere; 0: the hemisphere about the axis */
+    int nfm, nfp;       /* forced edges in mu and phi */
+    double fmu[2], fph[2];
+    int reps;           /* normals per item of the stochastic evaluation */
+    double integral;    /* what the evaluation integrates to (1; Oren-Nayar: its albedo) */
+    double int_tol;     /* allowed |integral - that| */
+} gof_case;
+
+static void grid_make(grid_t *g, const gof_case *gc, const float *s, int n)
+{
+    grid_frame(g, gc->axis);
+    g->lo = gc->lo, g->hi = 1;
+    xw *v = malloc((size_t)n * sizeof *v);
+    int k = 0;
+    for (int i = 0; i < n; i++) {
+        double mu, phi;
+        grid_coords(g, s + 4 * i, &mu, &phi);
+        if (s[4 * i + 3] > 0 && mu >= g->lo) v[k].x = mu, v[k++].w = s[4 * i + 3];
+    }
+    breakpoints(v, k, g->lo, g->hi, NMU, g->mu);
+    k = 0;
+    for (int i = 0; i < n; i++) {
+        double mu, phi;
+        grid_coords(g, s + 4 * i, &mu, &phi);
+        if (s[4 * i + 3] > 0 && mu >= g->lo) v[k].x = phi, v[k++].w = s[4 * i + 3];
+    }
+    breakpoints(v, k, 0.0, 2 * PI, NPHI, g->ph);
+    for (int i = 0; i < gc->nfm; i++) force_edge(g->mu, NMU, gc->fmu[i]);
+    for (int i = 0; i < gc->nfp; i++) force_edge(g->ph, NPHI, gc->fph[i]);
+    free(v);
+}
+
+/* ---------------------------------------------------------------- expected counts */
+
+typedef struct {
+    int c, level;
+    double m0, m1, p0, p1;
+} rect_t;
+
+static int rect_nodes(const grid_t *g, double m0, double m1, double p0, double p1, int q, float *d, double *w)
+{
+    static double gx[16], gw[16];
+    static int gq = 0;
+    if (gq != q) gauss_legendre(q, gx, gw), gq = q;
+    int n = 0;
+    for (int a = 0; a < q; a++)
+        for (int b = 0; b < q; b++, n++) {
+            double mu = 0.5 * (m0 + m1) + 0.5 * (m1 - m0) * gx[a], phi = 0.5 * (p0 + p1) + 0.5 * (p1 - p0) * gx[b], x[3];
+            grid_dir(g, mu, phi, x);
+            d[4 * n] = (float)x[0], d[4 * n + 1] = (float)x[1], d[4 * n + 2] = (float)x[2], d[4 * n + 3] = 0;
+            w[n] = 0.25 * (m1 - m0) * (p1 - p0) * gw[a] * gw[b];
+        }
+    return n;
+}
+
+/* The deterministic evaluation (harness_eval's value) integrated over every bin,
+ * adaptively: a rectangle's QA x QA rule against its four quarters', accepted when they
+ * agree to 2 % of the bin's sampling sigma (sqrt(rg N I) / N, scaled by the square root of
+ * the rectangle's share of the bin) or to 1e-6 relative (float), else the quarters are
+ * refined, down to MAX_LEVEL. I[c] += the quarters' sum, IQ[c] += |difference| (the
+ * error estimate; conservative, it is the coarser rule's). Probability units. */
+static void integrate_bins(const model_t *m, const grid_t *g, double N, double rg, double *I, double *IQ)
+{
+    const int nq = QA * QA, per = 5 * nq;
+    int np = NCELL;
+    rect_t *pend = malloc((size_t)np * sizeof *pend);
+    double sig[NCELL];
+    for (int c = 0; c < NCELL; c++) {
+        int i = c / NPHI, j = c % NPHI;
+        rect_t r = {c, 0, g->mu[i], g->mu[i + 1], g->ph[j], g->ph[j + 1]};
+        pend[c] = r, sig[c] = -1, I[c] = IQ[c] = 0;
+    }
+    while (np > 0) {
+        float *dirs = malloc((size_t)np * per * 16), *fp = malloc((size_t)np * per * 8);
+        double *wt = malloc((size_t)np * per * sizeof *wt);
+        for (int r = 0; r < np; r++) {
+            const rect_t *x = &pend[r];
+            double mm = 0.5 * (x->m0 + x->m1), pm = 0.5 * (x->p0 + x->p1);
+            const double box[5][4] = {{x->m0, x->m1, x->p0, x->p1}, {x->m0, mm, x->p0, pm}, {mm, x->m1, x->p0, pm},
+                                      {x->m0, mm, pm, x->p1}, {mm, x->m1, pm, x->p1}};
+            for (int b = 0; b < 5; b++) {
+                size_t o = (size_t)r * per + (size_t)b * nq;
+                rect_nodes(g, box[b][0], box[b][1], box[b][2], box[b][3], QA, dirs + 4 * o, wt + o);
+            }
+        }
+        k_eval(m, m->wo, dirs, (size_t)np * per, fp);
+        for (int r = 0; r < np; r++)
+            if (sig[pend[r].c] < 0) {
+                double v = 0;
+                for (int k = 0; k < nq; k++) v += wt[(size_t)r * per + k] * fp[2 * ((size_t)r * per + k)];
+                sig[pend[r].c] = sqrt(rg * fmax(N * v, 1.0)) / N;
+            }
+        int nn = 0;
+        rect_t *next = malloc((size_t)np * 4 * sizeof *next);
+        for (int r = 0; r < np; r++) {
+            const rect_t *x = &pend[r];
+            const int i = x->c / NPHI, j = x->c % NPHI;
+            double share = (x->m1 - x->m0) * (x->p1 - x->p0) / ((g->mu[i + 1] - g->mu[i]) * (g->ph[j + 1] - g->ph[j]));
+            double ip = 0, sum = 0;
+            int bad = 0;
+            for (int b = 0; b < 5; b++)
+                for (int k = 0; k < nq; k++) {
+                    size_t q = (size_t)r * per + (size_t)b * nq + k;
+                    double v = wt[q] * fp[2 * q];
+                    if (!isfinite(v)) v = 1e30, bad = 1; /* a non-finite value fails the fit, loudly */
+                    if (b) sum += v;
+                    else ip += v;
+                }
+            double diff = fabs(sum - ip);
+            /* accepted: converged, at the float floor, at the deepest level, non-finite
+             * (refining would not help), or when the refinement has grown past what memory
+             * allows (a broken evaluation: the fit fails anyway) */
+            if (diff <= 0.02 * sig[x->c] * sqrt(share) || diff <= 1e-6 * fabs(sum) || x->level >= MAX_LEVEL || bad ||
+                np > 200000) {
+                I[x->c] += sum, IQ[x->c] += diff;
+                continue;
+            }
+            double mm = 0.5 * (x->m0 + x->m1), pm = 0.5 * (x->p0 + x->p1);
+            rect_t q0 = {x->c, x->level + 1, x->m0, mm, x->p0, pm}, q1 = {x->c, x->level + 1, mm, x->m1, x->p0, pm};
+            rect_t q2 = {x->c, x->level + 1, x->m0, mm, pm, x->p1}, q3 = {x->c, x->level + 1, mm, x->m1, pm, x->p1};
+            next[nn++] = q0, next[nn++] = q1, next[nn++] = q2, next[nn++] = q3;
+        }
+        free(dirs), free(fp), free(wt), free(pend);
+        pend = next, np = nn;
+    }
+    free(pend);
+}
+
+/* The stochastic evaluation integrated over every bin: QM x QM Gauss nodes per bin, each
+ * node's value the mean of MC_K independent items; I[c] and its variance VI[c] (the
+ * nodes are independent: every work-item has its own random stream). */
+static void mc_bins(const model_t *m, const grid_t *g, int reps, double *I, double *VI)
+{
+    const int nq = QM * QM;
+    const size_t n = (size_t)NCELL * nq;
+    float *dirs = malloc(n * 16);
+    double *wt = malloc(n * sizeof *wt), *mean = malloc(n * sizeof *mean), *var = malloc(n * sizeof *var);
+    for (int c = 0; c < NCELL; c++) {
+        int i = c / NPHI, j = c % NPHI;
+        rect_nodes(g, g->mu[i], g->mu[i + 1], g->ph[j], g->ph[j + 1], QM, dirs + 4 * (size_t)c * nq, wt + (size_t)c * nq);
+    }
+    mc_eval(m, m->wo, dirs, n, reps, mean, var);
+    for (int c = 0; c < NCELL; c++) {
+        I[c] = VI[c] = 0;
+        for (int k = 0; k < nq; k++) {
+            size_t q = (size_t)c * nq + k;
+            I[c] += wt[q] * mean[q], VI[c] += wt[q] * wt[q] * var[q];
+        }
+    }
+    free(dirs), free(wt), free(mean), free(var);
+}
+
+/* ---------------------------------------------------------------- goodness of fit */
+
+/* Pooled chi-square of observed O (sum w), S2 (sum w^2) against expected E with the
+ * evaluation's variance V (as test_ms_models): bins with fewer than MIN_EFF effective
+ * samples (E / rg) go into one. With shift (another observation), also lambda: the
+ * noncentrality of shift - O in the same metric. */
+static double chi2_of(int nc, const double *O, const double *S2, const double *E, const double *V, double rg,
+                      const double *shift, int *dof, double *lambda)
+{
+    double chi2 = 0, lam = 0, po = 0, pe = 0, ps = 0, pv = 0, pd = 0;
+    int k = 0;
+    for (int c = 0; c < nc; c++) {
+        double d = shift ? shift[c] - O[c] : 0;
+        if (E[c] / rg < MIN_EFF) {
+            po += O[c], pe += E[c], ps += S2[c], pv += V[c], pd += d;
+            continue;
+        }
+        double r = O[c] > 0 ? S2[c] / O[c] : rg, v = r * E[c] + V[c];
+        chi2 += (O[c] - E[c]) * (O[c] - E[c]) / v, lam += d * d / v;
+        k++;
+    }
+    if (pe / rg >= 1.0 || po > 0) {
+        double r = po > 0 ? ps / po : rg, v = r * fmax(pe, rg) + pv;
+        chi2 += (po - pe) * (po - pe) / v, lam += pd * pd / v;
+        k++;
+    }
+    *dof = k;
+    if (lambda) *lambda = lam;
+    return chi2;
+}
+
+static int coarse_of(int c) { return (c / NPHI / COARSE) * (NPHI / COARSE) + (c % NPHI) / COARSE; }
+
+static void gof(const gof_case *gc, int index)
+{
+    const model_t *m = &gc->m;
+    const double t_case = now(), N = NS;
+    float *smp = malloc((size_t)NS * 16);
+    grid_t g;
+    k_sample(m, 977u + 2 * (cl_uint)index, NPILOT, smp);
+    grid_make(&g, gc, smp, NPILOT);
+    /* the skew's coordinate: the pilot's distribution function in mu */
+    static double pmu[NPILOT];
+    int npm = 0;
+    for (int i = 0; i < NPILOT; i++) {
+        double mu, phi;
+        grid_coords(&g, smp + 4 * i, &mu, &phi);
+        if (smp[4 * i + 3] > 0) pmu[npm++] = mu;
+    }
+    qsort(pmu, (size_t)npm, sizeof *pmu, dbl_cmp);
+    k_sample(m, 12345u + 2 * (cl_uint)index, NS, smp);
+
+    /* the samples: checks, the skew's normalisation, then the tallies */
+    int bad_dir = 0, bad_w = 0, outside = 0, not_one = 0;
+    double sw = 0, sw2 = 0, sws = 0;
+    for (size_t i = 0; i < NS; i++) {
+        const float *s = smp + 4 * i;
+        double w = s[3], len = sqrt((double)s[0] * s[0] + (double)s[1] * s[1] + (double)s[2] * s[2]), c = 0;
+        if (!(fabs(len - 1) < 1e-4)) bad_dir++;
+        if (!(w >= 0 && w < 1e6)) {
+            bad_w++;
+            continue;
+        }
+        if (m->use_phase && w != 1) not_one++;
+        if (cell_of(&g, s) < 0) outside++;
+        c = skew_c(&g, pmu, npm, s);
+        sw += w, sw2 += w * w, sws += w * (1 + SKEW * (2 * c - 1));
+    }
+    CHECK(bad_dir == 0, "%s: %d samples are not unit vectors", m->name, bad_dir);
+    CHECK(bad_w == 0, "%s: %d weights negative or not finite", m->name, bad_w);
+    CHECK(not_one == 0, "%s: %d phase sample weights are not 1", m->name, not_one);
+    CHECK(outside == 0, "%s: %d samples outside the model's hemisphere", m->name, outside);
+    const double norm = sw / sws, rg = sw > 0 ? sw2 / sw : 1;
+    static double O[2][NCELL], S2[2][NCELL];
+    memset(O, 0, sizeof O), memset(S2, 0, sizeof S2);
+    for (size_t i = 0; i < NS; i++) {
+        const float *s = smp + 4 * i;
+        double w = s[3], c = 0;
+        if (!(w >= 0 && w < 1e6)) continue;
+        int cell = cell_of(&g, s);
+        if (cell < 0) continue;
+        c = skew_c(&g, pmu, npm, s);
+        double ws = w * (1 + SKEW * (2 * c - 1)) * norm;
+        O[0][cell] += w, S2[0][cell] += w * w, O[1][cell] += ws, S2[1][cell] += ws * ws;
+    }
+    /* the weight is f / pdf at every sample (deterministic evaluations) */
+    if (!m->mc) {
+        float *fp = malloc((size_t)NS * 8);
+        k_eval(m, m->wo, smp, NS, fp);
+        int bad = 0;
+        for (size_t i = 0; i < NS; i++) {
+            double ratio = fp[2 * i + 1] > 0 ? fp[2 * i] / fp[2 * i + 1] : 0, w = smp[4 * i + 3];
+            if (!(fabs(w - ratio) <= 1e-4 * ratio + 1e-6)) bad++;
+        }
+        CHECK(bad == 0, "%s: %d sample weights differ from f / pdf", m->name, bad);
+        free(fp);
+    }
+
+    /* expected */
+    static double I[NCELL], IQ[NCELL], E[NCELL], V[NCELL];
+    double itot = 0, iq = 0, ivar = 0;
+    if (m->mc) {
+        mc_bins(m, &g, gc->reps, I, IQ);
+        for (int c = 0; c < NCELL; c++) E[c] = N * I[c], V[c] = N * N * IQ[c], itot += I[c], ivar += IQ[c];
+    } else {
+        integrate_bins(m, &g, N, rg, I, IQ);
+        for (int c = 0; c < NCELL; c++) {
+            E[c] = N * I[c], V[c] = N * N * IQ[c] * IQ[c] + 1e-12 * E[c] * E[c];
+            itot += I[c], iq += IQ[c];
+        }
+    }
+    /* normalisation */
+    if (m->mc)
+        CHECK(fabs(itot - gc->integral) <= gc->int_tol && sqrt(ivar) <= 0.25 * gc->int_tol,
+              "%s: the evaluation integrates to %.6f +- %.2g over the sphere, not %.6f (allowed %.2g)", m->name, itot,
+              sqrt(ivar), gc->integral, gc->int_tol);
+    else
+        CHECK(fabs(itot - gc->integral) <= gc->int_tol, "%s: the evaluation integrates to %.8f (quadrature error <= %.2g),"
+              " not %.8f (allowed %.2g)", m->name, itot, iq, gc->integral, gc->int_tol);
+
+    /* coarse bins: sums of blocks (quadrature errors add with unknown signs) */
+    static double OC[2][NCOARSE], SC[2][NCOARSE], EC[NCOARSE], VC[NCOARSE], QC[NCOARSE];
+    memset(OC, 0, sizeof OC), memset(SC, 0, sizeof SC), memset(EC, 0, sizeof EC), memset(VC, 0, sizeof VC);
+    memset(QC, 0, sizeof QC);
+    for (int c = 0; c < NCELL; c++) {
+        int k = coarse_of(c);
+        for (int s = 0; s < 2; s++) OC[s][k] += O[s][c], SC[s][k] += S2[s][c];
+        EC[k] += E[c];
+        if (m->mc) VC[k] += V[c];
+        else QC[k] += N * IQ[c];
+    }
+    for (int k = 0; k < NCOARSE; k++)
+        if (!m->mc) VC[k] = QC[k] * QC[k] + 1e-12 * EC[k] * EC[k];
+    const int fixed = m->use_phase; /* every weight 1: the counts sum to N */
+    double chi[2], chic[2], lam_c = 0, pf[2], pc[2], pz[2] = {1, 1}, z[2] = {0, 0};
+    int dof[2], dofc[2];
+    for (int s = 0; s < 2; s++) {
+        chi[s] = chi2_of(NCELL, O[s], S2[s], E, V, rg, NULL, &dof[s], NULL);
+        chic[s] = chi2_of(NCOARSE, OC[s], SC[s], EC, VC, rg, s ? NULL : OC[1], &dofc[s], s ? NULL : &lam_c);
+        dof[s] -= fixed, dofc[s] -= fixed;
+        pf[s] = chi2_p(chi[s], dof[s]), pc[s] = chi2_p(chic[s], dofc[s]);
+    }
+    char tn[200];
+    snprintf(tn, sizeof tn, "%s: chi2 (%d dof)", m->name, dof[0]);
+    record(tn, pf[0]);
+    snprintf(tn, sizeof tn, "%s: coarse chi2 (%d dof)", m->name, dofc[0]);
+    record(tn, pc[0]);
+    if (!m->use_phase) {
+        /* the total: the mean weight is the albedo */
+        double et = N * itot, var_e = (N * iq) * (N * iq) + 1e-12 * et * et;
+        for (int s = 0; s < 2; s++) {
+            double tw = 0, tw2 = 0;
+            for (int c = 0; c < NCELL; c++) tw += O[s][c], tw2 += S2[s][c];
+            double var = fmax(tw2 - tw * tw / N, 0.0) + var_e;
+            z[s] = (tw - et) / sqrt(var), pz[s] = erfc(fabs(z[s]) / sqrt(2.0));
+        }
+        snprintf(tn, sizeof tn, "%s: total", m->name);
+        record(tn, pz[0]);
+    }
+    double ps = fmin(fmin(pf[1], pc[1]), pz[1]);
+    if (n_skews < 128) {
+        snprintf(skews[n_skews].name, sizeof skews[n_skews].name, "%s", m->name);
+        skews[n_skews].p = ps, skews[n_skews].lambda = lam_c, skews[n_skews++].required = lam_c >= 100;
+    }
+    printf("%-36s chi2 %6.1f/%3d p=%.3f coarse %5.1f/%2d p=%.3f | integral %.7f (%s %.1e) | skewed p %.1e (lambda %.0f)"
+           " | %.2f s\n",
+           m->name, chi[0], dof[0], pf[0], chic[0], dofc[0], pc[0], itot, m->mc ? "sigma" : "quad", m->mc ? sqrt(ivar) : iq,
+           ps, lam_c, now() - t_case);
+    if (!m->use_phase) printf("%36s total z = %+.2f (mean weight %.6f, albedo %.6f)\n", "", z[0], sw / N, gc->integral);
+    free(smp);
+}
+
+/* ---------------------------------------------------------------- section 1 + 2: the fits */
+
+static int n_case = 0;
+
+static void fits_hg2(void)
+{
+    const double p[][3] = {{0.9, -0.5, 0.3}, {0.0, 0.95, 0.5}, {-0.95, 0.95, 1.0}}, wo[3] = {0.3, -0.2, 0.9327379};
+    for (int i = 0; i < 3; i++) {
+        gof_case gc = {.m = hg2_model(p[i][0], p[i][1], p[i][2], wo), .lo = -1, .integral = 1, .int_tol = 1e-4};
+        for (int k = 0; k < 3; k++) gc.axis[k] = -wo[k];
+        gof(&gc, n_case++);
+    }
+}
+
+static void fits_rayleigh(void)
+{
+    const double rho[] = {-1, 0, 0.5, 1}, wo[3] = {-0.48, 0.6, 0.64};
+    for (int i = 0; i < 4; i++) {
+        gof_case gc = {.m = rayleigh_model(rho[i], wo), .lo = -1, .integral = 1, .int_tol = 1e-4};
+        for (int k = 0; k < 3; k++) gc.axis[k] = -wo[k];
+        gof(&gc, n_case++);
+    }
+}
+
+static void fits_sggx(int diffuse)
+{
+    const double ratio[] = {0.1, 1, 10}, th[] = {0, 60, 89};
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) {
+            gof_case gc = {.m = sggx_model(ratio[i], diffuse, th[j]), .axis = {0, 0, 1}, .lo = -1, .nfm = 1,
+                           .fmu = {0.0}, .reps = 2000, .integral = 1, .int_tol = diffuse ? 1e-3 : 1e-4};
+            gof(&gc, n_case++);
+        }
+}
+
+/* The Oren-Nayar albedo, independently: the formula in double, Gauss-Legendre in theta_i
+ * (so that sin theta_i is smooth) and phi on panels split at its kinks (theta_i = theta_o,
+ * and the azimuths where wo'.wi' = 0), n nodes per panel side. With fw, also the same
+ * rule's nodes (float directions) and weights, for the kernel's integral. */
+static double oren_nayar_albedo(double fr, double s, const double o[3], int n, float *fd, double *fw)
+{
+    double gx[64], gw[64], to = acos(fmin(1.0, o[2]));
+    gauss_legendre(n, gx, gw);
+    const double tcut[] = {0, to, PI / 2}, pcut[] = {-PI / 2, PI / 2, 3 * PI / 2};
+    double sum = 0;
+    int k = 0;
+    for (int a = 0; a < 2; a++)
+        for (int b = 0; b < 2; b++) {
+            double t0 = tcut[a], t1 = tcut[a + 1], p0 = pcut[b], p1 = pcut[b + 1];
+            if (t1 <= t0 + 1e-12) continue;
+            for (int i = 0; i < n; i++)
+                for (int j = 0; j < n; j++, k++) {
+                    double t = 0.5 * (t0 + t1) + 0.5 * (t1 - t0) * gx[i], ph = 0.5 * (p0 + p1) + 0.5 * (p1 - p0) * gx[j];
+                    double d[3] = {sin(t) * cos(ph), sin(t) * sin(ph), cos(t)};
+                    double w = 0.25 * (t1 - t0) * (p1 - p0) * gw[i] * gw[j] * sin(t);
+                    sum += w * oren_nayar_ref(fr, s, o, d);
+                    if (fw) {
+                        for (int c = 0; c < 3; c++) fd[4 * k + c] = (float)d[c];
+                        fd[4 * k + 3] = 0, fw[k] = w;
+                    }
+                }
+        }
+    return fw ? k : sum;
+}
+
+static void fits_oren_nayar(void)
+{
+    const double sig[] = {0, 0.3, 0.8}, th[] = {0, 60, 85}, fr = 0.7;
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) {
+            model_t m = oren_nayar_model(fr, sig[i], th[j]);
+            double o[3];
+            wo_double(m.wo, o);
+            double alb = oren_nayar_albedo((float)fr, (float)sig[i], o, 48, NULL, NULL),
+                   alb2 = oren_nayar_albedo((float)fr, (float)sig[i], o, 24, NULL, NULL);
+            CHECK(fabs(alb - alb2) < 1e-10, "Oren-Nayar albedo quadrature: %.12f vs %.12f", alb, alb2);
+            gof_case gc = {.m = m, .axis = {0, 0, 1}, .lo = 0, .integral = alb, .int_tol = 2e-5 * alb};
+            gc.nfm = 1, gc.fmu[0] = o[2];
+            if (th[j] > 0) gc.nfp = 2, gc.fph[0] = PI / 2, gc.fph[1] = 3 * PI / 2;
+            gof(&gc, n_case++);
+        }
+    {
+        /* from below: the layer reflects on wo's side, whichever it is (the albedo is that
+         * of wo mirrored up) */
+        model_t m = oren_nayar_model(fr, 0.3, 120);
+        double o[3];
+        wo_double(m.wo, o);
+        o[2] = fabs(o[2]);
+        double alb = oren_nayar_albedo((float)fr, (float)0.3, o, 48, NULL, NULL);
+        gof_case gc = {.m = m, .axis = {0, 0, -1}, .lo = 0, .integral = alb, .int_tol = 2e-5 * alb, .nfm = 1,
+                       .fmu = {o[2]}, .nfp = 2, .fph = {PI / 2, 3 * PI / 2}};
+        gof(&gc, n_case++);
+    }
+    /* The published formula gains energy at grazing angles: albedo 1.005 at sigma 0.1, 80
+     * degrees (fR = 1); the kernel's values on the same rule integrate to the same. */
+    model_t m = oren_nayar_model(1.0, 0.1, 80);
+    double o[3];
+    wo_double(m.wo, o);
+    const int n = 48;
+    float *d = malloc(4 * n * n * 4 * sizeof *d), *fp = malloc(2 * n * n * 4 * sizeof *fp);
+    double *w = malloc(n * n * 4 * sizeof *w);
+    double alb = oren_nayar_albedo(1.0, (float)0.1, o, n, NULL, NULL);
+    int k = (int)oren_nayar_albedo(1.0, (float)0.1, o, n, d, w);
+    k_eval(&m, m.wo, d, (size_t)k, fp);
+    double kern = 0;
+    for (int i = 0; i < k; i++) kern += w[i] * fp[2 * i];
+    CHECK(alb > 1.004 && alb < 1.006, "Oren-Nayar albedo at sigma 0.1, 80 degrees: %.6f (published formula: ~1.005)",
+          alb);
+    CHECK(fabs(kern - alb) <= 2e-5 * alb, "Oren-Nayar kernel albedo at sigma 0.1, 80 degrees %.7f, formula %.7f", kern,
+          alb);
+    printf("Oren-Nayar sigma 0.1 at 80 degrees, fR 1: albedo %.6f (formula), %.6f (kernel): not energy conserving, as"
+           " published\n", alb, kern);
+    free(d), free(fp), free(w);
+}
+
+/* ---------------------------------------------------------------- section 3: limits */
+
+static void rand_dir(uint64_t *s, double d[3])
+{
+    for (;;) {
+        double v[3], n = 0;
+        for (int i = 0; i < 3; i++) {
+            *s = *s * 6364136223846793005ull + 1442695040888963407ull;
+            v[i] = 2.0 * ((*s >> 11) * 0x1.0p-53) - 1.0;
+            n += v[i] * v[i];
+        }
+        if (n > 1e-4 && n <= 1) {
+            for (int i = 0; i < 3; i++) d[i] = v[i] / sqrt(n);
+            return;
+        }
+    }
+}
+
+/* nd random float directions, and their double normalised copies */
+#define NLIM 4096
+static void rand_dirs(uint64_t seed, int nd, float *f, double (*d)[3])
+{
+    uint64_t s = seed;
+    for (int i = 0; i < nd; i++) {
+        double x[3];
+        rand_dir(&s, x);
+        for (int c = 0; c < 3; c++) f[4 * i + c] = (float)x[c];
+        f[4 * i + 3] = 0;
+        double n = 0;
+        for (int c = 0; c < 3; c++) n += (double)f[4 * i + c] * f[4 * i + c];
+        for (int c = 0; c < 3; c++) d[i][c] = f[4 * i + c] / sqrt(n);
+    }
+}
+
+
+/* The diffuse sphere's phase function, a the angle between wo and wi (both away from the
+ * vertex; a = 0 is straight back). */
+static double sphere_phase(double a) { return 2 / (3 * PI * PI) * (sin(a) + (PI - a) * cos(a)); }
+
+static void limits(void)
+{
+    static float f[4 * NLIM], fp[2 * NLIM], fq[2 * NLIM];
+    static double d[NLIM][3];
+    rand_dirs(7, NLIM, f, d);
+    const double wos[][3] = {{0, 0, 1}, {0.3, -0.2, 0.9327379}, {0.99, 0.1, -0.0995}};
+
+    /* HG2 with b = 0 is HG(g0), bit for bit: values and samples */
+    const double g0s[] = {0.9, -0.5, 0.999, -0.999, 0.0}, g1s[] = {-0.7, 0.95, -0.999, 0.999, 0.5};
+    int neq = 0, nsame = 0;
+    for (int i = 0; i < 5; i++) {
+        model_t a = phase_model("HG", LSQT_PHASE_HG, g0s[i], 0, 0, wos[i % 3]);
+        model_t b = phase_model("HG2 b=0", LSQT_PHASE_HG2, g0s[i], g1s[i], 0, wos[i % 3]);
+        k_eval(&a, a.wo, f, NLIM, fp);
+        k_eval(&b, b.wo, f, NLIM, fq);
+        for (int k = 0; k < 2 * NLIM; k++) neq += fp[k] != fq[k];
+        enum { NSAMP = 20000 };
+        static float sa[4 * NSAMP], sb[4 * NSAMP];
+        k_sample(&a, 99u + (cl_uint)i, NSAMP, sa);
+        k_sample(&b, 99u + (cl_uint)i, NSAMP, sb);
+        for (int k = 0; k < 4 * NSAMP; k++) nsame += sa[k] != sb[k];
+    }
+    CHECK(neq == 0, "HG2 with b = 0: %d values differ from HG(g0)", neq);
+    CHECK(nsame == 0, "HG2 with b = 0: %d sample coordinates differ from HG(g0)'s", nsame);
+
+    /* Rayleigh: rho = 1 isotropic, rho = 0 is 3 / (16 pi) (1 + cos^2) */
+    double worst_iso = 0, worst_r0 = 0;
+    for (int w = 0; w < 3; w++) {
+        model_t r1 = rayleigh_model(1, wos[w]), r0 = rayleigh_model(0, wos[w]);
+        double o[3];
+        wo_double(r1.wo, o);
+        k_eval(&r1, r1.wo, f, NLIM, fp);
+        k_eval(&r0, r0.wo, f, NLIM, fq);
+        for (int k = 0; k < NLIM; k++) {
+            double c = dot3(o, d[k]), ref = 3 / (16 * PI) * (1 + c * c);
+            worst_iso = fmax(worst_iso, fabs(fp[2 * k] * 4 * PI - 1));
+            worst_r0 = fmax(worst_r0, fabs(fq[2 * k] / ref - 1));
+        }
+    }
+    CHECK(worst_iso <= 1e-6, "Rayleigh rho = 1: largest relative departure from 1/(4 pi) %.3g", worst_iso);
+    CHECK(worst_r0 <= 1e-6, "Rayleigh rho = 0: largest relative departure from 3/(16 pi)(1 + cos^2) %.3g", worst_r0);
+
+    /* SGGX specular with Apara = Aperp (any common scale) is isotropic */
+    double worst_sp = 0;
+    const double scale[] = {1.0, 0.25};
+    for (int w = 0; w < 3; w++)
+        for (int s = 0; s < 2; s++) {
+            model_t m = phase_model("SGGX", LSQT_PHASE_SGGX, scale[s], scale[s], 0, wos[w]);
+            k_eval(&m, m.wo, f, NLIM, fp);
+            for (int k = 0; k < NLIM; k++) worst_sp = fmax(worst_sp, fabs(fp[2 * k] * 4 * PI - 1));
+        }
+    CHECK(worst_sp <= 1e-5, "SGGX specular Apara = Aperp: largest relative departure from 1/(4 pi) %.3g", worst_sp);
+
+    /* Oren-Nayar with sigma = 0 is Lambertian */
+    double worst_on = 0;
+    int wrong_side = 0;
+    for (int w = 0; w < 3; w++) {
+        model_t m = oren_nayar_model(0.7, 0, 0);
+        for (int c = 0; c < 3; c++) m.wo[c] = (float)wos[w][c];
+        k_eval(&m, m.wo, f, NLIM, fp);
+        for (int k = 0; k < NLIM; k++) {
+            if (m.wo[2] * d[k][2] > 0) worst_on = fmax(worst_on, fabs(fp[2 * k] / (0.7f * fabs(d[k][2]) / PI) - 1));
+            else wrong_side += fp[2 * k] != 0;
+        }
+    }
+    CHECK(worst_on <= 1e-6, "Oren-Nayar sigma = 0: largest relative departure from fR |cos| / pi %.3g", worst_on);
+    CHECK(wrong_side == 0, "Oren-Nayar: %d values on the side away from wo are not 0", wrong_side);
+
+    /* SGGX diffuse with Apara = Aperp is the diffuse sphere. Its closed form integrates to 1
+     * (Gauss-Legendre in cos a), then the stochastic evaluation at angles a. */
+    double gx[64], gw[64], one = 0;
+    gauss_legendre(64, gx, gw);
+    for (int i = 0; i < 64; i++) one += 2 * PI * gw[i] * sphere_phase(acos(gx[i]));
+    CHECK(fabs(one - 1) < 1e-8, "the diffuse sphere's phase function integrates to %.12f", one);
+    const double angles[] = {0, 5, 20, 45, 70, 90, 110, 135, 160, 175, 180};
+    const int na = 11;
+    float dirs[4 * 2 * 11];
+    double mean[22], var[22], zmax = 0, relmax = 0;
+    int nz = 0;
+    for (int w = 0; w < 2; w++) {
+        model_t m = phase_model("SGGX diffuse Apara = Aperp", LSQT_PHASE_SGGX, 1, 1, 1, wos[w + 1]);
+        m.mc = 1;
+        double o[3], u[3], t[3] = {0, 0, 1}, un = 0;
+        wo_double(m.wo, o);
+        /* u: normal to o */
+        double dd = dot3(t, o);
+        for (int c = 0; c < 3; c++) u[c] = t[c] - dd * o[c], un += u[c] * u[c];
+        for (int c = 0; c < 3; c++) u[c] /= sqrt(un);
+        for (int i = 0; i < na; i++) {
+            double a = angles[i] * PI / 180;
+            for (int c = 0; c < 3; c++) dirs[4 * (w * na + i) + c] = (float)(cos(a) * o[c] + sin(a) * u[c]);
+            dirs[4 * (w * na + i) + 3] = 0;
+        }
+        /* 64 items per value: the variance estimate has 63 dof, so z is close to normal */
+        mc_eval_k(&m, m.wo, dirs + 4 * w * na, na, 64, 5000, mean + w * na, var + w * na);
+        for (int i = 0; i < na; i++) {
+            const float *x = dirs + 4 * (w * na + i);
+            double xd[3] = {x[0], x[1], x[2]}, n = sqrt(dot3(xd, xd));
+            double a = acos(fmin(1.0, fmax(-1.0, dot3(xd, o) / n))), ref = sphere_phase(a), s = sqrt(var[w * na + i]);
+            if (ref < 1e-12 && mean[w * na + i] == 0) continue; /* a = 180: no normal sees both, exactly 0 */
+            double zz = (mean[w * na + i] - ref) / s;
+            CHECK(s > 0 && fabs(zz) < 4, "SGGX diffuse Apara = Aperp at a = %g degrees: %.6f +- %.2g, sphere %.6f, z = %.2f",
+                  angles[i], mean[w * na + i], s, ref, zz);
+            zmax = fmax(zmax, fabs(zz)), nz++;
+            if (ref > 0.01) relmax = fmax(relmax, s / ref);
+        }
+    }
+    CHECK(relmax < 0.01, "SGGX diffuse sphere: the evaluation's relative sigma %.3g is too large to judge", relmax);
+
+    /* SGGX specular next to the exact forward direction wi = -wo (h = wo + wi vanishes):
+     * finite and below max D / (4 sigma(wo)) */
+    const double ratio[] = {0.1, 10, 1};
+    int n_bad = 0, n_all = 0, n_exact = 0;
+    double worst = 0, wv = 0, wb = 0, exact_v = 0;
+    float wu[3] = {0, 0, 0}, ww[3] = {0, 0, 0};
+    for (int r = 0; r < 3; r++)
+        for (int w = 0; w < 3; w++) {
+            double ap = ratio[r] <= 1 ? ratio[r] : 1, an = ratio[r] <= 1 ? 1 : 1 / ratio[r];
+            model_t m = phase_model("SGGX", LSQT_PHASE_SGGX, ap * ap, an * an, 0, wos[w]);
+            double o[3];
+            wo_double(m.wo, o);
+            double sxx = m.M.pp[0], szz = m.M.pp[1];
+            double dmax = fmax(sxx, szz) * fmax(sxx, szz) / (PI * sxx * sqrt(szz));
+            double bound = dmax / (4 * sqrt(sxx * (o[0] * o[0] + o[1] * o[1]) + szz * o[2] * o[2]));
+            float u[4 * 49];
+            int n = 0;
+            for (int c = 0; c < 3; c++) u[c] = -m.wo[c];
+            u[3] = 0, n = 1;
+            double a0[3] = {-o[1], o[0], 0}, an0 = sqrt(a0[0] * a0[0] + a0[1] * a0[1]);
+            if (an0 < 1e-6) a0[0] = 1, a0[1] = 0, an0 = 1;
+            for (int c = 0; c < 3; c++) a0[c] /= an0;
+            double b0[3] = {o[1] * a0[2] - o[2] * a0[1], o[2] * a0[0] - o[0] * a0[2], o[0] * a0[1] - o[1] * a0[0]};
+            for (int e = 0; e < 6; e++)
+                for (int j = 0; j < 8; j++, n++) {
+                    double t = pow(10.0, -7.0 + e), ph = 2 * PI * j / 8, q[3], len = 0;
+                    for (int c = 0; c < 3; c++) q[c] = -o[c] + t * (cos(ph) * a0[c] + sin(ph) * b0[c]), len += q[c] * q[c];
+                    for (int c = 0; c < 3; c++) u[4 * n + c] = (float)(q[c] / sqrt(len));
+                    u[4 * n + 3] = 0;
+                }
+            float out[2 * 49];
+            k_eval(&m, m.wo, u, (size_t)n, out);
+            /* u[0] = -wo exactly: h = 0, the value is undefined (its limit depends on the
+             * way wi approaches -wo); only reported */
+            if (!(isfinite(out[0]) && out[0] <= 1.001 * bound)) n_exact++, exact_v = out[0];
+            for (int i = 1; i < n; i++) {
+                n_all++;
+                double rr = out[2 * i] / bound;
+                if (!(rr <= 1.001)) {
+                    n_bad++;
+                    if (!(rr <= worst)) {
+                        worst = isfinite(rr) ? rr : 1e300, wv = out[2 * i], wb = bound;
+                        for (int c = 0; c < 3; c++) wu[c] = u[4 * i + c], ww[c] = m.wo[c];
+                    }
+                }
+            }
+        }
+    CHECK(n_bad == 0,
+          "SGGX specular next to wi = -wo: %d of %d values not finite or over max D / (4 sigma(wo)), worst %.6g against"
+          " %.6g at wo = (%.9g, %.9g, %.9g), wi = (%.9g, %.9g, %.9g)",
+          n_bad, n_all, wv, wb, ww[0], ww[1], ww[2], wu[0], wu[1], wu[2]);
+    if (n_exact)
+        printf("NOTE: SGGX specular at wi = -wo exactly (h = wo + wi = 0): %d of 9 (wo, S) pairs give %g (not finite or"
+               " over the bound), e.g. wo = (0, 0, 1), wi = (0, 0, -1)\n", n_exact, exact_v);
+    printf("limits: HG2 b=0 = HG (%d values, samples bit for bit), Rayleigh rho=1 / rho=0 within %.2g / %.2g, SGGX"
+           " specular isotropic within %.2g, Oren-Nayar sigma=0 within %.2g, diffuse sphere: closed form integrates to"
+           " 1 %+.1e, %d values |z| <= %.2f; SGGX forward bound: %d of %d over\n",
+           2 * NLIM * 5, worst_iso, worst_r0, worst_sp, worst_on, one - 1, nz, zmax, n_bad, n_all);
+}
+
+/* ---------------------------------------------------------------- section 4: peaks */
+
+/* HG in double, the textbook form: (1 - g^2) / (4 pi (1 + g^2 - 2 g cos t)^1.5), cos t =
+ * -wo.wi */
+static double hg_ref(double g, double cost)
+{
+    double d = 1 + g * g - 2 * g * cost;
+    return (1 - g * g) / (4 * PI * d * sqrt(d));
+}
+
+/* P(q <= Q) for q = 1 - cos t (from the forward direction), HG(g): the CDF
+ * (1 - g^2) / (2 g) [1 / (1 - g) - 1 / sqrt((1 - g)^2 + 2 g Q)] without its cancellation */
+static double hg_cdf_q(double g, double Q)
+{
+    double a = 1 - g, b = sqrt(a * a + 2 * g * Q);
+    return (1 - g * g) * Q / (a * b * (a + b));
+}
+
+static void peaks(void)
+{
+    const float g9 = 0.999f;
+    typedef struct {
+        const char *name;
+        int kind;
+        double g0, g1, b;
+    } pk;
+    const pk cases[] = {{"HG g=0.999", LSQT_PHASE_HG, g9, 0, 0},
+                        {"HG g=-0.999", LSQT_PHASE_HG, -g9, 0, 0},
+                        {"HG2 (0.999, -0.999, 0.3)", LSQT_PHASE_HG2, g9, -g9, 0.3f}};
+    const double wos[][3] = {{0, 0, 1}, {1, 0, 0}, {0, 0, -1}};
+    const double ts[] = {0, 1e-4, 1e-3, 3e-3, 1e-2, 0.1, 1, 2, PI}, phs[] = {0, 1, 2.5, 4};
+    const int nt = 9;
+    double worst[9] = {0};
+    for (int c = 0; c < 3; c++)
+        for (int w = 0; w < 3; w++) {
+            model_t m = phase_model(cases[c].name, cases[c].kind, cases[c].g0, cases[c].g1, cases[c].b, wos[w]);
+            const double g0 = m.M.pp[0], g1 = m.M.pp[1], b = m.M.pp[2];
+            float dirs[4 * 2 * 9 * 4];
+            int n = 0;
+            for (int side = 0; side < 2; side++) {
+                /* about the forward direction -wo, then the backward one, wo */
+                double P[3], U[3] = {0, 0, 0}, V[3];
+                for (int k = 0; k < 3; k++) P[k] = side ? wos[w][k] : -wos[w][k];
+                U[fabs(P[0]) > 0.5 ? 1 : 0] = 1;
+                V[0] = P[1] * U[2] - P[2] * U[1], V[1] = P[2] * U[0] - P[0] * U[2], V[2] = P[0] * U[1] - P[1] * U[0];
+                for (int i = 0; i < nt; i++)
+                    for (int j = 0; j < 4; j++, n++)
+                        for (int k = 0; k < 4; k++)
+                            dirs[4 * n + k] = k == 3 ? 0.0f
+                                                     : (float)(cos(ts[i]) * P[k] +
+                                                               sin(ts[i]) * (cos(phs[j]) * U[k] + sin(phs[j]) * V[k]));
+            }
+            float out[2 * 2 * 9 * 4];
+            k_eval(&m, m.wo, dirs, (size_t)n, out);
+            double o[3];
+            wo_double(m.wo, o);
+            for (int q = 0; q < n; q++) {
+                double x[3] = {dirs[4 * q], dirs[4 * q + 1], dirs[4 * q + 2]}, nx = sqrt(dot3(x, x));
+                double cost = -dot3(o, x) / nx;
+                double ref = cases[c].kind == LSQT_PHASE_HG ? hg_ref(g0, cost)
+                                                            : (1 - b) * hg_ref(g0, cost) + b * hg_ref(g1, cost);
+                double rel = fabs(out[2 * q] / ref - 1);
+                int it = (q % (nt * 4)) / 4;
+                if (!(rel <= worst[it])) worst[it] = isfinite(rel) ? rel : 1e300;
+                CHECK(rel <= 1e-4, "%s, wo = (%g, %g, %g), %s peak, %g rad off: %.9g, double %.9g (rel %.2g)",
+                      m.name, o[0], o[1], o[2], q < nt * 4 ? "forward" : "backward", ts[it], out[2 * q], ref, rel);
+            }
+        }
+    printf("peaks, values against double: largest relative error at 0, 1e-4, 1e-3, 3e-3, 1e-2, 0.1, 1, 2, pi rad:");
+    for (int i = 0; i < nt; i++) printf(" %.1e", worst[i]);
+    printf("\n");
+
+    /* normalisation at the peaks: the kernel's values integrated over q = 1 - cos t about
+     * the forward axis (the value depends on q alone), Gauss-Legendre on panels in log q
+     * from 1e-14 (below which the rest is q p(0) < 1e-8) */
+    double gxn[16], gwn[16];
+    gauss_legendre(16, gxn, gwn);
+    for (int c = 0; c < 3; c++) {
+        const double wz[3] = {0, 0, 1};
+        model_t m = phase_model(cases[c].name, cases[c].kind, cases[c].g0, cases[c].g1, cases[c].b, wz);
+        enum { NPAN = 30 };
+        static float dq[4 * 2 * NPAN * 16], vq[2 * 2 * NPAN * 16];
+        double wq[2 * NPAN * 16];
+        int n = 0;
+        for (int h = 0; h < 2; h++)
+            for (int p = 0; p < NPAN; p++) {
+                double l0 = -14 + 14.0 * p / NPAN, l1 = -14 + 14.0 * (p + 1) / NPAN; /* log10 q, q up to 1 */
+                for (int i = 0; i < 16; i++, n++) {
+                    double l = 0.5 * (l0 + l1) + 0.5 * (l1 - l0) * gxn[i], q = pow(10.0, l);
+                    double st = sqrt(q * (2 - q)), ct = 1 - q; /* angle from the axis h ? +z : -z */
+                    dq[4 * n] = (float)st, dq[4 * n + 1] = 0, dq[4 * n + 2] = (float)(h ? ct : -ct), dq[4 * n + 3] = 0;
+                    wq[n] = 2 * PI * 0.5 * (l1 - l0) * gwn[i] * q * log(10.0);
+                }
+            }
+        k_eval(&m, m.wo, dq, (size_t)n, vq);
+        double tot = 0;
+        for (int i = 0; i < n; i++) tot += wq[i] * vq[2 * i];
+        CHECK(fabs(tot - 1) <= 1e-4, "%s: integrates to %.8f over the sphere", m.name, tot);
+        printf("%-28s integral over the sphere %.8f\n", m.name, tot);
+    }
+
+    /* the samplers: q = 1 - cos t about each peak axis, 4 bins per decade down to 1e-9 */
+    enum { NQ = 37 };
+    double qe[NQ + 1];
+    qe[0] = 0;
+    for (int k = 1; k <= NQ; k++) qe[k] = pow(10.0, -9.0 + 0.25 * (k - 1));
+    qe[NQ] = 1; /* the hemisphere's edge, q = 1 */
+    const double swo[][3] = {{0, 0, 1}, {0.48, -0.6, 0.64}};
+    float *s = malloc((size_t)NS * 16);
+    for (int c = 0; c < 3; c++)
+        for (int w = 0; w < 2; w++) {
+            model_t m = phase_model(cases[c].name, cases[c].kind, cases[c].g0, cases[c].g1, cases[c].b, swo[w]);
+            const double g0 = m.M.pp[0], g1 = m.M.pp[1], b = cases[c].kind == LSQT_PHASE_HG ? 0 : m.M.pp[2];
+            k_sample(&m, 4321u + 10 * (cl_uint)(c * 2 + w), NS, s);
+            double o[3];
+            wo_double(m.wo, o);
+            static double O[2 * NQ], E[2 * NQ], S2[2 * NQ], V[2 * NQ];
+            memset(O, 0, sizeof O), memset(V, 0, sizeof V);
+            double qmin = 1;
+            for (size_t i = 0; i < NS; i++) {
+                double x[3] = {s[4 * i], s[4 * i + 1], s[4 * i + 2]}, nx = sqrt(dot3(x, x)), df[3], db[3];
+                for (int k = 0; k < 3; k++) x[k] /= nx, df[k] = x[k] + o[k], db[k] = x[k] - o[k];
+                /* forward: 1 - cos t = |wi + wo|^2 / 2; backward: 1 + cos t = |wi - wo|^2 / 2 */
+                double qf = 0.5 * dot3(df, df), qb = 0.5 * dot3(db, db);
+                int h = qf <= 1 ? 0 : 1;
+                double q = h ? qb : qf;
+                qmin = fmin(qmin, q);
+                O[h * NQ + find_bin(qe, NQ, fmin(q, 1.0))] += 1;
+            }
+            double tot = 0;
+            for (int h = 0; h < 2; h++)
+                for (int k = 0; k < NQ; k++) {
+                    double e = 0;
+                    for (int l = 0; l < 2; l++) {
+                        double gl = l ? g1 : g0, wl = l ? b : 1 - b, gs = h ? -gl : gl;
+                        if (wl > 0) e += wl * (hg_cdf_q(gs, qe[k + 1]) - hg_cdf_q(gs, qe[k]));
+                    }
+                    E[h * NQ + k] = NS * e, tot += e;
+                }
+            memcpy(S2, O, sizeof O);
+            int dof;
+            double chi2 = chi2_of(2 * NQ, O, S2, E, V, 1.0, NULL, &dof, NULL);
+            dof -= 1;
+            double p = chi2_p(chi2, dof);
+            char tn[200];
+            snprintf(tn, sizeof tn, "%s sampler wo=(%g,%g,%g): q bins", m.name, swo[w][0], swo[w][1], swo[w][2]);
+            record(tn, p);
+            CHECK(fabs(tot - 1) < 1e-12, "%s: the CDF sums to %.15f", tn, tot);
+            printf("%-50s chi2 %6.1f/%2d p=%.3f, expected below q = 1e-9: %.0f, observed %.0f (smallest q %.2g)\n", tn,
+                   chi2, dof, p, E[0] + E[NQ], O[0] + O[NQ], qmin);
+        }
+    free(s);
+}
+
+/* ---------------------------------------------------------------- section 5: Rayleigh KS */
+
+static int cmp_double(const void *a, const void *b) { return dbl_cmp(a, b); }
+
+static void rayleigh_ks(void)
+{
+    const double rho[] = {-1, -0.5, 0, 0.5, 1}, wo[3] = {0.48, -0.6, 0.64};
+    const size_t n = 1000000;
+    float *s = malloc(n * 16);
+    double *u = malloc(n * sizeof *u);
+    for (int r = 0; r < 5; r++) {
+        model_t m = rayleigh_model(rho[r], wo);
+        const double gam = m.M.pp[0], a = 1 + 3 * gam, b = 1 - gam;
+        k_sample(&m, 777u + (cl_uint)r, n, s);
+        double o[3];
+        wo_double(m.wo, o);
+        for (size_t i = 0; i < n; i++) {
+            double x[3] = {s[4 * i], s[4 * i + 1], s[4 * i + 2]}, nx = sqrt(dot3(x, x));
+            double mu = -dot3(o, x) / nx;
+            mu = fmin(1.0, fmax(-1.0, mu));
+            u[i] = (a * (mu + 1) + b * (mu * mu * mu + 1) / 3) / (2 * a + 2 * b / 3);
+        }
+        qsort(u, n, sizeof *u, cmp_double);
+        double d = 0;
+        for (size_t i = 0; i < n; i++) d = fmax(d, fmax((i + 1.0) / n - u[i], u[i] - (double)i / n));
+        double p = ks_p(d, (double)n);
+        char tn[200];
+        snprintf(tn, sizeof tn, "Rayleigh rho=%g sampler: KS of the CDF at mu", rho[r]);
+        record(tn, p);
+        printf("%-50s D = %.5f (sqrt(n) D = %.3f) p = %.3f\n", tn, d, sqrt((double)n) * d, p);
+    }
+    free(s), free(u);
+}
+
+/* ---------------------------------------------------------------- section 6: reciprocity */
+
+static double sggx_sigma_d(const model_t *m, const double w[3])
+{
+    return sqrt(m->M.pp[0] * (w[0] * w[0] + w[1] * w[1]) + m->M.pp[1] * w[2] * w[2]);
+}
+
+static void reciprocity(void)
+{
+    enum { NP = 400 };
+    static float fa[4 * NP], fb[4 * NP], out_ab[2], out_ba[2];
+    static double a[NP][3], b[NP][3];
+    /* Oren-Nayar: pairs on one side (above, and below), f(a->b)/|cos b| = f(b->a)/|cos a| */
+    rand_dirs(11, NP, fa, a);
+    rand_dirs(12, NP, fb, b);
+    const double sig[] = {0.1, 0.3, 0.8};
+    double worst_on = 0;
+    int n_on = 0;
+    for (int si = 0; si < 3; si++) {
+        model_t m = oren_nayar_model(0.6, sig[si], 0);
+        for (int i = 0; i < 100; i++) {
+            float wa[3] = {fa[4 * i], fa[4 * i + 1], fa[4 * i + 2]}, wb[4] = {fb[4 * i], fb[4 * i + 1], fb[4 * i + 2], 0};
+            if (wa[2] * wb[2] < 0) wb[2] = -wb[2]; /* same side */
+            float wa4[4] = {wa[0], wa[1], wa[2], 0};
+            k_eval(&m, wa, wb, 1, out_ab);
+            k_eval(&m, wb, wa4, 1, out_ba);
+            double x = out_ab[0] / fabs(wb[2]), y = out_ba[0] / fabs(wa[2]), rel = fabs(x - y) / fmax(fabs(x), fabs(y));
+            CHECK(x > 0 && rel <= 1e-5, "Oren-Nayar sigma %g: f(a->b)/|cos b| = %.8g, f(b->a)/|cos a| = %.8g at a = (%.7f,"
+                  " %.7f, %.7f), b = (%.7f, %.7f, %.7f)", sig[si], x, y, wa[0], wa[1], wa[2], wb[0], wb[1], wb[2]);
+            worst_on = fmax(worst_on, rel), n_on++;
+        }
+    }
+    /* SGGX specular: sigma(a) p(a->b) = sigma(b) p(b->a) = D(h) / 4 */
+    const double ratio[] = {0.1, 1, 10};
+    double worst_sp = 0, asym[3] = {0, 0, 0};
+    int n_sp = 0;
+    for (int r = 0; r < 3; r++) {
+        const double zero[3] = {0, 0, 1};
+        double ap = ratio[r] <= 1 ? ratio[r] : 1, an = ratio[r] <= 1 ? 1 : 1 / ratio[r];
+        model_t m = phase_model("SGGX", LSQT_PHASE_SGGX, ap * ap, an * an, 0, zero);
+        for (int i = 0; i < 100; i++) {
+            float wa[3] = {fa[4 * i], fa[4 * i + 1], fa[4 * i + 2]}, wb[3] = {fb[4 * i], fb[4 * i + 1], fb[4 * i + 2]};
+            k_eval(&m, wa, fb + 4 * i, 1, out_ab);
+            k_eval(&m, wb, fa + 4 * i, 1, out_ba);
+            double x = sggx_sigma_d(&m, a[i]) * out_ab[0], y = sggx_sigma_d(&m, b[i]) * out_ba[0];
+            double rel = fabs(x - y) / fmax(fabs(x), fabs(y));
+            CHECK(x > 0 && rel <= 1e-5, "SGGX specular Apara/Aperp %g: sigma(a) p(a->b) = %.8g, sigma(b) p(b->a) = %.8g at"
+                  " a = (%.7f, %.7f, %.7f), b = (%.7f, %.7f, %.7f)", ratio[r], x, y, wa[0], wa[1], wa[2], wb[0], wb[1],
+                  wb[2]);
+            worst_sp = fmax(worst_sp, rel), n_sp++;
+            asym[r] = fmax(asym[r], fabs(out_ab[0] - out_ba[0]) / fmax(out_ab[0], out_ba[0]));
+        }
+    }
+    /* p itself is not symmetric unless sigma is constant */
+    CHECK(asym[0] > 0.1 && asym[2] > 0.1 && asym[1] < 1e-5,
+          "SGGX specular: p(a->b) vs p(b->a) differ by up to %.3g, %.3g, %.3g (ratios 0.1, 1, 10)", asym[0], asym[1],
+          asym[2]);
+    /* SGGX diffuse, stochastic: each value its own launch */
+    double zmax = 0, chi2 = 0;
+    int n_df = 0;
+    for (int r = 0; r < 3; r++) {
+        const double zero[3] = {0, 0, 1};
+        double ap = ratio[r] <= 1 ? ratio[r] : 1, an = ratio[r] <= 1 ? 1 : 1 / ratio[r];
+        model_t m = phase_model("SGGX diffuse", LSQT_PHASE_SGGX, ap * ap, an * an, 1, zero);
+        m.mc = 1;
+        for (int i = 0; i < 20; i++) {
+            float wa[3] = {fa[4 * i], fa[4 * i + 1], fa[4 * i + 2]}, wb[3] = {fb[4 * i], fb[4 * i + 1], fb[4 * i + 2]};
+            double mab, vab, mba, vba;
+            mc_eval_k(&m, wa, fb + 4 * i, 1, 64, 2500, &mab, &vab);
+            mc_eval_k(&m, wb, fa + 4 * i, 1, 64, 2500, &mba, &vba);
+            double sa = sggx_sigma_d(&m, a[i]), sb = sggx_sigma_d(&m, b[i]);
+            double x = sa * mab, y = sb * mba, s = sqrt(sa * sa * vab + sb * sb * vba), z = s > 0 ? (x - y) / s : 0;
+            if (x == 0 && y == 0) continue; /* no normal sees both (a flake distribution this sharp): 0 = 0 */
+            CHECK(s > 0 && fabs(z) < 4, "SGGX diffuse Apara/Aperp %g: sigma(a) p(a->b) = %.6g, sigma(b) p(b->a) = %.6g,"
+                  " z = %.2f at a = (%.7f, %.7f, %.7f), b = (%.7f, %.7f, %.7f)", ratio[r], x, y, z, wa[0], wa[1], wa[2],
+                  wb[0], wb[1], wb[2]);
+            zmax = fmax(zmax, fabs(z)), chi2 += z * z, n_df++;
+        }
+    }
+    double p = chi2_p(chi2, n_df);
+    record("SGGX diffuse reciprocity: sum z^2", p);
+    printf("reciprocity: Oren-Nayar %d pairs, worst rel %.2g; SGGX specular %d pairs (sigma-weighted), worst rel %.2g;"
+           " unweighted p(a->b)/p(b->a) asymmetry up to %.2g, %.2g, %.2g (ratios 0.1, 1, 10); SGGX diffuse %d pairs, "
+           "largest |z| %.2f, sum z^2 %.1f p=%.3f\n",
+           n_on, worst_on, n_sp, worst_sp, asym[0], asym[1], asym[2], n_df, zmax, chi2, p);
+}
+
+/* ---------------------------------------------------------------- section 7: stacks */
+
+/* NEE transmittance (lower hemisphere) minus the scattered transmission T - delta_T, per
+ * batch from the same paths (as nee_albedo_minus), with its batch-means error. */
+static lsqt_est nee_t_minus_scattered(const lsqt_state *st, int s)
+{
+    const size_t nw = (size_t)st->n_wi;
+    const double w = 4.0 * PI / st->n_wi, n = (double)st->paths;
+    double d[LSQT_BATCHES], total = 0;
+    for (int b = 0; b < LSQT_BATCHES; b++) {
+        const lsqt_u128 *nee = st->nee + ((size_t)s * LSQT_BATCHES + (size_t)b) * nw;
+        double a = 0;
+        for (size_t k = 0; k < nw; k++)
+            if (!(st->wi[((size_t)s * nw + k) * 4 + 2] > 0)) a += w * lsqt_u128_to_double(nee[k]);
+        const lsqt_u128 *sc = st->scalars + ((size_t)s * LSQT_BATCHES + (size_t)b) * LSQT_T_COUNT;
+        d[b] = (a - lsqt_u128_to_double(sc[LSQT_T_T]) + lsqt_u128_to_double(sc[LSQT_T_DELTA_T])) / LSQT_FIX_SCALE;
+        total += d[b];
+    }
+    lsqt_est e = {total / n, 0};
+    double ss = 0;
+    for (int b = 0; b < LSQT_BATCHES; b++) ss += nee_sqr(d[b] - (double)lsqt_batch_paths(st->paths, b) * e.mean);
+    e.err = sqrt(ss * LSQT_BATCHES / (LSQT_BATCHES - 1)) / n;
+    return e;
+}
+
+static double nee_t(const lsqt_state *st, int s)
+{
+    /* the NEE transmittance alone: the same sum without the tallies */
+    const size_t nw = (size_t)st->n_wi;
+    double a = 0;
+    for (int b = 0; b < LSQT_BATCHES; b++) {
+        const lsqt_u128 *nee = st->nee + ((size_t)s * LSQT_BATCHES + (size_t)b) * nw;
+        for (size_t k = 0; k < nw; k++)
+            if (!(st->wi[((size_t)s * nw + k) * 4 + 2] > 0)) a += 4.0 * PI / st->n_wi * lsqt_u128_to_double(nee[k]);
+    }
+    return a / LSQT_FIX_SCALE / (double)st->paths;
+}
+
+static void stack(const char *name, const char *text, uint64_t paths)
+{
+    const double deg[] = {0, 45, 80};
+    lsqt_state st, coarse;
+    lsqt_slice_est *e = fixture_run(text, 3, deg, 1024, paths, 21, &st);
+    lsqt_slice_est *ec = fixture_run(text, 3, deg, 256, paths, 21, &coarse);
+    CHECK(st.transmits, "%s transmits", name);
+    for (int s = 0; s < 3; s++) {
+        double sig = sqrt(e[s].R.err * e[s].R.err + e[s].T.err * e[s].T.err), rt = e[s].R.mean + e[s].T.mean;
+        CHECK(fabs(rt - 1) <= 4 * sig + 1e-9, "%s, %g degrees: R + T = %.9f +- %.2g", name, deg[s], rt, sig);
+        CHECK(e[s].n_nonfinite == 0 && e[s].cut == 0, "%s: %d non-finite, %llu cut", name, e[s].n_nonfinite,
+              (unsigned long long)e[s].cut);
+        lsqt_est dr = nee_albedo_minus(&st, s, 1, 1.0, LSQT_T_R), dt = nee_t_minus_scattered(&st, s);
+        double rn = nee_albedo_minus(&st, s, 1, 0.0, LSQT_T_R).mean;
+        double qr = fabs(rn - nee_albedo_minus(&coarse, s, 1, 0.0, LSQT_T_R).mean);
+        double tn = nee_t(&st, s), qt = fabs(tn - nee_t(&coarse, s));
+        CHECK(fabs(dr.mean) <= 4 * dr.err + qr, "%s, %g degrees: NEE R - R = %.3g +- %.2g (quadrature %.2g)", name,
+              deg[s], dr.mean, dr.err, qr);
+        CHECK(fabs(dt.mean) <= 4 * dt.err + qt, "%s, %g degrees: NEE T - (T - delta_T) = %.3g +- %.2g (quadrature %.2g)",
+              name, deg[s], dt.mean, dt.err, qt);
+        CHECK(qr < 0.02 * rn && qt < 0.02 * tn, "%s, %g degrees: the 256- and 1024-direction rules differ by %.3g (R)"
+              " and %.3g (T): the quadrature does not allow the comparison", name, deg[s], qr, qt);
+        printf("%-28s %2g deg: R %.5f T %.5f (delta_T %.5f) R+T-1 %+.1e +- %.1e | NEE R-R %+.1e +- %.1e (quad %.1e)"
+               " NEE T-(T-dT) %+.1e +- %.1e (quad %.1e)\n",
+               name, deg[s], e[s].R.mean, e[s].T.mean, e[s].delta_T.mean, rt - 1, sig, dr.mean, dr.err, qr, dt.mean,
+               dt.err, qt);
+    }
+    CHECK(st.flags == 0, "%s: flags %u", name, st.flags);
+    lsqt_estimates_free(e, 3), lsqt_estimates_free(ec, 3);
+    lsqt_state_free(&st), lsqt_state_free(&coarse);
+}
+
+static void stacks(void)
+{
+    stack("HG2 (0.8, -0.3, 0.3) slab",
+          "Medium\nLayer z=1 NullBsdf\nMedium mus=1 HenyeyGreenstein2Phase g0=0.8 g1=-0.3 b=0.3\n"
+          "Layer z=0 NullBsdf\nMedium\n",
+          100000);
+    stack("SGGX diffuse Apara=0.3 slab",
+          "Medium\nLayer z=1 NullBsdf\nMedium mus=1 SggxPhase Apara=0.3 type=Diffuse\nLayer z=0 NullBsdf\nMedium\n",
+          100000);
+}
+
+/* ---------------------------------------------------------------- main */
+
+static int want(int argc, char **argv, const char *sec)
+{
+    if (argc < 2) return 1;
+    for (int i = 1; i < argc; i++)
+        if (!strcmp(argv[i], sec)) return 1;
+    return 0;
+}
+
+int main(int argc, char **argv)
+{
+    const double t_start = now();
+    fixture_open();
+    char err[1024], *log = NULL;
+    prog = lsqt_program_build(&fixture_cx,
+                              "-cl-std=CL1.2 -DLSQT_HAS_PHASE_HG=1 -DLSQT_HAS_PHASE_HG2=1 -DLSQT_HAS_PHASE_RAYLEIGH=1 "
+                              "-DLSQT_HAS_PHASE_SGGX=1 -DLSQT_HAS_BSDF_OREN_NAYAR=1",
+                              &log, err, sizeof err);
+    CHECK(prog != NULL, "%s\n%s", err, log ? log : "");
+    free(log);
+    if (!prog) return check_finish("test_phases");
+    printf("build %.1f s\n", now() - t_start);
+    const char *secs[] = {"hg2", "rayleigh", "sggx-specular", "sggx-diffuse", "oren-nayar", "peaks", "rayleigh-ks",
+                          "limits", "reciprocity", "stacks"};
+    for (int i = 1; i < argc; i++) {
+        int ok = 0;
+        for (int k = 0; k < 10; k++) ok |= !strcmp(argv[i], secs[k]);
+        CHECK(ok, "unknown section '%s'", argv[i]);
+    }
+    for (int k = 0; k < 10; k++) {
+        if (!want(argc, argv, secs[k])) {
+            if (k < 5) n_case += k == 0 ? 3 : k == 1 ? 4 : k == 4 ? 10 : 9; /* the same seeds whatever runs */
+            continue;
+        }
+        double t0 = now();
+        switch (k) {
+        case 0: fits_hg2(); break;
+        case 1: fits_rayleigh(); break;
+        case 2: fits_sggx(0); break;
+        case 3: fits_sggx(1); break;
+        case 4: fits_oren_nayar(); break;
+        case 5: peaks(); break;
+        case 6: rayleigh_ks(); break;
+        case 7: limits(); break;
+        case 8: reciprocity(); break;
+        case 9: stacks(); break;
+        }
+        printf("[%s: %.1f s]\n", secs[k], now() - t0);
+    }
+
+    /* the family: Bonferroni over every p-value recorded */
+    const double thr = FAMILY_ALPHA / (n_tests > 0 ? n_tests : 1);
+    double pmin = 1;
+    int imin = 0, failed = 0;
+    for (int i = 0; i < n_tests && i < MAX_TESTS; i++) {
+        CHECK(tests[i].p >= thr, "%s: p = %.3g below %.3g", tests[i].name, tests[i].p, thr);
+        failed += tests[i].p < thr;
+        if (tests[i].p < pmin) pmin = tests[i].p, imin = i;
+    }
+    CHECK(n_tests <= MAX_TESTS, "%d tests", n_tests);
+    int req = 0, caught = 0, other = 0, other_caught = 0;
+    double pmax = 0;
+    for (int i = 0; i < n_skews; i++) {
+        if (skews[i].required) {
+            req++, caught += skews[i].p < thr, pmax = fmax(pmax, skews[i].p);
+            CHECK(skews[i].p < thr, "the 2 %% skewed sampler passed: %s, smallest p = %.3g (lambda %.0f)", skews[i].name,
+                  skews[i].p, skews[i].lambda);
+        } else {
+            other++, other_caught += skews[i].p < thr;
+            printf("skew not required (lambda %.0f < 100): %s, p = %.3g\n", skews[i].lambda, skews[i].name, skews[i].p);
+        }
+    }
+    printf("%d tests, reject below p = %.3g (family 1e-3): smallest p %.3g (%s), %d rejected\n", n_tests, thr, pmin,
+           n_tests ? tests[imin].name : "", failed);
+    if (n_skews)
+        printf("2 %% skew (tilt along mu): rejected in %d of %d cases with the power for it (largest p %.2g), %d of %d"
+               " others\n", caught, req, pmax, other_caught, other);
+    printf("total %.1f s, kernels %.1f s\n", now() - t_start, t_kernel);
+    clReleaseProgram(prog);
+    lsqt_context_release(&fixture_cx);
+    return check_finish("test_phases");
+}
