@@ -17,6 +17,9 @@ inline real sggx_sigma(real sxx, real szz, real3 w)
 inline real4 sggx_d4(real sxx, real szz, real4 mx, real4 my, real4 mz)
 {
     real4 q = (mx * mx + my * my) / sxx + mz * mz / szz; /* sqrt|S| = sxx sqrt(szz) */
+    /* A unit m has q >= min(1/sxx, 1/szz); m = 0 (the half vector of wi = -wo, which has
+     * no direction) would divide by 0: it takes the largest D, a finite value. */
+    q = fmax(q, (real4)(fmin(R(1.0) / sxx, R(1.0) / szz)));
     return R(1.0) / (((LSQT_PI * sxx) * sqrt(szz)) * q * q);
 }
 

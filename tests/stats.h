@@ -1,7 +1,6 @@
 /* p-values for the tests' goodness-of-fit statistics: chi-square by the regularized upper
- * incomplete gamma function (gamma_q and chi2_p as in test_ms_models, which can include
- * this instead of its copy), and the Kolmogorov-Smirnov statistic by its asymptotic
- * distribution. */
+ * incomplete gamma function, and the Kolmogorov-Smirnov statistic by its asymptotic
+ * distribution. test_phases checks them against closed forms before it uses them. */
 #ifndef LSQT_TESTS_STATS_H
 #define LSQT_TESTS_STATS_H
 

@@ -58,6 +58,7 @@
 #include <time.h>
 
 #include "cl_fixture.h"
+#include "stats.h"
 #include "lsqt/util.h"
 #include "quadrature.h"
 
@@ -88,40 +89,7 @@ static double now(void)
 
 /* ---------------------------------------------------------------- statistics */
 
-/* Regularized upper incomplete gamma Q(a, x) (series below a + 1, continued fraction
- * above, as in Numerical Recipes' gammq). */
-static double gamma_q(double a, double x)
-{
-    if (x <= 0) return 1.0;
-    double gln = lgamma(a);
-    if (x < a + 1) {
-        double ap = a, sum = 1.0 / a, del = sum;
-        for (int n = 0; n < 100000; n++) {
-            ap += 1;
-            del *= x / ap;
-            sum += del;
-            if (fabs(del) < fabs(sum) * 1e-15) break;
-        }
-        double p = sum * exp(-x + a * log(x) - gln);
-        return p >= 1 ? 0.0 : 1.0 - p;
-    }
-    double b = x + 1 - a, c = 1e300, d = 1 / b, h = d;
-    for (int i = 1; i < 100000; i++) {
-        double an = -i * (i - a);
-        b += 2;
-        d = an * d + b;
-        if (fabs(d) < 1e-300) d = 1e-300;
-        c = b + an / c;
-        if (fabs(c) < 1e-300) c = 1e-300;
-        d = 1 / d;
-        double del = d * c;
-        h *= del;
-        if (fabs(del - 1) < 1e-15) break;
-    }
-    return exp(-x + a * log(x) - gln) * h;
-}
-
-static double chi2_p(double chi2, int dof) { return dof > 0 ? gamma_q(0.5 * dof, 0.5 * chi2) : 1.0; }
+/* chi2_p comes from stats.h. */
 
 /* Every test's p-value, judged together at the end (Bonferroni). */
 #define MAX_TESTS 512

@@ -5,12 +5,19 @@
 # usage: tools/bench.sh [PATHS] [lsqt-cl options...]; prints one line per example.
 #        tools/bench.sh micro [lsqt-cl options...]: the microsurface examples at the issue's
 #        settings (-p 1e4; Rough -wi 320, Substr -wi 600), multiple scattering on and off.
+#        tools/bench.sh phases [PATHS] [lsqt-cl options...]: a slab of optical thickness 1
+#        between null layers with each phase function (default -p 1e6), and the slab over
+#        a Lambertian and an Oren-Nayar floor.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 P=${1:-1e6}
 shift || true
-MICRO=0
+MICRO=0 PHASES=0
 if [ "$P" = micro ]; then MICRO=1; P=1e4; fi
+if [ "$P" = phases ]; then
+  PHASES=1 P=1e6
+  if [[ ${1:-} =~ ^[0-9.e]+$ ]]; then P=$1; shift; fi
+fi
 BIN=./build/lsqt-cl
 [ -x "$BIN" ] || bash tools/build.sh
 work=$(mktemp -d)
@@ -27,6 +34,18 @@ if [ "$MICRO" = 1 ]; then
     sed -E '/^(#|$)/d; s/use_multiple_scattering=[a-z]+//; s/^(Layer .*Microsurface[A-Za-z]*)/\1 use_multiple_scattering=false/' "$f" > "$work/$b-ss.lsqt"
     cases+=("$work/$b-ms.lsqt|$o" "$work/$b-ss.lsqt|$o")
   done
+elif [ "$PHASES" = 1 ]; then
+  cases=()
+  slab() { printf 'Medium\nLayer z=1 NullBsdf\nMedium mus=1 %s\nLayer z=0 %s\nMedium\n' "$2" "$3" > "$work/$1.lsqt"
+           cases+=("$work/$1.lsqt|"); }
+  slab hg-0 "HenyeyGreensteinPhase g=0" NullBsdf
+  slab hg-0.8 "HenyeyGreensteinPhase g=0.8" NullBsdf
+  slab hg2 "HenyeyGreenstein2Phase g0=0.8 g1=-0.3 b=0.3" NullBsdf
+  slab rayleigh "RayleighPhase rho=-0.5" NullBsdf
+  slab sggx-specular "SggxPhase Apara=0.3 type=Specular" NullBsdf
+  slab sggx-diffuse "SggxPhase Apara=0.3 type=Diffuse" NullBsdf
+  slab hg-0-lambertian "HenyeyGreensteinPhase g=0" "LambertianBsdf fR=0.5"
+  slab hg-0-oren-nayar "HenyeyGreensteinPhase g=0" "OrenNayarDiffuseBrdf fR=0.5 sigma=0.5"
 else
   cases=()
   for f in examples/tutorial/Lambertian.lsqt examples/tutorial/Dust.lsqt examples/tutorial/Silver.lsqt \
