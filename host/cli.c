@@ -65,6 +65,10 @@ void lsqt_cli_help(FILE *f)
           "      --list-devices          list OpenCL devices and exit\n"
           "      --double                compute in double precision (device needs fp64)\n"
           "      --time-limit S          stop adding paths after S seconds\n"
+          "      --target-error E        add paths until every slice's largest relative standard\n"
+          "                              error of the BSDF values is at most E (e.g. 0.01); -p,\n"
+          "                              if given, is then a cap (checked at path counts that\n"
+          "                              depend only on the tallies: the stop is reproducible)\n"
           "      --lss PATH              LSS file (default FILE.lss; none for stdin)\n"
           "      --json PATH             machine-readable summary\n"
           "  -q, --quiet                 print errors only\n"
@@ -80,7 +84,7 @@ void lsqt_cli_help(FILE *f)
 
 enum flag_id {
     F_PATHS, F_WO, F_WO_ANGLES, F_WI, F_RX, F_RP, F_RESTART, F_SEED, F_THREADS, F_OUTPUT,
-    F_HEMI, F_DEVICE, F_LIST, F_DOUBLE, F_TIME, F_LSS, F_JSON, F_QUIET, F_VERBOSE, F_HELP
+    F_HEMI, F_DEVICE, F_LIST, F_DOUBLE, F_TIME, F_TARGET, F_LSS, F_JSON, F_QUIET, F_VERBOSE, F_HELP
 };
 
 static const struct flag {
@@ -97,6 +101,7 @@ static const struct flag {
     {NULL, "--time-limit", F_TIME, 1},       {NULL, "--lss", F_LSS, 1},
     {NULL, "--json", F_JSON, 1},             {"-q", "--quiet", F_QUIET, 0},
     {"-v", "--verbose", F_VERBOSE, 0},       {"-h", "--help", F_HELP, 0},
+    {NULL, "--target-error", F_TARGET, 1},
 };
 
 static int parse_angles(const char *s, lsqt_cli *c)
@@ -122,7 +127,7 @@ static int apply(const struct flag *fl, const char *name, const char *v, lsqt_cl
     double d = 0;
     const char *expect = NULL;
     switch (fl->id) {
-    case F_PATHS: if (lsqt_parse_count(v, 1, 9.0e15, &c->paths)) expect = "an integer path count >= 1 (e.g. 10000 or 1e7)"; break;
+    case F_PATHS: if (lsqt_parse_count(v, 1, 9.0e15, &c->paths)) expect = "an integer path count >= 1 (e.g. 10000 or 1e7)"; c->paths_given = 1; break;
     case F_WO: if (lsqt_parse_count(v, 4, 1024, &n)) expect = "an integer in 4-1024"; else c->wo_count = (int)n; c->sampling_given = 1; break;
     case F_WO_ANGLES: if (parse_angles(v, c)) expect = "comma-separated angles in degrees in [0, 90), at most 1024"; c->sampling_given = 1; break;
     case F_WI: if (lsqt_parse_count(v, 16, 1024, &n)) expect = "an integer in 16-1024"; else c->wi_count = (int)n; c->sampling_given = 1; break;
@@ -131,6 +136,7 @@ static int apply(const struct flag *fl, const char *name, const char *v, lsqt_cl
     case F_SEED: if (lsqt_parse_u64(v, &c->seed)) expect = "an integer in 0-18446744073709551615 (decimal digits)"; c->seed_given = c->sampling_given = 1; break;
     case F_THREADS: if (lsqt_parse_count(v, 1, 4096, &n)) expect = "an integer in 1-4096"; else c->threads = (int)n; break;
     case F_TIME: if (lsqt_parse_double(v, &d) || !(d > 0)) expect = "a positive number of seconds"; else c->time_limit = d; break;
+    case F_TARGET: if (lsqt_parse_double(v, &d) || !(d > 0)) expect = "a positive relative error (e.g. 0.01)"; else c->target_error = d; break;
     case F_OUTPUT: if (!*v) expect = "a file name"; c->output = v; break;
     case F_DEVICE: if (!*v) expect = "an index, a name substring, cpu or gpu"; c->device = v; break;
     case F_LSS: if (!*v) expect = "a file name"; c->lss = v; break;

@@ -335,9 +335,11 @@ int main(int argc, char **argv)
     }
     if (c.verbose) fprintf(stderr, "device: %s [%s]\n", cx.dev.name, cx.dev.platform_name);
 
-    lsqt_sim_opts so = {isatty(STDERR_FILENO) && !c.quiet, c.time_limit, 0, &g_stop, NULL, c.verbose};
+    lsqt_sim_opts so = {isatty(STDERR_FILENO) && !c.quiet, c.time_limit, 0, &g_stop, NULL, c.verbose, c.target_error};
     lsqt_sim_stats stats;
-    rc = lsqt_simulate(&cx, &a, &st, c.paths, &so, &stats, err, sizeof err);
+    /* With a target error, -p is a cap when given, else there is none. */
+    const uint64_t add = c.target_error > 0 && !c.paths_given ? UINT64_MAX : c.paths;
+    rc = lsqt_simulate(&cx, &a, &st, add, &so, &stats, err, sizeof err);
     if (rc) {
         fail(1, "%s%s", err, "");
     } else {
@@ -346,7 +348,10 @@ int main(int argc, char **argv)
         snprintf(devname, sizeof devname, "%s [%s]", cx.dev.name, cx.dev.platform_name);
         lsqt_run_info ri = {devname, stats.seconds,
                             stats.seconds > 0 ? (double)stats.paths_added * st.n_slices / stats.seconds : 0.0,
-                            (unsigned long long)stats.paths_added};
+                            (unsigned long long)stats.paths_added, NULL};
+        static const char *const why[] = {"the path count (-p)", "the target error (--target-error)",
+                                          "the time limit (--time-limit)", "an interrupt"};
+        if (c.target_error > 0 || c.time_limit > 0) ri.stopped_by = why[stats.stop_reason];
         if (!est) rc = fail(1, "out of memory%s%s", "", "");
         else rc = write_outputs(&out, &c, &st, est, &ri, info);
         if (est && !c.quiet) lsqt_report_summary(info, &st, est, &ri);

@@ -4,6 +4,14 @@
 
 #include "lsqt/util.h"
 
+/* An error for the summary: "n/a" while it cannot be estimated. */
+static const char *err_text(double v, char *buf, size_t cap)
+{
+    if (isnan(v)) snprintf(buf, cap, "n/a");
+    else snprintf(buf, cap, "%.2g", v);
+    return buf;
+}
+
 void lsqt_report_summary(FILE *f, const lsqt_state *st, const lsqt_slice_est *est,
                          const lsqt_run_info *ri)
 {
@@ -13,12 +21,14 @@ void lsqt_report_summary(FILE *f, const lsqt_state *st, const lsqt_slice_est *es
     fprintf(f, "%5s %9s  %-21s %-21s %-10s %s\n", "slice", "theta_o", "R +- 1 s.e.", "T +- 1 s.e.",
             "delta_T", "max rel err");
     unsigned long long cut = 0;
-    int nonfinite = 0;
+    int nonfinite = 0, no_err = 0;
     for (int s = 0; s < st->n_slices; s++) {
         const lsqt_slice_est *e = &est[s];
-        fprintf(f, "%5d %8.3fd  %.6f +- %-9.2g %.6f +- %-9.2g %-10.4g %.3g\n", s,
-                e->theta_o * 180.0 / LSQT_PI, e->R.mean, e->R.err, e->T.mean, e->T.err,
-                e->delta_T.mean, e->max_rel_err);
+        char er[32], et[32], em[32];
+        fprintf(f, "%5d %8.3fd  %.6f +- %-9s %.6f +- %-9s %-10.4g %s\n", s, e->theta_o * 180.0 / LSQT_PI,
+                e->R.mean, err_text(e->R.err, er, sizeof er), e->T.mean, err_text(e->T.err, et, sizeof et),
+                e->delta_T.mean, isnan(e->max_rel_err) ? "n/a" : (snprintf(em, sizeof em, "%.3g", e->max_rel_err), em));
+        if (isnan(e->max_rel_err)) no_err = 1;
         cut += e->cut;
         nonfinite += e->n_nonfinite;
     }
@@ -27,6 +37,10 @@ void lsqt_report_summary(FILE *f, const lsqt_state *st, const lsqt_slice_est *es
             fprintf(f, "note: unscattered light (delta_T) is a forward delta; it is in T and LSS, not in RAW\n");
             break;
         }
+    if (no_err)
+        fprintf(f, "note: errors need paths in 2 of the %d batches (more than %d paths per slice): n/a\n",
+                LSQT_BATCHES, LSQT_CHUNK);
+    if (ri->stopped_by) fprintf(f, "stopped by %s\n", ri->stopped_by);
     if (cut) fprintf(f, "warning: %llu paths reached the safety cap of %d events and were stopped\n", cut, LSQT_MAX_EVENTS);
     if (nonfinite) fprintf(f, "warning: %d non-finite estimates were left out of RAW\n", nonfinite);
     if (st->flags & LSQT_FLAG_NONFINITE) fprintf(f, "warning: non-finite path contributions were dropped\n");
@@ -54,8 +68,11 @@ int lsqt_report_json(const char *path, const lsqt_state *st, const lsqt_slice_es
     json_num(f, ri->seconds);
     fprintf(f, ", \"paths_per_second\": ");
     json_num(f, ri->paths_per_second);
-    fprintf(f, ", \"assembly_hash\": \"%016llx\", \"flags\": %u,\n \"slices\": [", (unsigned long long)st->hash,
-            st->flags);
+    fprintf(f, ", \"assembly_hash\": \"%016llx\", \"flags\": %u, \"paths_added\": %llu, \"stopped_by\": ",
+            (unsigned long long)st->hash, st->flags, ri->paths_added);
+    if (ri->stopped_by) fprintf(f, "\"%s\"", ri->stopped_by);
+    else fprintf(f, "null");
+    fprintf(f, ",\n \"slices\": [");
     for (int s = 0; s < st->n_slices; s++) {
         const lsqt_slice_est *e = &est[s];
         fprintf(f, "%s\n  {\"theta_o\": %.17g, \"paths\": %llu, \"R\": ", s ? "," : "", e->theta_o,
@@ -69,6 +86,8 @@ int lsqt_report_json(const char *path, const lsqt_state *st, const lsqt_slice_es
         json_num(f, e->T.err);
         fprintf(f, ", \"delta_T\": ");
         json_num(f, e->delta_T.mean);
+        fprintf(f, ", \"delta_T_err\": ");
+        json_num(f, e->delta_T.err);
         fprintf(f, ", \"max_rel_err\": ");
         json_num(f, e->max_rel_err);
         fprintf(f, ", \"cut_paths\": %llu}", (unsigned long long)e->cut);

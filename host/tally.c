@@ -8,7 +8,7 @@
 
 lsqt_est lsqt_batch_estimate(const lsqt_u128 *sums, size_t stride, uint64_t total_paths, double scale)
 {
-    lsqt_est r = {0.0, 0.0};
+    lsqt_est r = {0.0, NAN};
     if (total_paths == 0) return r;
     double total = 0.0;
     for (int b = 0; b < LSQT_BATCHES; b++) total += lsqt_u128_to_double(sums[(size_t)b * stride]);
@@ -25,7 +25,7 @@ lsqt_est lsqt_batch_estimate(const lsqt_u128 *sums, size_t stride, uint64_t tota
         used++;
     }
     r.mean = mean;
-    r.err = used > 1 ? sqrt(ss * used / (used - 1)) / (double)total_paths : INFINITY;
+    r.err = used > 1 ? sqrt(ss * used / (used - 1)) / (double)total_paths : NAN;
     return r;
 }
 
@@ -66,7 +66,9 @@ lsqt_slice_est *lsqt_estimates(const lsqt_state *st)
             e->f[k].err = c.err / cz;
             if (!isfinite(e->f[k].mean)) {
                 e->n_nonfinite++;
-            } else if (e->f[k].mean > 0) {
+            } else if (isnan(e->f[k].err)) {
+                e->max_rel_err = NAN;
+            } else if (e->f[k].mean > 0 && !isnan(e->max_rel_err)) {
                 double rel = e->f[k].err / e->f[k].mean;
                 if (rel > e->max_rel_err) e->max_rel_err = rel;
             }

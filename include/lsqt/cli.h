@@ -30,6 +30,8 @@ typedef struct lsqt_cli {
     int list_devices;
     int use_double;
     double time_limit;        /* seconds, 0 = none */
+    double target_error;      /* --target-error, 0 = none */
+    int paths_given;          /* -p was given */
     const char *lss;          /* --lss */
     const char *json;         /* --json */
     int quiet, verbose;

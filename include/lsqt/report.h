@@ -16,6 +16,7 @@ typedef struct lsqt_run_info {
     double seconds;          /* this run */
     double paths_per_second; /* this run, all slices together */
     unsigned long long paths_added;
+    const char *stopped_by;  /* what ended the run (NULL: not said) */
 } lsqt_run_info;
 
 void lsqt_report_summary(FILE *f, const lsqt_state *st, const lsqt_slice_est *est,

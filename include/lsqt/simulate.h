@@ -1,5 +1,6 @@
-/* The launch loop: uploads an assembly's device tables and a state's tallies, runs paths
- * on the device in launches over (chunks of paths, slices), and reads the tallies back. */
+/* The launch loop: runs paths of a state on the device in launches over (chunks of paths,
+ * slices) through a session (session.h), with progress and the stop rules (path count,
+ * time limit, interrupt, target error), and reads the tallies back into the state. */
 #ifndef LSQT_SIMULATE_H
 #define LSQT_SIMULATE_H
 
@@ -8,7 +9,9 @@
 
 #include "lsqt/assembly.h"
 #include "lsqt/device.h"
+#include "lsqt/session.h"
 #include "lsqt/state.h"
+#include "lsqt/tables.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -21,12 +24,25 @@ typedef struct lsqt_sim_opts {
     volatile sig_atomic_t *stop;  /* set asynchronously (Ctrl-C): stop after this launch */
     const char *extra_options;    /* appended to the kernel build options (tests, tuning) */
     int verbose;                  /* print the kernel build options and launches on stderr */
+    double target_error;          /* > 0: stop once every slice's largest relative standard
+                                     error of the point estimates is at most this (checked at
+                                     path counts that depend only on the tallies, so the stop
+                                     is reproducible); add_paths is then a cap */
 } lsqt_sim_opts;
+
+enum {
+    LSQT_STOP_PATHS = 0,  /* the requested paths are done (with a target error: the cap) */
+    LSQT_STOP_TARGET,     /* the target error is reached */
+    LSQT_STOP_TIME,       /* the time limit */
+    LSQT_STOP_INTERRUPT   /* *stop was set */
+};
 
 typedef struct lsqt_sim_stats {
     uint64_t paths_added;         /* per slice */
     double seconds;
     int interrupted;              /* stopped early by *stop or the time limit */
+    int stop_reason;              /* LSQT_STOP_* */
+    int launches;
 } lsqt_sim_stats;
 
 /* Returns 0, or 1 with err filled (build log, if any, already printed to stderr). Models
@@ -34,13 +50,9 @@ typedef struct lsqt_sim_stats {
 int lsqt_simulate(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint64_t add_paths,
                   const lsqt_sim_opts *o, lsqt_sim_stats *stats, char *err, size_t errcap);
 
-/* Fills the device tables of an assembly in double precision (exposed for the tests;
- * a float kernel gets them rounded). */
-void lsqt_device_tables(const lsqt_assembly *a, lsqt_dev_scene *scene, lsqt_dev_medium_d *media,
-                        lsqt_dev_layer_d *layers);
-
-/* NULL when the kernels support every model of the assembly, else the first model name. */
-const char *lsqt_unsupported_model(const lsqt_assembly *a, int *line);
+/* The largest over the slices of the largest relative standard error of the point
+ * estimates; NaN while a run may not stop on it (fewer than LSQT_STOP_ERR_PATHS paths). */
+double lsqt_max_rel_err(const lsqt_state *st);
 
 #ifdef __cplusplus
 }

@@ -8,9 +8,16 @@
 extern "C" {
 #endif
 
+/* Below LSQT_MIN_ERR_PATHS paths (one chunk) a single batch holds them all and the batch means give
+ * no standard error: errors are NaN then (printed "n/a", JSON null; they were +-inf).
+ * A target error is judged only from LSQT_STOP_ERR_PATHS on, where every batch holds 2
+ * chunks: an error from a few batches is too noisy to stop a run on. */
+#define LSQT_MIN_ERR_PATHS ((uint64_t)LSQT_CHUNK + 1)
+#define LSQT_STOP_ERR_PATHS ((uint64_t)2 * LSQT_CHUNK * LSQT_BATCHES)
+
 typedef struct lsqt_est {
     double mean; /* per path */
-    double err;  /* one standard error of the mean */
+    double err;  /* one standard error of the mean; NaN below LSQT_MIN_ERR_PATHS paths */
 } lsqt_est;
 
 typedef struct lsqt_slice_est {
@@ -19,7 +26,7 @@ typedef struct lsqt_slice_est {
     lsqt_est R, T, delta_T;
     uint64_t cut;        /* paths stopped by the safety cap */
     lsqt_est *f;         /* n_wi: non-cosine-weighted BSDF (1/sr) at each wi */
-    double max_rel_err;  /* largest err/mean over the finite, positive f */
+    double max_rel_err;  /* largest err/mean over the finite, positive f (NaN: no errors yet) */
     int n_nonfinite;     /* f values that are not finite (never written to RAW) */
 } lsqt_slice_est;
 

@@ -1,0 +1,141 @@
+/* The launch loop (simulate.h): launch sizing, progress, and the stop rules. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "lsqt/simulate.h"
+#include "lsqt/tally.h"
+#include "lsqt/util.h"
+
+/* Target-error checks fall on multiples of this many paths (whole chunks of every batch). */
+#define CHECK_STEP ((uint64_t)LSQT_CHUNK * LSQT_BATCHES)
+
+double lsqt_max_rel_err(const lsqt_state *st)
+{
+    if (st->paths < LSQT_STOP_ERR_PATHS) return NAN;
+    lsqt_slice_est *est = lsqt_estimates(st);
+    if (!est) return NAN;
+    double m = 0.0;
+    for (int s = 0; s < st->n_slices; s++) {
+        if (isnan(est[s].max_rel_err)) m = NAN;
+        else if (!isnan(m) && est[s].max_rel_err > m) m = est[s].max_rel_err;
+    }
+    lsqt_estimates_free(est, st->n_slices);
+    return m;
+}
+
+/* The next path count at which to check the error: where 1/sqrt(N) predicts the target
+ * (5 % beyond), at least 1.1 and at most 4 times the current count, on a CHECK_STEP
+ * multiple. A function of the tallies only, so runs stop at the same count anywhere. */
+static uint64_t next_check(uint64_t paths, double err, double target)
+{
+    double want = (double)paths * 4.0;
+    if (isfinite(err) && err > 0) want = (double)paths * (err / target) * (err / target) * 1.05;
+    if (want < (double)paths * 1.1) want = (double)paths * 1.1;
+    if (want > (double)paths * 4.0) want = (double)paths * 4.0;
+    uint64_t n = want > 1e18 ? (uint64_t)1e18 : (uint64_t)want;
+    n = (n / CHECK_STEP + 1) * CHECK_STEP;
+    if (n < LSQT_STOP_ERR_PATHS) n = LSQT_STOP_ERR_PATHS;
+    return n > paths ? n : paths + CHECK_STEP;
+}
+
+static void progress_draw(uint64_t done, uint64_t total, double elapsed, int n_slices, double err, double target)
+{
+    double rate = elapsed > 0 ? (double)done * n_slices / elapsed : 0.0;
+    if (target > 0) {
+        char e[32] = "n/a";
+        if (isfinite(err)) snprintf(e, sizeof e, "%.3g", err);
+        fprintf(stderr, "\r%llu paths per slice  %.3g paths/s  max rel err %s (target %.3g)   ",
+                (unsigned long long)done, rate, e, target);
+        fflush(stderr);
+        return;
+    }
+    double frac = total ? (double)done / (double)total : 1.0;
+    double eta = frac > 0 ? elapsed * (1.0 - frac) / frac : 0.0;
+    char bar[31];
+    int fill = (int)(frac * 30.0);
+    for (int i = 0; i < 30; i++) bar[i] = i < fill ? '#' : '.';
+    bar[30] = '\0';
+    fprintf(stderr, "\r[%s] %5.1f%%  %.3g paths/s  ETA %.0f s   ", bar, 100.0 * frac, rate, eta);
+    fflush(stderr);
+}
+
+int lsqt_simulate(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint64_t add_paths,
+                  const lsqt_sim_opts *o, lsqt_sim_stats *stats, char *err, size_t errcap)
+{
+    memset(stats, 0, sizeof *stats);
+    lsqt_session s;
+    if (lsqt_session_open(&s, cx, a, st, o->extra_options, o->local_size, o->verbose, err, errcap)) return 1;
+
+    /* Launches cover whole chunks; their size adapts so each takes about 0.3 s, which
+     * keeps the progress bar and Ctrl-C responsive without starving the device. */
+    const uint64_t first = st->paths;
+    const uint64_t target = add_paths > UINT64_MAX - first ? UINT64_MAX : first + add_paths;
+    const double goal = o->target_error;
+    uint64_t pos = first, chunks_per_launch = 8, check = UINT64_MAX;
+    double cur_err = NAN;
+    int rc = 1;
+    if (goal > 0) {
+        /* a continued state may already be good enough */
+        cur_err = lsqt_max_rel_err(st);
+        if (!isnan(cur_err) && cur_err <= goal) {
+            stats->stop_reason = LSQT_STOP_TARGET;
+            rc = 0;
+            goto done;
+        }
+        check = first < LSQT_STOP_ERR_PATHS ? LSQT_STOP_ERR_PATHS : next_check(first, cur_err, goal);
+    }
+    const double t0 = lsqt_now();
+    if (o->verbose)
+        fprintf(stderr, "simulating %llu paths per slice x %d slices (work-group size %zu)%s\n",
+                (unsigned long long)(target - first), st->n_slices, s.local_size,
+                goal > 0 ? ", or fewer if the target error is reached" : "");
+    stats->stop_reason = LSQT_STOP_PATHS;
+    while (pos < target) {
+        uint64_t end = (pos / LSQT_CHUNK + chunks_per_launch) * LSQT_CHUNK;
+        if (end > target) end = target;
+        if (end > check) end = check;
+        double t = lsqt_now();
+        if (lsqt_session_launch(&s, pos, end, err, errcap)) goto done;
+        double dt = lsqt_now() - t;
+        pos = end;
+        stats->launches++;
+        double grow = dt > 0 ? 0.3 / dt : 4.0;
+        grow = grow > 4.0 ? 4.0 : grow < 0.5 ? 0.5 : grow;
+        chunks_per_launch = (uint64_t)((double)chunks_per_launch * grow);
+        if (chunks_per_launch < 1) chunks_per_launch = 1;
+        if (pos == check) {
+            if (lsqt_session_read(&s, st, err, errcap)) goto done;
+            st->paths = pos;
+            cur_err = lsqt_max_rel_err(st);
+            if (!isnan(cur_err) && cur_err <= goal) {
+                stats->stop_reason = LSQT_STOP_TARGET;
+                break;
+            }
+            check = next_check(pos, cur_err, goal);
+        }
+        if (o->progress) progress_draw(pos - first, target - first, lsqt_now() - t0, st->n_slices, cur_err, goal);
+        if (o->stop && *o->stop) {
+            stats->stop_reason = LSQT_STOP_INTERRUPT;
+            stats->interrupted = 1;
+            break;
+        }
+        if (o->time_limit > 0 && lsqt_now() - t0 >= o->time_limit && pos < target) {
+            stats->stop_reason = LSQT_STOP_TIME;
+            stats->interrupted = 1;
+            break;
+        }
+    }
+    if (o->progress) fprintf(stderr, "\n");
+    if (o->verbose) fprintf(stderr, "%d launches in %.3g s\n", stats->launches, lsqt_now() - t0);
+    if (lsqt_session_read(&s, st, err, errcap)) goto done;
+    stats->paths_added = pos - first;
+    stats->seconds = lsqt_now() - t0;
+    st->paths = pos;
+    if (lsqt_tally_flags_error(st->flags, err, errcap)) goto done;
+    rc = 0;
+done:
+    lsqt_session_close(&s);
+    return rc;
+}

@@ -1,0 +1,220 @@
+#include "lsqt/session.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "lsqt/tables.h"
+
+static cl_mem make_buffer(lsqt_context *cx, cl_mem_flags fl, size_t size, void *host, cl_int *e)
+{
+    if (*e != CL_SUCCESS) return NULL;
+    return clCreateBuffer(cx->ctx, fl | (host ? CL_MEM_COPY_HOST_PTR : 0), size, host, e);
+}
+
+static int build_options(lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st,
+                         char *opt, size_t cap, char *err, size_t errcap)
+{
+    size_t n = lsqt_assembly_build_options(a, opt, cap);
+    if (n >= cap) {
+        snprintf(err, errcap, "kernel build options too long");
+        return 1;
+    }
+    n += (size_t)snprintf(opt + n, cap - n, " -cl-std=CL1.2 -DLSQT_NWI=%d", st->n_wi);
+    if (lsqt_device_check(&cx->dev, st->use_double, err, errcap)) return 1;
+    if (st->use_double) n += (size_t)snprintf(opt + n, cap - n, " -DLSQT_DOUBLE=1");
+    if (!cx->dev.has_int64_atomics) snprintf(opt + n, cap - n, " -DLSQT_NO_INT64_ATOMICS=1");
+    return 0;
+}
+
+/* The tables, the directions and the tallies go up; the direction tables (T, Lambda,
+ * lgamma(1 + Lambda) per slice, layer and direction) are made on the device, once. */
+static int upload(lsqt_session *s, const lsqt_assembly *a, const lsqt_state *st, char *err, size_t errcap)
+{
+    lsqt_context *cx = s->cx;
+    const int n = a->n_layers;
+    lsqt_dev_scene scene;
+    lsqt_dev_medium_d *media = calloc((size_t)n + 1, sizeof *media);
+    lsqt_dev_layer_d *layers = calloc((size_t)n, sizeof *layers);
+    lsqt_dev_medium *media_f = calloc((size_t)n + 1, sizeof *media_f);
+    lsqt_dev_layer *layers_f = calloc((size_t)n, sizeof *layers_f);
+    /* Directions go to the device in the kernel's precision: double for --double. */
+    const size_t pad = LSQT_PAD4((size_t)st->n_wi), n_wo = (size_t)st->n_slices * 4, n_wi = (size_t)st->n_slices * 3 * pad;
+    double *wo = calloc(n_wo, sizeof *wo), *wi = calloc(n_wi, sizeof *wi);
+    float *wo_f = calloc(n_wo, sizeof *wo_f), *wi_f = calloc(n_wi, sizeof *wi_f);
+    int rc = 1;
+    cl_int e = CL_SUCCESS;
+    if (!media || !layers || !media_f || !layers_f || !wo || !wi || !wo_f || !wi_f) {
+        snprintf(err, errcap, "out of memory");
+        goto done;
+    }
+    lsqt_device_tables(a, &scene, media, layers);
+    lsqt_tables_to_float(media, media_f, n + 1, layers, layers_f, n);
+    /* The kernel reads the layout it was built for (see device_layout.h). */
+    const void *media_up = st->use_double ? (const void *)media : (const void *)media_f;
+    const void *layers_up = st->use_double ? (const void *)layers : (const void *)layers_f;
+    const size_t media_size = st->use_double ? sizeof *media : sizeof *media_f;
+    const size_t layer_size = st->use_double ? sizeof *layers : sizeof *layers_f;
+    scene.n_wi = st->n_wi;
+    scene.seed_lo = (lsqt_u32)st->seed;
+    scene.seed_hi = (lsqt_u32)(st->seed >> 32);
+    for (int sl = 0; sl < st->n_slices; sl++) {
+        wo[4 * sl] = sin(st->theta_o[sl]);
+        wo[4 * sl + 2] = cos(st->theta_o[sl]);
+        /* Incident directions as coordinate arrays, zero-padded to fours. The state holds
+         * them in float; in double they are normalised again (float leaves |wi| - 1 at
+         * 1e-7), in float they go as they are. */
+        for (size_t i = 0; i < (size_t)st->n_wi; i++) {
+            const float *d = st->wi + ((size_t)sl * (size_t)st->n_wi + i) * 4;
+            double len = sqrt((double)d[0] * d[0] + (double)d[1] * d[1] + (double)d[2] * d[2]);
+            for (size_t j = 0; j < 3; j++) {
+                wi[((size_t)sl * 3 + j) * pad + i] = st->use_double && len > 0 ? d[j] / len : d[j];
+                wi_f[((size_t)sl * 3 + j) * pad + i] = d[j];
+            }
+        }
+    }
+    for (size_t i = 0; i < n_wo; i++) wo_f[i] = (float)wo[i];
+    const size_t dir_size = st->use_double ? sizeof(double) : sizeof(float);
+    void *wo_up = st->use_double ? (void *)wo : (void *)wo_f, *wi_up = st->use_double ? (void *)wi : (void *)wi_f;
+    cl_mem_flags ro = CL_MEM_READ_ONLY, rw = CL_MEM_READ_WRITE;
+    cl_uint flags0 = 0;
+    s->scene = make_buffer(cx, ro, sizeof scene, &scene, &e);
+    s->media = make_buffer(cx, ro, ((size_t)n + 1) * media_size, (void *)media_up, &e);
+    s->layers = make_buffer(cx, ro, (size_t)n * layer_size, (void *)layers_up, &e);
+    s->wo = make_buffer(cx, ro, n_wo * dir_size, wo_up, &e);
+    s->wi = make_buffer(cx, ro, n_wi * dir_size, wi_up, &e);
+    const size_t tab_size = (size_t)st->n_slices * (size_t)n * 3 * pad * dir_size;
+    s->tab = make_buffer(cx, rw, tab_size, NULL, &e);
+    s->nee = make_buffer(cx, rw, s->n_nee * sizeof *st->nee, st->nee, &e);
+    s->scalars = make_buffer(cx, rw, s->n_scalars * sizeof *st->scalars, st->scalars, &e);
+    s->hist = make_buffer(cx, rw, s->n_hist * sizeof *st->hist, st->hist, &e);
+    s->flags = make_buffer(cx, rw, sizeof flags0, &flags0, &e);
+    if (e != CL_SUCCESS) {
+        snprintf(err, errcap, "cannot allocate device buffers: %s (%d)", lsqt_cl_error_name(e), (int)e);
+        goto done;
+    }
+    cl_mem *args[] = {&s->scene, &s->media, &s->layers, &s->wo, &s->wi, &s->tab};
+    for (cl_uint i = 0; i < 6; i++) e |= clSetKernelArg(s->walk, i, sizeof(cl_mem), args[i]);
+    e |= clSetKernelArg(s->walk, 9, sizeof(cl_mem), &s->nee);
+    e |= clSetKernelArg(s->walk, 10, sizeof(cl_mem), &s->scalars);
+    e |= clSetKernelArg(s->walk, 11, sizeof(cl_mem), &s->hist);
+    e |= clSetKernelArg(s->walk, 12, sizeof(cl_mem), &s->flags);
+    cl_mem *pargs[] = {&s->scene, &s->media, &s->layers, &s->wi, &s->tab};
+    for (cl_uint i = 0; i < 5; i++) e |= clSetKernelArg(s->prepare, i, sizeof(cl_mem), pargs[i]);
+    if (e == CL_SUCCESS) {
+        size_t pglobal[2] = {pad, (size_t)st->n_slices};
+        e = clEnqueueNDRangeKernel(cx->queue, s->prepare, 2, NULL, pglobal, NULL, 0, NULL, NULL);
+    }
+    if (e != CL_SUCCESS) {
+        snprintf(err, errcap, "cannot set up the kernels: %s (%d)", lsqt_cl_error_name(e), (int)e);
+        goto done;
+    }
+    rc = 0;
+done:
+    free(media);
+    free(layers);
+    free(media_f);
+    free(layers_f);
+    free(wo);
+    free(wi);
+    free(wo_f);
+    free(wi_f);
+    return rc;
+}
+
+int lsqt_session_open(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st,
+                      const char *extra_options, size_t local_size, int verbose, char *err, size_t errcap)
+{
+    memset(s, 0, sizeof *s);
+    s->cx = cx;
+    s->n_slices = st->n_slices;
+    s->n_wi = st->n_wi;
+    s->n_nee = lsqt_state_nee_count(st);
+    s->n_scalars = lsqt_state_scalar_count(st);
+    s->n_hist = lsqt_state_hist_count(st);
+    int line = 0;
+    const char *model = lsqt_unsupported_model(a, &line);
+    if (model) {
+        snprintf(err, errcap, "line %d: the model %s is not implemented in the kernels yet", line, model);
+        return 1;
+    }
+    char opt[1024];
+    if (build_options(cx, a, st, opt, sizeof opt, err, errcap)) return 1;
+    if (extra_options && strlen(opt) + strlen(extra_options) + 2 < sizeof opt) {
+        strcat(opt, " ");
+        strcat(opt, extra_options);
+    }
+    if (verbose) fprintf(stderr, "kernel build options: %s\n", opt);
+    char *log = NULL;
+    s->prog = lsqt_program_build(cx, opt, &log, err, errcap);
+    if (!s->prog) {
+        if (log) fprintf(stderr, "OpenCL build log:\n%s\n", log);
+        free(log);
+        return 1;
+    }
+    cl_int e = CL_SUCCESS, e2 = CL_SUCCESS;
+    s->walk = clCreateKernel(s->prog, "lsqt_walk", &e);
+    s->prepare = clCreateKernel(s->prog, "lsqt_prepare", &e2);
+    if (e != CL_SUCCESS || e2 != CL_SUCCESS) {
+        if (e == CL_SUCCESS) e = e2;
+        snprintf(err, errcap, "clCreateKernel: %s (%d)", lsqt_cl_error_name(e), (int)e);
+        lsqt_session_close(s);
+        return 1;
+    }
+    size_t ls = local_size ? local_size : 64, kmax = 0;
+    clGetKernelWorkGroupInfo(s->walk, cx->dev.id, CL_KERNEL_WORK_GROUP_SIZE, sizeof kmax, &kmax, NULL);
+    if (kmax && ls > kmax) ls = kmax;
+    s->local_size = ls;
+    if (upload(s, a, st, err, errcap)) {
+        lsqt_session_close(s);
+        return 1;
+    }
+    return 0;
+}
+
+int lsqt_session_launch(lsqt_session *s, uint64_t begin, uint64_t end, char *err, size_t errcap)
+{
+    if (end <= begin) return 0;
+    cl_ulong b = begin, en = end, chunk0 = begin / LSQT_CHUNK;
+    cl_ulong nchunks = (end - 1) / LSQT_CHUNK - chunk0 + 1;
+    cl_int e = clSetKernelArg(s->walk, 6, sizeof b, &b);
+    e |= clSetKernelArg(s->walk, 7, sizeof en, &en);
+    e |= clSetKernelArg(s->walk, 8, sizeof chunk0, &chunk0);
+    size_t global[2] = {(size_t)nchunks * s->local_size, (size_t)s->n_slices}, local[2] = {s->local_size, 1};
+    if (e == CL_SUCCESS) e = clEnqueueNDRangeKernel(s->cx->queue, s->walk, 2, NULL, global, local, 0, NULL, NULL);
+    if (e == CL_SUCCESS) e = clFinish(s->cx->queue);
+    if (e != CL_SUCCESS) {
+        snprintf(err, errcap, "kernel launch failed: %s (%d)", lsqt_cl_error_name(e), (int)e);
+        return 1;
+    }
+    return 0;
+}
+
+int lsqt_session_read(lsqt_session *s, lsqt_state *st, char *err, size_t errcap)
+{
+    cl_command_queue q = s->cx->queue;
+    cl_uint fl = 0;
+    cl_int e = clEnqueueReadBuffer(q, s->nee, CL_TRUE, 0, s->n_nee * sizeof *st->nee, st->nee, 0, NULL, NULL);
+    e |= clEnqueueReadBuffer(q, s->scalars, CL_TRUE, 0, s->n_scalars * sizeof *st->scalars, st->scalars, 0, NULL, NULL);
+    e |= clEnqueueReadBuffer(q, s->hist, CL_TRUE, 0, s->n_hist * sizeof *st->hist, st->hist, 0, NULL, NULL);
+    e |= clEnqueueReadBuffer(q, s->flags, CL_TRUE, 0, sizeof fl, &fl, 0, NULL, NULL);
+    if (e != CL_SUCCESS) {
+        snprintf(err, errcap, "cannot read the tallies back: %s (%d)", lsqt_cl_error_name(e), (int)e);
+        return 1;
+    }
+    st->flags |= fl;
+    return 0;
+}
+
+void lsqt_session_close(lsqt_session *s)
+{
+    cl_mem *all[] = {&s->scene, &s->media, &s->layers, &s->wo, &s->wi, &s->tab,
+                     &s->nee, &s->scalars, &s->hist, &s->flags};
+    for (size_t i = 0; i < sizeof all / sizeof *all; i++)
+        if (*all[i]) clReleaseMemObject(*all[i]);
+    if (s->walk) clReleaseKernel(s->walk);
+    if (s->prepare) clReleaseKernel(s->prepare);
+    if (s->prog) clReleaseProgram(s->prog);
+    memset(s, 0, sizeof *s);
+}

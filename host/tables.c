@@ -1,0 +1,146 @@
+/* Device tables: an assembly as the kernels read it (layouts in device_layout.h). */
+#include "lsqt/tables.h"
+
+#include <string.h>
+
+/* Models the kernels can run today; the parser knows them all. */
+static int bsdf_supported(const lsqt_layer *l)
+{
+    return l->kind == LSQT_BSDF_NULL || l->kind == LSQT_BSDF_LAMBERTIAN || l->kind == LSQT_BSDF_MS_LAMBERTIAN ||
+           l->kind == LSQT_BSDF_MS_DIELECTRIC || l->kind == LSQT_BSDF_MS_CONDUCTIVE || l->kind == LSQT_BSDF_OREN_NAYAR;
+}
+static int phase_supported(int kind)
+{
+    return kind == LSQT_PHASE_NONE || kind == LSQT_PHASE_HG || kind == LSQT_PHASE_HG2 || kind == LSQT_PHASE_RAYLEIGH ||
+           kind == LSQT_PHASE_SGGX;
+}
+
+const char *lsqt_unsupported_model(const lsqt_assembly *a, int *line)
+{
+    for (int i = 0; i < a->n_layers; i++)
+        if (!bsdf_supported(&a->layers[i])) {
+            *line = a->layers[i].line;
+            return lsqt_bsdf_name(a->layers[i].kind);
+        }
+    for (int m = 0; m <= a->n_layers; m++)
+        if (a->media[m].mus > 0 && !phase_supported(a->media[m].phase.kind)) {
+            *line = a->media[m].line;
+            return lsqt_phase_name(a->media[m].phase.kind);
+        }
+    return NULL;
+}
+
+static double medium_thickness(const lsqt_assembly *a, int m)
+{
+    return (m == 0 || m == a->n_layers) ? 0.0 : a->layers[m - 1].z - a->layers[m].z;
+}
+
+static double medium_tau(const lsqt_assembly *a, int m)
+{
+    return (a->media[m].mua + a->media[m].mus) * medium_thickness(a, m);
+}
+
+/* A phase model's parameters as the kernels read them (kernels/phase_*.cl). */
+static void phase_params(const lsqt_phase *p, double pp[4])
+{
+    switch (p->kind) {
+    case LSQT_PHASE_HG: pp[0] = p->g; break;
+    case LSQT_PHASE_HG2: pp[0] = p->g0, pp[1] = p->g1, pp[2] = p->b; break;
+    case LSQT_PHASE_RAYLEIGH: pp[0] = p->rho / (2.0 - p->rho); break; /* gamma, as in the seed */
+    case LSQT_PHASE_SGGX: {
+        /* S = diag(Apara^2, Apara^2, Aperp^2), scaled to a largest entry of 1 (the phase
+         * function does not change with the scale of S, and float keeps its range) */
+        double a = p->apara > p->aperp ? p->apara : p->aperp;
+        pp[0] = (p->apara / a) * (p->apara / a), pp[1] = (p->aperp / a) * (p->aperp / a);
+        pp[2] = p->sggx_diffuse ? 1.0 : 0.0;
+        break;
+    }
+    default: break;
+    }
+}
+
+void lsqt_device_tables(const lsqt_assembly *a, lsqt_dev_scene *scene, lsqt_dev_medium_d *media,
+                        lsqt_dev_layer_d *layers)
+{
+    const int n = a->n_layers;
+    memset(scene, 0, sizeof *scene);
+    scene->n_layers = n;
+    scene->top_nonnull = scene->bottom_nonnull = -1;
+    for (int i = 0; i < n; i++) {
+        const lsqt_layer *l = &a->layers[i];
+        memset(&layers[i], 0, sizeof layers[i]);
+        layers[i].kind = l->kind;
+        layers[i].iter_count = l->iter_count;
+        layers[i].multiple_scattering = l->multiple_scattering;
+        const lsqt_medium *up = &a->media[i], *down = &a->media[i + 1];
+        if (l->kind == LSQT_BSDF_MS_CONDUCTIVE) {
+            /* alpha, and the metal's complex index relative to the medium above */
+            layers[i].p[0] = l->alpha;
+            layers[i].p[1] = down->eta / up->eta;
+            layers[i].p[2] = down->mua / up->eta;
+        } else if (l->kind == LSQT_BSDF_MS_DIELECTRIC) {
+            /* alpha, the index below relative to the one above, the Fresnel scales */
+            layers[i].p[0] = l->alpha;
+            layers[i].p[1] = down->eta / up->eta;
+            layers[i].p[2] = l->kR;
+            layers[i].p[3] = l->kT;
+        } else if (l->kind == LSQT_BSDF_MS_LAMBERTIAN) {
+            layers[i].p[0] = l->alpha;
+            layers[i].p[1] = l->fR;
+            layers[i].p[2] = l->fT;
+        } else if (l->kind == LSQT_BSDF_OREN_NAYAR) {
+            layers[i].p[0] = l->fR;
+            layers[i].p[1] = l->sigma;
+        } else {
+            layers[i].p[0] = l->fR;
+            layers[i].p[1] = l->fT;
+        }
+        if (l->kind != LSQT_BSDF_NULL) {
+            if (scene->top_nonnull < 0) scene->top_nonnull = i;
+            scene->bottom_nonnull = i;
+        }
+    }
+    for (int m = 0; m <= n; m++) {
+        const lsqt_medium *src = &a->media[m];
+        lsqt_dev_medium_d *d = &media[m];
+        memset(d, 0, sizeof *d);
+        d->eta = src->eta;
+        d->mua = src->mua;
+        d->mus = src->mus;
+        d->mut = src->mua + src->mus;
+        d->thickness = medium_thickness(a, m);
+        d->phase_kind = src->mus > 0 ? src->phase.kind : LSQT_PHASE_NONE;
+        phase_params(&src->phase, d->pp);
+    }
+    /* Optical thickness of the interior media strictly above / below each medium. */
+    double acc = 0.0;
+    for (int m = 0; m <= n; m++) {
+        media[m].tau_above = acc;
+        acc += medium_tau(a, m);
+    }
+    acc = 0.0;
+    for (int m = n; m >= 0; m--) {
+        media[m].tau_below = acc;
+        acc += medium_tau(a, m);
+    }
+}
+
+void lsqt_tables_to_float(const lsqt_dev_medium_d *md, lsqt_dev_medium *mf, int n_media,
+                          const lsqt_dev_layer_d *ld, lsqt_dev_layer *lf, int n_layers)
+{
+    for (int m = 0; m < n_media; m++) {
+        const lsqt_dev_medium_d *d = &md[m];
+        lsqt_dev_medium *f = &mf[m];
+        memset(f, 0, sizeof *f);
+        f->eta = (float)d->eta, f->mua = (float)d->mua, f->mus = (float)d->mus, f->mut = (float)d->mut;
+        f->thickness = (float)d->thickness, f->tau_above = (float)d->tau_above, f->tau_below = (float)d->tau_below;
+        for (int i = 0; i < 4; i++) f->pp[i] = (float)d->pp[i];
+        f->phase_kind = d->phase_kind;
+    }
+    for (int l = 0; l < n_layers; l++) {
+        memset(&lf[l], 0, sizeof lf[l]);
+        lf[l].kind = ld[l].kind, lf[l].iter_count = ld[l].iter_count;
+        lf[l].multiple_scattering = ld[l].multiple_scattering;
+        for (int i = 0; i < 8; i++) lf[l].p[i] = (float)ld[l].p[i];
+    }
+}

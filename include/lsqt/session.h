@@ -1,0 +1,47 @@
+/* A simulation session on one device: the program, the device tables and the tallies of
+ * one state, kept across launches (and the stages of a run: pilot, refinement, stop
+ * rules). The launch loop itself is in run.c (simulate.h). */
+#ifndef LSQT_SESSION_H
+#define LSQT_SESSION_H
+
+#include <stdint.h>
+
+#include "lsqt/assembly.h"
+#include "lsqt/device.h"
+#include "lsqt/state.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct lsqt_session {
+    lsqt_context *cx;
+    cl_program prog;
+    cl_kernel walk, prepare;
+    cl_mem scene, media, layers, wo, wi, tab, nee, scalars, hist, flags;
+    size_t local_size; /* work-group size of the walk */
+    int n_slices, n_wi;
+    size_t n_nee, n_scalars, n_hist; /* tally counts (lsqt_u128 each) */
+} lsqt_session;
+
+/* Builds the program for assembly A and state ST (its precision and direction count),
+ * uploads the tables, directions and ST's tallies, and fills the direction tables.
+ * extra_options: appended to the build options (tests, tuning); local_size 0 = automatic.
+ * Returns 0, or 1 with err filled (a build log, if any, already printed to stderr). */
+int lsqt_session_open(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st,
+                      const char *extra_options, size_t local_size, int verbose, char *err, size_t errcap);
+
+/* Runs paths [begin, end) of every slice (the chunks they touch) and waits for them.
+ * Returns 0, or 1 with err filled. */
+int lsqt_session_launch(lsqt_session *s, uint64_t begin, uint64_t end, char *err, size_t errcap);
+
+/* Copies the device tallies into ST and ORs the device flags into ST's (paths are the
+ * caller's to count). Returns 0, or 1 with err filled. */
+int lsqt_session_read(lsqt_session *s, lsqt_state *st, char *err, size_t errcap);
+
+void lsqt_session_close(lsqt_session *s);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,66 @@
+#!/usr/bin/env bash
+# Stop rules of lsqt-cl: --target-error reaches the requested error and stops there, at a
+# path count that depends only on the tallies (so the run is reproducible and equals a
+# plain -p run of that count); -p caps it; a target is judged only from 2 chunks in each
+# batch on (16384 paths); an error that cannot be estimated (one batch: 256 paths or
+# fewer) is "n/a".
+# usage: test_stop_rules.sh LSQT_CL EXAMPLES_DIR
+set -u
+# shellcheck source=cli_lib.sh
+source "$(dirname "${BASH_SOURCE[0]}")/cli_lib.sh"
+BIN=$1
+EX=$2
+T=$(mktemp -d)
+trap 'rm -rf "$T"' EXIT
+cd "$T"
+cp "$EX/slab.lsqt" S.lsqt
+F=(-wo 4 -wi 16 -s 3)
+
+# json FILE EXPR: evaluates a Python expression over the JSON summary j.
+json() { python3 -c "import json, sys; j = json.load(open(sys.argv[1])); sys.exit(0 if ($2) else 1)" "$1"; }
+
+# Reaches the target: every slice's largest relative error at most E, stopped by it, on a
+# check count (a multiple of 8192 paths, at least 16384), and not far beyond it (checks
+# aim 5 % past the 1/sqrt(N) prediction, so the error at the stop is well above E / 2).
+E=0.03
+expect 0 "stopped by the target error" -- "$BIN" -R --target-error $E "${F[@]}" --lss a.lss -o a.raw --json a.json S.lsqt
+json a.json "all(s['max_rel_err'] <= $E for s in j['slices']) and max(s['max_rel_err'] for s in j['slices']) > $E / 2" \
+  && ok || bad "target $E: max_rel_err $(python3 -c "import json; print([s['max_rel_err'] for s in json.load(open('a.json'))['slices']])")"
+json a.json "j['stopped_by'].startswith('the target error') and j['paths_added'] % 8192 == 0 and j['paths_added'] >= 16384" \
+  && ok || bad "target $E: stopped_by / paths: $(cat a.json)"
+N=$(python3 -c "import json; print(json.load(open('a.json'))['paths_added'])")
+# Reproducible, and the same as a plain run of that many paths.
+"$BIN" -q -R --target-error $E "${F[@]}" --lss b.lss -o b.raw S.lsqt && cmp -s a.lss b.lss && cmp -s a.raw b.raw \
+  && ok || bad "target $E: a second run differs"
+"$BIN" -q -R -p "$N" "${F[@]}" --lss c.lss -o c.raw S.lsqt && cmp -s a.lss c.lss && ok \
+  || bad "target $E: differs from -p $N"
+# A continued LSS that already meets the target adds nothing; a smaller target goes on.
+expect 0 "0 added per slice" -- "$BIN" --target-error $E --lss a.lss -o a2.raw S.lsqt
+cmp -s a.lss c.lss && ok || bad "continuing at the target changed the LSS"
+expect 0 "stopped by the target error" -- "$BIN" --target-error 0.02 --lss a.lss -o a3.raw --json a3.json S.lsqt
+json a3.json "all(s['max_rel_err'] <= 0.02 for s in j['slices']) and j['slices'][0]['paths'] > $N" && ok \
+  || bad "continued to 0.02: $(cat a3.json)"
+
+# -p caps a target that is not reached.
+expect 0 "stopped by the path count" -- "$BIN" -R --target-error 0.001 -p 20000 "${F[@]}" --lss d.lss -o d.raw --json d.json S.lsqt
+json d.json "j['paths_added'] == 20000 and all(s['max_rel_err'] > 0.001 for s in j['slices'])" && ok || bad "cap: $(cat d.json)"
+
+# A target met by any estimate still waits for an error that can be estimated.
+expect 0 "stopped by the target error" -- "$BIN" -R --target-error 10 "${F[@]}" --lss e.lss -o e.raw --json e.json S.lsqt
+json e.json "j['paths_added'] == 16384" && ok || bad "target 10: $(cat e.json)"
+
+# With all paths in one batch (256 or fewer) the errors are n/a (JSON null), never +-inf or 0;
+# from two batches on they are numbers.
+expect 0 "+- n/a" -- "$BIN" -R -p 256 "${F[@]}" --lss f.lss -o f.raw --json f.json S.lsqt
+json f.json "all(s['R_err'] is None and s['max_rel_err'] is None for s in j['slices'])" && ok || bad "n/a: $(cat f.json)"
+expect 0 "errors need paths in 2 of the 32 batches" -- "$BIN" -R -p 256 "${F[@]}" --lss f.lss -o f.raw S.lsqt
+"$BIN" -q -R -p 300 "${F[@]}" --lss g.lss -o g.raw --json g.json S.lsqt
+json g.json "all(s['R_err'] > 0 and s['max_rel_err'] > 0 for s in j['slices'])" && ok || bad "300 paths: $(cat g.json)"
+
+# Bad values.
+for v in 0 -0.1 abc nan; do
+  expect 2 "bad value '$v' for --target-error" -- "$BIN" -R --target-error "$v" S.lsqt
+done
+ls S.lsqt.* >/dev/null 2>&1 && bad "a refused run wrote output" || ok
+
+finish test_stop_rules
