@@ -92,7 +92,8 @@ int lsqt_lss_write(const char *path, const lsqt_state *st, char *err, size_t err
         for (size_t i = 0; i < LSQT_BATCHES * nw; i++) put_u128(&w, st->nee[(size_t)s * LSQT_BATCHES * nw + i]);
         for (size_t i = 0; i < LSQT_BATCHES * LSQT_T_COUNT; i++)
             put_u128(&w, st->scalars[(size_t)s * LSQT_BATCHES * LSQT_T_COUNT + i]);
-        for (size_t i = 0; i < LSQT_HIST_BINS; i++) put_u128(&w, st->hist[(size_t)s * LSQT_HIST_BINS + i]);
+        for (size_t i = 0; i < LSQT_BATCHES * LSQT_HIST_BINS; i++)
+            put_u128(&w, st->hist[(size_t)s * LSQT_BATCHES * LSQT_HIST_BINS + i]);
     }
     put_u32(&w, lsqt_crc32(0, w.p, w.n));
     if (w.oom) {
@@ -206,7 +207,7 @@ int lsqt_lss_parse(const unsigned char *data, size_t len, lsqt_state *st, char *
     }
     /* The rest must have exactly the size the header announces. */
     const size_t per_slice = 16 + (size_t)n_wi * 12 + (size_t)LSQT_BATCHES * n_wi * 16 +
-                             LSQT_BATCHES * LSQT_T_COUNT * 16 + LSQT_HIST_BINS * 16;
+                             LSQT_BATCHES * LSQT_T_COUNT * 16 + LSQT_BATCHES * LSQT_HIST_BINS * 16;
     if (r.n - r.at != tl + per_slice * n_slices) {
         snprintf(err, errcap, "corrupt LSS file (size does not match its header)");
         return -1;
@@ -236,7 +237,8 @@ int lsqt_lss_parse(const unsigned char *data, size_t len, lsqt_state *st, char *
         for (size_t i = 0; i < LSQT_BATCHES * nw; i++) st->nee[s * LSQT_BATCHES * nw + i] = get_u128(&r);
         for (size_t i = 0; i < LSQT_BATCHES * LSQT_T_COUNT; i++)
             st->scalars[s * LSQT_BATCHES * LSQT_T_COUNT + i] = get_u128(&r);
-        for (size_t i = 0; i < LSQT_HIST_BINS; i++) st->hist[s * LSQT_HIST_BINS + i] = get_u128(&r);
+        for (size_t i = 0; i < LSQT_BATCHES * LSQT_HIST_BINS; i++)
+            st->hist[s * LSQT_BATCHES * LSQT_HIST_BINS + i] = get_u128(&r);
     }
     if (r.bad) {
         lsqt_state_free(st);

@@ -337,6 +337,7 @@ int main(int argc, char **argv)
 
     lsqt_sim_opts so = {isatty(STDERR_FILENO) && !c.quiet, c.time_limit, 0, &g_stop, NULL, c.verbose, c.target_error};
     lsqt_sim_stats stats;
+    const lsqt_work before = lsqt_work_totals(&st);
     /* With a target error, -p is a cap when given, else there is none. */
     const uint64_t add = c.target_error > 0 && !c.paths_given ? UINT64_MAX : c.paths;
     rc = lsqt_simulate(&cx, &a, &st, add, &so, &stats, err, sizeof err);
@@ -348,7 +349,9 @@ int main(int argc, char **argv)
         snprintf(devname, sizeof devname, "%s [%s]", cx.dev.name, cx.dev.platform_name);
         lsqt_run_info ri = {devname, stats.seconds,
                             stats.seconds > 0 ? (double)stats.paths_added * st.n_slices / stats.seconds : 0.0,
-                            (unsigned long long)stats.paths_added, NULL};
+                            (unsigned long long)stats.paths_added, NULL, lsqt_work_totals(&st)};
+        ri.work.paths -= before.paths, ri.work.layer_events -= before.layer_events;
+        ri.work.medium_events -= before.medium_events, ri.work.nee_evaluations -= before.nee_evaluations;
         static const char *const why[] = {"the path count (-p)", "the target error (--target-error)",
                                           "the time limit (--time-limit)", "an interrupt"};
         if (c.target_error > 0 || c.time_limit > 0) ri.stopped_by = why[stats.stop_reason];

@@ -41,6 +41,13 @@ void lsqt_report_summary(FILE *f, const lsqt_state *st, const lsqt_slice_est *es
         fprintf(f, "note: errors need paths in 2 of the %d batches (more than %d paths per slice): n/a\n",
                 LSQT_BATCHES, LSQT_CHUNK);
     if (ri->stopped_by) fprintf(f, "stopped by %s\n", ri->stopped_by);
+    const lsqt_work *w = &ri->work;
+    if (w->paths > 0) {
+        double ev = w->layer_events + w->medium_events;
+        fprintf(f, "work: %.4g events per path (layers %.4g, media %.4g), %.4g events/s, %.4g next-event "
+                   "evaluations/s\n", ev / w->paths, w->layer_events / w->paths, w->medium_events / w->paths,
+                ri->seconds > 0 ? ev / ri->seconds : 0.0, ri->seconds > 0 ? w->nee_evaluations / ri->seconds : 0.0);
+    }
     if (cut) fprintf(f, "warning: %llu paths reached the safety cap of %d events and were stopped\n", cut, LSQT_MAX_EVENTS);
     if (nonfinite) fprintf(f, "warning: %d non-finite estimates were left out of RAW\n", nonfinite);
     if (st->flags & LSQT_FLAG_NONFINITE) fprintf(f, "warning: non-finite path contributions were dropped\n");
@@ -72,6 +79,19 @@ int lsqt_report_json(const char *path, const lsqt_state *st, const lsqt_slice_es
             (unsigned long long)st->hash, st->flags, ri->paths_added);
     if (ri->stopped_by) fprintf(f, "\"%s\"", ri->stopped_by);
     else fprintf(f, "null");
+    const lsqt_work *w = &ri->work;
+    const double ev = w->layer_events + w->medium_events, np = w->paths > 0 ? w->paths : NAN;
+    const double sec = ri->seconds > 0 ? ri->seconds : NAN;
+    fprintf(f, ",\n \"events_per_path\": ");
+    json_num(f, ev / np);
+    fprintf(f, ", \"layer_events_per_path\": ");
+    json_num(f, w->layer_events / np);
+    fprintf(f, ", \"medium_events_per_path\": ");
+    json_num(f, w->medium_events / np);
+    fprintf(f, ", \"events_per_second\": ");
+    json_num(f, ev / sec);
+    fprintf(f, ", \"nee_evaluations\": %.17g, \"nee_evaluations_per_second\": ", w->nee_evaluations);
+    json_num(f, w->nee_evaluations / sec);
     fprintf(f, ",\n \"slices\": [");
     for (int s = 0; s < st->n_slices; s++) {
         const lsqt_slice_est *e = &est[s];

@@ -16,7 +16,7 @@ size_t lsqt_state_scalar_count(const lsqt_state *st)
 
 size_t lsqt_state_hist_count(const lsqt_state *st)
 {
-    return (size_t)st->n_slices * LSQT_HIST_BINS;
+    return (size_t)st->n_slices * LSQT_BATCHES * LSQT_HIST_BINS;
 }
 
 int lsqt_state_init(lsqt_state *st, const char *canonical, uint64_t hash, uint64_t seed,

@@ -39,6 +39,18 @@ int lsqt_tally_flags_error(uint32_t flags, char *err, size_t errcap)
     return 1;
 }
 
+lsqt_work lsqt_work_totals(const lsqt_state *st)
+{
+    lsqt_work w = {(double)st->paths * st->n_slices, 0.0, 0.0, 0.0};
+    for (size_t i = 0; i < (size_t)st->n_slices * LSQT_BATCHES; i++) {
+        const lsqt_u128 *sc = st->scalars + i * LSQT_T_COUNT;
+        w.layer_events += lsqt_u128_to_double(sc[LSQT_T_LAYER_EVENTS]);
+        w.medium_events += lsqt_u128_to_double(sc[LSQT_T_MEDIUM_EVENTS]);
+        w.nee_evaluations += lsqt_u128_to_double(sc[LSQT_T_NEE_VERTICES]) * st->n_wi;
+    }
+    return w;
+}
+
 lsqt_slice_est *lsqt_estimates(const lsqt_state *st)
 {
     lsqt_slice_est *out = calloc((size_t)st->n_slices, sizeof *out);

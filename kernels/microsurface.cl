@@ -22,6 +22,7 @@ typedef struct {
     real *sum;
     __global const real *wi;
     __global const real *tab;
+    ulong *count; /* vertices evaluated (work counter), or 0 */
 } ms_sink;
 
 /* Directions are in `real`: --double is double end to end (the host normalises them). */
@@ -35,6 +36,7 @@ inline dir4 load_dir4(__global const real *wi, int k)
  * u (this side's frame), lam and lg are in scope for EXPR. Lanes with T = 0 add nothing
  * even where EXPR is not finite (the zero vectors that pad the directions). */
 #define MS_NEE_LOOP(EXPR)                                                        \
+    if (k->count) (*k->count)++;                                                 \
     for (int b = 0; b < LSQT_NWI_PAD; b += 4) {                                  \
         real4 t = vload4(0, k->tab + b);                                         \
         if (!any(t > R(0.0))) continue;                                          \

@@ -12,6 +12,12 @@
  * work-group's. Integer sums keep the result independent of order. */
 #define ACC_N (LSQT_NWI + LSQT_T_COUNT)
 
+/* A work-item's work counters, in the order of the LSQT_T_LAYER_EVENTS... tallies. */
+#define WORK_LAYER (LSQT_T_LAYER_EVENTS - LSQT_T_LAYER_EVENTS)
+#define WORK_MEDIUM (LSQT_T_MEDIUM_EVENTS - LSQT_T_LAYER_EVENTS)
+#define WORK_NEE (LSQT_T_NEE_VERTICES - LSQT_T_LAYER_EVENTS)
+#define WORK_N (LSQT_T_COUNT - LSQT_T_LAYER_EVENTS)
+
 typedef struct {
     __constant lsqt_dev_scene *scene;
     __global const lsqt_dev_medium *media;
@@ -20,6 +26,7 @@ typedef struct {
     __global const real *tab;          /* this slice's per-layer direction tables (lsqt_prepare) */
     real *sum;                         /* the current path's point estimates */
     ulong *nee;                        /* this work-item's point-estimate sums, low words */
+    ulong *work;                       /* this work-item's work counters (LSQT_T_LAYER_EVENTS ...) */
     volatile __local acc_word *acc;    /* the work-group's tallies, LSQT_ACC_WORDS each */
     volatile __global uint *flags;
 } walk_ctx;
@@ -131,12 +138,14 @@ inline real layer_vertex(const walk_ctx *c, int li, real3 d, real w, rng_t *rng,
     real tau_down = below->tau_below + below->mut * below->thickness;
     const int visible = nee_visible(tau_up, tau_down, up, down);
     __global const real *tab = c->tab + li * LSQT_TAB_STRIDE;
+    c->work[WORK_LAYER]++;
 #if defined(LSQT_HAS_BSDF_MS_LAMBERTIAN) || defined(LSQT_HAS_BSDF_MS_DIELECTRIC) || defined(LSQT_HAS_BSDF_MS_CONDUCTIVE)
     if (layer_is_micro(l)) {
-        ms_sink k = {c->sum, c->wi, tab};
+        ms_sink k = {c->sum, c->wi, tab, c->work + WORK_NEE};
         return ms_vertex_walks(l, d, rng, w, visible, &k, wi);
     }
 #endif
+    if (visible) c->work[WORK_NEE]++;
     if (visible)
         for (int k = 0; k < LSQT_NWI_PAD; k += 4)
             nee_add4(c, k, w * bsdf_eval4(l, -d, load_dir4(c->wi, k)), vload4(0, tab + k));
@@ -152,6 +161,7 @@ inline void nee_medium(const walk_ctx *c, int mi, real h, real3 d, real w, const
     real tau_up = m->tau_above + m->mut * (m->thickness - h);
     real tau_down = m->tau_below + m->mut * h;
     if (!nee_visible(tau_up, tau_down, up, down)) return;
+    c->work[WORK_NEE]++;
     for (int k = 0; k < LSQT_NWI_PAD; k += 4) {
         dir4 wi = load_dir4(c->wi, k);
         nee_add4(c, k, w * phase_eval4(m, pv, -d, wi), nee_transmittance4(wi.z, tau_up, tau_down, up, down));
@@ -236,7 +246,8 @@ inline void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulong *hi
                 h = clamp(h + s * d.z, R(0.0), (real)m->thickness);
                 w *= (real)m->mus / (real)m->mut;
                 scattered = 1;
-                if (!(w > R(0.0))) return;
+                if (!(w > R(0.0))) return; /* absorbed (mus = 0): no scattering event */
+                c->work[WORK_MEDIUM]++;
                 phase_vtx pv = phase_vertex(m, -d, rng);
                 nee_medium(c, medium, h, d, w, &pv);
                 real3 wi;
@@ -274,19 +285,21 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
     for (int k = lid; k < LSQT_ACC_WORDS * ACC_N; k += lsz) acc[k] = 0;
     barrier(CLK_LOCAL_MEM_FENCE);
 
-    ulong nee_priv[LSQT_NWI_PAD];
+    ulong nee_priv[LSQT_NWI_PAD], work[WORK_N] = {0, 0, 0};
     real path_sum[LSQT_NWI_PAD];
     for (int k = 0; k < LSQT_NWI_PAD; k++) nee_priv[k] = 0, path_sum[k] = R(0.0);
     walk_ctx c = {scene, media, layers, wi_dirs + 3 * LSQT_NWI_PAD * slice,
-                  tab + (size_t)slice * scene->n_layers * LSQT_TAB_STRIDE, path_sum, nee_priv, acc, flags};
+                  tab + (size_t)slice * scene->n_layers * LSQT_TAB_STRIDE, path_sum, nee_priv, work, acc, flags};
     real3 wo = make_real3(wo_dirs[4 * slice], wo_dirs[4 * slice + 1], wo_dirs[4 * slice + 2]);
     for (ulong p = begin + (ulong)lid; p < end; p += (ulong)lsz) {
         rng_t rng = rng_init(scene->seed_lo, scene->seed_hi, slice, p, RNG_PURPOSE_WALK);
-        run_path(&c, wo, &rng, hist + 2 * (ulong)slice * LSQT_HIST_BINS);
+        run_path(&c, wo, &rng, hist + 2 * ((ulong)slice * LSQT_BATCHES + (ulong)batch) * LSQT_HIST_BINS);
         nee_flush(&c);
     }
     for (int k = 0; k < LSQT_NWI; k++)
         if (nee_priv[k]) local_add128(acc + LSQT_ACC_WORDS * k, nee_priv[k], 0, flags);
+    for (int k = 0; k < WORK_N; k++)
+        if (work[k]) local_add128(acc + LSQT_ACC_WORDS * (LSQT_NWI + LSQT_T_LAYER_EVENTS + k), work[k], 0, flags);
     barrier(CLK_LOCAL_MEM_FENCE);
 
     ulong base = (ulong)slice * LSQT_BATCHES + (ulong)batch;

@@ -13,17 +13,77 @@ static lsqt_u128 sum_u128(const lsqt_u128 *p, size_t n, size_t stride)
     return t;
 }
 
-/* Every scattered exit lands in one histogram bin with the same fixed-point weight as
- * its R or T tally: the integer sums must agree exactly (R + T = binned + delta_T). */
+/* Every scattered exit lands in one histogram bin of its path's batch with the same
+ * fixed-point weight as its R or T tally: the integer sums must agree exactly, batch by
+ * batch (R + T = binned + delta_T). */
 static void check_hist_total(const lsqt_state *st, int s)
 {
-    const lsqt_u128 *sc = st->scalars + (size_t)s * LSQT_BATCHES * LSQT_T_COUNT;
-    lsqt_u128 exits = lsqt_u128_add(sum_u128(sc + LSQT_T_R, LSQT_BATCHES, LSQT_T_COUNT),
-                                    sum_u128(sc + LSQT_T_T, LSQT_BATCHES, LSQT_T_COUNT));
-    lsqt_u128 binned = lsqt_u128_add(sum_u128(st->hist + (size_t)s * LSQT_HIST_BINS, LSQT_HIST_BINS, 1),
-                                     sum_u128(sc + LSQT_T_DELTA_T, LSQT_BATCHES, LSQT_T_COUNT));
-    CHECK(exits.lo == binned.lo && exits.hi == binned.hi, "slice %d: histogram + delta_T holds %.17g, exits %.17g",
-          s, lsqt_u128_to_double(binned), lsqt_u128_to_double(exits));
+    for (int b = 0; b < LSQT_BATCHES; b++) {
+        const lsqt_u128 *sc = st->scalars + ((size_t)s * LSQT_BATCHES + (size_t)b) * LSQT_T_COUNT;
+        const lsqt_u128 *h = st->hist + ((size_t)s * LSQT_BATCHES + (size_t)b) * LSQT_HIST_BINS;
+        lsqt_u128 exits = lsqt_u128_add(sc[LSQT_T_R], sc[LSQT_T_T]);
+        lsqt_u128 binned = lsqt_u128_add(sum_u128(h, LSQT_HIST_BINS, 1), sc[LSQT_T_DELTA_T]);
+        CHECK(exits.lo == binned.lo && exits.hi == binned.hi,
+              "slice %d batch %d: histogram + delta_T holds %.17g, exits %.17g", s, b, lsqt_u128_to_double(binned),
+              lsqt_u128_to_double(exits));
+    }
+}
+
+/* The histogram of one slice summed over its batches, bin by bin. */
+static void hist_of_slice(const lsqt_state *st, int s, lsqt_u128 *out)
+{
+    for (int i = 0; i < LSQT_HIST_BINS; i++)
+        out[i] = sum_u128(st->hist + (size_t)s * LSQT_BATCHES * LSQT_HIST_BINS + (size_t)i, LSQT_BATCHES,
+                          LSQT_HIST_BINS);
+}
+
+/* The work counters of one slice, summed over its batches. */
+static double work_of(const lsqt_state *st, int s, int which)
+{
+    return lsqt_u128_to_double(
+        sum_u128(st->scalars + (size_t)s * LSQT_BATCHES * LSQT_T_COUNT + (size_t)which, LSQT_BATCHES, LSQT_T_COUNT));
+}
+
+/* Work counters where they are exact: a lone Lambertian layer scatters each path once
+ * and evaluates its point estimate there; under a clear absorber, only the paths that
+ * reach it (and absorption is no event); in a
+ * slab between null layers every event is in the medium, the null layers count none,
+ * and every medium vertex sees out (optical depth 1 < 60), so each evaluates once. */
+static void test_work_counters(void)
+{
+    const char *texts[] = {"Medium\nLayer z=0 LambertianBsdf fR=0.6 fT=0\nMedium\n",
+                           "Medium\nLayer z=1 NullBsdf\nMedium mua=1\nLayer z=0 LambertianBsdf fR=0.5\nMedium\n",
+                           "Medium\nLayer z=1 NullBsdf\nMedium mus=1 HenyeyGreensteinPhase g=0.5\nLayer z=0 NullBsdf\nMedium\n"};
+    const double deg[] = {0, 70};
+    for (int t = 0; t < 3; t++) {
+        lsqt_state st;
+        lsqt_slice_est *e = fixture_run(texts[t], 2, deg, 16, 3000, 40 + (uint64_t)t, &st);
+        for (int s = 0; s < 2; s++) {
+            double n = (double)st.paths, lay = work_of(&st, s, LSQT_T_LAYER_EVENTS);
+            double med = work_of(&st, s, LSQT_T_MEDIUM_EVENTS), nee = work_of(&st, s, LSQT_T_NEE_VERTICES);
+            if (t == 0) {
+                CHECK(lay == n && med == 0 && nee == n, "case %d slice %d: %g paths, layer %g, medium %g, NEE %g", t, s,
+                      n, lay, med, nee);
+            } else if (t == 1) {
+                /* a path reaches the floor with probability exp(-1 / cos), binomially;
+                 * absorption in the clear medium is no scattering event */
+                double p = exp(-1.0 / cos(deg[s] * PI / 180)), sd = sqrt(n * p * (1 - p));
+                CHECK(lay == nee && med == 0 && fabs(lay - n * p) <= 4 * sd,
+                      "absorber slice %d: %g paths, layer %g (expected %.1f +- %.1f), medium %g, NEE %g", s, n, lay,
+                      n * p, sd, med, nee);
+            } else {
+                /* mean events per path in a slab of optical depth 1: between 0.5 and 3 */
+                CHECK(lay == 0 && nee == med && med > 0.5 * n && med < 3 * n,
+                      "slab slice %d: %g paths, layer %g, medium %g, NEE %g", s, n, lay, med, nee);
+            }
+        }
+        lsqt_work w = lsqt_work_totals(&st);
+        CHECK(w.paths == 2.0 * st.paths && w.nee_evaluations == 16 * (work_of(&st, 0, LSQT_T_NEE_VERTICES) +
+                                                                       work_of(&st, 1, LSQT_T_NEE_VERTICES)),
+              "case %d: totals %g paths, %g NEE evaluations", t, w.paths, w.nee_evaluations);
+        lsqt_estimates_free(e, 2);
+        lsqt_state_free(&st);
+    }
 }
 
 static void test_lambertian(void)
@@ -39,7 +99,8 @@ static void test_lambertian(void)
         check_hist_total(&st, s);
         /* Exits are cosine distributed: row i of the |cos| grid holds (2i+1)/N^2 of them.
          * Every path weighs exactly fR, so weight / fR counts paths (chi-square). */
-        const lsqt_u128 *h = st.hist + (size_t)s * LSQT_HIST_BINS;
+        lsqt_u128 h[LSQT_HIST_BINS];
+        hist_of_slice(&st, s, h);
         const double unit = 0.6 * LSQT_FIX_SCALE, n = (double)st.paths;
         double chi2 = 0.0;
         for (int i = 0; i < LSQT_HIST_NMU; i++) {
@@ -274,6 +335,7 @@ int main(void)
 {
     fixture_open();
     test_lambertian();
+    test_work_counters();
     test_roulette_exit();
     test_double_tables();
     test_slab();

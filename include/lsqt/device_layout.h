@@ -42,10 +42,18 @@ typedef struct lsqt_u128 {
 #define LSQT_T_T 1        /* weight leaving downward */
 #define LSQT_T_DELTA_T 2  /* part of T that never scattered (forward delta) */
 #define LSQT_T_CUT 3      /* paths stopped by the safety cap (count, not fixed point) */
-#define LSQT_T_COUNT 4
+/* Work counters (counts, not fixed point): scattering events on layers (NullBsdf layers
+ * are crossed, not counted) and in media, and the vertices whose next-event estimate
+ * was evaluated towards all n_wi directions (path vertices and microsurface walk
+ * vertices that can see out): n_wi times that is the count of evaluations. */
+#define LSQT_T_LAYER_EVENTS 4
+#define LSQT_T_MEDIUM_EVENTS 5
+#define LSQT_T_NEE_VERTICES 6
+#define LSQT_T_COUNT 7
 
 /* Exit histogram: per hemisphere LSQT_HIST_NMU bins in |cos theta| times LSQT_HIST_NPHI in
- * phi folded to [0, pi] (equal solid angle). Upper hemisphere first. */
+ * phi folded to [0, pi] (equal solid angle). Upper hemisphere first. Tallied per
+ * (slice, batch), as the point estimates, so that every bin has a standard error. */
 #define LSQT_HIST_NMU 32
 #define LSQT_HIST_NPHI 16
 #define LSQT_HIST_BINS (2 * LSQT_HIST_NMU * LSQT_HIST_NPHI)

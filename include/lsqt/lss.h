@@ -3,8 +3,8 @@
  *   u64 seed, u64 assembly hash, u32 double, transmits, flags,
  *   u32 n_slices, n_wi, u64 paths, u32 text length, canonical assembly text,
  *   per slice: f64 theta_o, u64 paths, n_wi x f32 (x, y, z),
- *              [batch][n_wi] point-estimate sums, [batch][t_count] scalars, hist_bins
- *              histogram, each tally a u128 as two u64 (low first) of 2^-fix_bits units,
+ *              [batch][n_wi] point-estimate sums, [batch][t_count] scalars,
+ *              [batch][hist_bins] histogram, each tally a u128 as two u64 (low first) of 2^-fix_bits units,
  *   u32 CRC-32 of everything before it.
  * Nothing that depends on timing is stored, so equal work gives byte-identical files. */
 #ifndef LSQT_LSS_H
@@ -18,7 +18,7 @@
 extern "C" {
 #endif
 
-#define LSQT_LSS_VERSION 2u /* 2: 128-bit tallies of 2^-40 (1: 64-bit of 2^-30) */
+#define LSQT_LSS_VERSION 3u /* 3: work counters, histogram per batch; 2: 128-bit tallies of 2^-40 (1: 64-bit of 2^-30) */
 
 /* Written through lsqt_out (util.h: atomic for regular files). Returns 0 or -1. */
 int lsqt_lss_write(const char *path, const lsqt_state *st, char *err, size_t errcap);

@@ -17,6 +17,7 @@ typedef struct lsqt_run_info {
     double paths_per_second; /* this run, all slices together */
     unsigned long long paths_added;
     const char *stopped_by;  /* what ended the run (NULL: not said) */
+    lsqt_work work;          /* the work of this run (the state's counters after minus before) */
 } lsqt_run_info;
 
 void lsqt_report_summary(FILE *f, const lsqt_state *st, const lsqt_slice_est *est,

@@ -25,7 +25,7 @@ typedef struct lsqt_state {
     uint64_t paths;         /* paths done per slice (every slice the same) */
     lsqt_u128 *nee;         /* [slice][LSQT_BATCHES][n_wi] fixed point */
     lsqt_u128 *scalars;     /* [slice][LSQT_BATCHES][LSQT_T_COUNT] */
-    lsqt_u128 *hist;        /* [slice][LSQT_HIST_BINS] fixed point */
+    lsqt_u128 *hist;        /* [slice][LSQT_BATCHES][LSQT_HIST_BINS] fixed point */
     uint32_t flags;         /* LSQT_FLAG_* raised so far */
 } lsqt_state;
 

@@ -30,6 +30,14 @@ typedef struct lsqt_slice_est {
     int n_nonfinite;     /* f values that are not finite (never written to RAW) */
 } lsqt_slice_est;
 
+/* The work counters of a state, summed over slices and batches: paths (per slice times
+ * slices), scattering events on layers and in media, and next-event evaluations (vertices
+ * evaluated towards all directions, times n_wi). */
+typedef struct lsqt_work {
+    double paths, layer_events, medium_events, nee_evaluations;
+} lsqt_work;
+lsqt_work lsqt_work_totals(const lsqt_state *st);
+
 /* Estimates of every slice (array of st->n_slices, free with lsqt_estimates_free). */
 lsqt_slice_est *lsqt_estimates(const lsqt_state *st);
 void lsqt_estimates_free(lsqt_slice_est *e, int n_slices);
