@@ -53,6 +53,14 @@ void lsqt_cli_help(FILE *f)
           "      --wo-angles=A,B,...     explicit outgoing angles in degrees, [0, 90)\n"
           "  -wi, --wi-count N           incident directions per slice, 16-1024 (default 80;\n"
           "                              even when the stack transmits)\n"
+          "      --wi-file FILE          the incident directions, the same for every slice,\n"
+          "                              instead of -wi: 1-1024, one a line, 'x y z' (normalised)\n"
+          "                              or 'theta_deg phi_deg' (theta from +z in [0, 180], phi\n"
+          "                              from +x, the azimuth of wo); '#' comments. Not on the\n"
+          "                              horizon (z = 0), nor below it unless the stack transmits.\n"
+          "                              The BSDF is mirror symmetric about the plane of wo (xz):\n"
+          "                              a direction with y < 0 is simulated at (x, -y, z), and\n"
+          "                              the RAW, which holds both mirror images, has it as given\n"
           "  -rx, --rrss-oversampling N  RRSS oversampling, 2-8 (default 4; RRSS not yet used)\n"
           "  -rp, --rrss-path-frac F     RRSS path fraction, (0,1] (default 0.8; not yet used)\n"
           "  -R, --restart               ignore an existing LSS and start over\n"
@@ -83,7 +91,7 @@ void lsqt_cli_help(FILE *f)
 }
 
 enum flag_id {
-    F_PATHS, F_WO, F_WO_ANGLES, F_WI, F_RX, F_RP, F_RESTART, F_SEED, F_THREADS, F_OUTPUT,
+    F_PATHS, F_WO, F_WO_ANGLES, F_WI, F_WI_FILE, F_RX, F_RP, F_RESTART, F_SEED, F_THREADS, F_OUTPUT,
     F_HEMI, F_DEVICE, F_LIST, F_DOUBLE, F_TIME, F_TARGET, F_LSS, F_JSON, F_QUIET, F_VERBOSE, F_HELP
 };
 
@@ -93,6 +101,7 @@ static const struct flag {
 } flags[] = {
     {"-p", "--path-count", F_PATHS, 1},      {"-wo", "--wo-count", F_WO, 1},
     {NULL, "--wo-angles", F_WO_ANGLES, 1},   {"-wi", "--wi-count", F_WI, 1},
+    {NULL, "--wi-file", F_WI_FILE, 1},
     {"-rx", "--rrss-oversampling", F_RX, 1}, {"-rp", "--rrss-path-frac", F_RP, 1},
     {"-R", "--restart", F_RESTART, 0},       {"-s", "--seed", F_SEED, 1},
     {"-t", "--thread-count", F_THREADS, 1},  {"-o", "--output", F_OUTPUT, 1},
@@ -131,6 +140,7 @@ static int apply(const struct flag *fl, const char *name, const char *v, lsqt_cl
     case F_WO: if (lsqt_parse_count(v, 4, 1024, &n)) expect = "an integer in 4-1024"; else c->wo_count = (int)n; c->sampling_given = 1; break;
     case F_WO_ANGLES: if (parse_angles(v, c)) expect = "comma-separated angles in degrees in [0, 90), at most 1024"; c->sampling_given = 1; break;
     case F_WI: if (lsqt_parse_count(v, 16, 1024, &n)) expect = "an integer in 16-1024"; else c->wi_count = (int)n; c->sampling_given = 1; break;
+    case F_WI_FILE: if (!*v) expect = "a file of directions"; c->wi_file = v; c->sampling_given = 1; break;
     case F_RX: if (lsqt_parse_count(v, 2, 8, &n)) expect = "an integer in 2-8"; else c->rx = (int)n; c->sampling_given = 1; break;
     case F_RP: if (lsqt_parse_double(v, &d) || !(d > 0 && d <= 1)) expect = "a number in (0, 1]"; else c->rp = d; c->sampling_given = 1; break;
     case F_SEED: if (lsqt_parse_u64(v, &c->seed)) expect = "an integer in 0-18446744073709551615 (decimal digits)"; c->seed_given = c->sampling_given = 1; break;
@@ -165,6 +175,7 @@ int lsqt_cli_parse(int argc, char **argv, lsqt_cli *c, char *err, size_t errcap)
     c->wi_count = 80;
     c->rx = 4;
     c->rp = 0.8;
+    char wi_name[16] = ""; /* -wi or --wi-count, as given */
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         if (a[0] != '-' || strcmp(a, "-") == 0) {
@@ -203,8 +214,17 @@ int lsqt_cli_parse(int argc, char **argv, lsqt_cli *c, char *err, size_t errcap)
             snprintf(err, errcap, "%s takes no value", name);
             return 2;
         }
+        if (fl->id == F_WI) snprintf(wi_name, sizeof wi_name, "%s", fl->short_name && strcmp(name, fl->short_name) == 0 ? "-wi" : "--wi-count");
         int rc = apply(fl, name, v ? v : "", c, err, errcap);
         if (rc) return rc;
+    }
+    if (wi_name[0] && c->wi_file) {
+        snprintf(err, errcap, "%s and --wi-file both set the incident directions: give one of them", wi_name);
+        return 2;
+    }
+    if (c->wi_file && c->input && strcmp(c->wi_file, "-") == 0 && strcmp(c->input, "-") == 0) {
+        snprintf(err, errcap, "--wi-file - and the input - cannot both be read from stdin");
+        return 2;
     }
     return 0;
 }

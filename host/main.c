@@ -87,18 +87,24 @@ static int fail(int code, const char *fmt, const char *a, const char *b)
     return code;
 }
 
-/* A fresh state: slices, incident directions and zero tallies. */
-static int new_state(lsqt_state *st, const lsqt_cli *c, const lsqt_assembly *a, const char *canonical)
+/* A fresh state: slices, incident directions and zero tallies. The directions are the
+ * --wi-file ones (wi_file, n_wi_file of them) when given, else the -wi spread; every
+ * slice gets the same (its wo is at azimuth 0, so phi is measured from it in each). */
+static int new_state(lsqt_state *st, const lsqt_cli *c, const lsqt_assembly *a, const char *canonical,
+                     const float *wi_file, int n_wi_file)
 {
     int n_slices = c->n_wo_angles ? c->n_wo_angles : c->wo_count;
-    if (lsqt_state_init(st, canonical, lsqt_assembly_hash(a), c->seed, n_slices, c->wi_count,
+    if (lsqt_state_init(st, canonical, lsqt_assembly_hash(a), c->seed, n_slices, wi_file ? n_wi_file : c->wi_count,
                         lsqt_assembly_transmits(a)))
         return -1;
     st->use_double = c->use_double;
     if (c->n_wo_angles) memcpy(st->theta_o, c->wo_angles, (size_t)n_slices * sizeof(double));
     else lsqt_wo_angles(n_slices, st->theta_o);
-    for (int s = 0; s < n_slices; s++)
-        lsqt_wi_spread(st->n_wi, st->transmits, st->wi + (size_t)s * (size_t)st->n_wi * 4);
+    for (int s = 0; s < n_slices; s++) {
+        float *dst = st->wi + (size_t)s * (size_t)st->n_wi * 4;
+        if (wi_file) memcpy(dst, wi_file, (size_t)st->n_wi * 4 * sizeof *dst);
+        else lsqt_wi_spread(st->n_wi, st->transmits, dst);
+    }
     return 0;
 }
 
@@ -262,14 +268,32 @@ int main(int argc, char **argv)
 
     /* Over the sphere the equal-area lattice puts its middle direction of an odd count on
      * the horizon, where a BSDF value (tally / |cos|) is 0 / 0. */
-    if (lsqt_assembly_transmits(&a) && c.wi_count % 2) {
+    if (!c.wi_file && lsqt_assembly_transmits(&a) && c.wi_count % 2) {
         lsqt_assembly_free(&a);
         snprintf(err, sizeof err, "-wi %d: this stack transmits, so the directions cover the sphere", c.wi_count);
         return fail(2, "%s%s", err, " and their count must be even");
     }
+    /* --wi-file is read (and checked) even when an LSS is continued: bad input is an error
+     * whether or not it would be used. Below the horizon is allowed only where light is
+     * transmitted; elsewhere the value would be 0 by construction, so it is a mistake. */
+    float *wi_dirs = NULL;
+    int n_wi_dirs = 0, n_mirrored = 0;
+    if (c.wi_file) {
+        int wrc = lsqt_wi_file_read(c.wi_file, lsqt_assembly_transmits(&a), &wi_dirs, &n_wi_dirs, &n_mirrored,
+                                    err, sizeof err);
+        if (wrc) {
+            lsqt_assembly_free(&a);
+            if (wrc == 2) {
+                fprintf(stderr, "%s\n", err);
+                return 2;
+            }
+            return fail(wrc < 0 ? 1 : 2, "--wi-file: %s%s", err, "");
+        }
+    }
     outputs out;
     int rc = plan_outputs(&c, from_stdin, lsqt_assembly_transmits(&a), &out, err, sizeof err);
     if (rc) {
+        free(wi_dirs);
         lsqt_assembly_free(&a);
         return fail(rc, "%s%s", err, "");
     }
@@ -283,7 +307,11 @@ int main(int argc, char **argv)
      * ever read as an LSS: a FIFO would block and a device holds no state. */
     size_t clen = lsqt_assembly_canonical(&a, NULL, 0);
     char *canonical = malloc(clen + 1);
-    if (!canonical) return fail(1, "out of memory%s%s", "", "");
+    if (!canonical) {
+        free(wi_dirs);
+        lsqt_assembly_free(&a);
+        return fail(1, "out of memory%s%s", "", "");
+    }
     lsqt_assembly_canonical(&a, canonical, clen + 1);
     lsqt_state st;
     const char *what = NULL;
@@ -302,13 +330,18 @@ int main(int argc, char **argv)
         } else if (!c.quiet) {
             fprintf(stderr, "continuing %s (%llu paths per slice so far)%s\n", lss_path,
                     (unsigned long long)st.paths,
-                    c.sampling_given ? "; sampling flags (-wo, -wi, -s, ...) are taken from it" : "");
+                    c.sampling_given ? "; sampling flags (-wo, -wi, --wi-file, -s, ...) are taken from it" : "");
             if (st.use_double != c.use_double)
                 fprintf(stderr, "note: precision follows the LSS (%s)\n", st.use_double ? "double" : "float");
         }
-    } else if (new_state(&st, &c, &a, canonical)) {
+    } else if (new_state(&st, &c, &a, canonical, wi_dirs, n_wi_dirs)) {
         rc = fail(1, "out of memory%s%s", "", "");
+    } else if (n_mirrored && !c.quiet) {
+        fprintf(stderr, "note: %d direction%s of %s with y < 0 %s simulated at (x, -y, z) (the BSDF is symmetric "
+                        "about the plane of wo); the RAW holds both mirror images\n",
+                n_mirrored, n_mirrored > 1 ? "s" : "", c.wi_file, n_mirrored > 1 ? "are" : "is");
     }
+    free(wi_dirs);
     free(canonical);
     if (rc) {
         lsqt_assembly_free(&a);

@@ -29,7 +29,7 @@ int lsqt_raw_write(const char *path, const lsqt_state *st, const lsqt_slice_est 
             /* Each estimate twice, at y and -y: the BSDF is mirror symmetric about the
              * plane of wo, and raw2sqt covers the sphere better with both. */
             fprintf(f, "%d %.9g %.9g %.9g %.9g\n", s, x, y, z, v);
-            fprintf(f, "%d %.9g %.9g %.9g %.9g\n", s, x, -y, z, v);
+            fprintf(f, "%d %.9g %.9g %.9g %.9g\n", s, x, 0.0 - y, z, v); /* y = 0: "0", not "-0" */
         }
     }
     return lsqt_out_commit(&af, err, errcap);

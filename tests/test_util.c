@@ -1,4 +1,5 @@
 /* Host utilities without OpenCL: exact seed parsing, the device check behind exit status 3,
+ * the --wi-file parser (numbers, normalisation, the mirror in y, errors with line numbers),
  * and the output-file rules of util.h on every kind of target. Everything is made inside
  * a private temporary folder; device nodes are ones this test makes there with mknod
  * (skipped when it may not), never the system's. */
@@ -19,6 +20,7 @@
 #include "check.h"
 #include "lsqt/cli.h"
 #include "lsqt/device.h"
+#include "lsqt/directions.h"
 #include "lsqt/util.h"
 
 static char dir[256];
@@ -88,6 +90,122 @@ static void test_device_check(void)
     CHECK(lsqt_device_check(&d, 0, err, sizeof err) == 3, "big-endian without 64-bit atomics accepted");
     d.has_int64_atomics = 1;
     CHECK(lsqt_device_check(&d, 0, err, sizeof err) == 0, "big-endian with 64-bit atomics: %s", err);
+}
+
+/* lsqt_wi_parse of exactly len bytes (a copy with no terminator, so reading past the end
+ * is caught under ASan). Returns its status; *dirs as it gives them. */
+static int wi_parse(const char *text, size_t len, int lower, float **dirs, int *n, int *mirrored, char *err,
+                    size_t errcap)
+{
+    char *copy = malloc(len ? len : 1);
+    if (!copy) return -1;
+    memcpy(copy, text, len);
+    int rc = lsqt_wi_parse(copy, len, "w.txt", lower, dirs, n, mirrored, err, errcap);
+    free(copy);
+    return rc;
+}
+
+/* One good text: its count, and each direction (x, y, z) within tol (0: exactly). */
+static void wi_good(const char *text, int lower, int want_n, const double *want, double tol, int want_mirrored)
+{
+    float *d = NULL;
+    int n = -1, m = -1;
+    char err[512] = "";
+    int rc = wi_parse(text, strlen(text), lower, &d, &n, &m, err, sizeof err);
+    CHECK(rc == 0 && d && n == want_n && m == want_mirrored, "'%s': rc %d, n %d (want %d), mirrored %d (want %d): %s",
+          text, rc, n, want_n, m, want_mirrored, err);
+    for (int k = 0; rc == 0 && d && k < n && k < want_n; k++) {
+        for (int j = 0; j < 3; j++)
+            CHECK(fabs(d[4 * k + j] - want[3 * k + j]) <= tol, "'%s': direction %d coordinate %d is %.9g, want %.9g", text,
+                  k, j, d[4 * k + j], want[3 * k + j]);
+        CHECK(d[4 * k + 3] == 0.0f && d[4 * k + 1] >= 0 && !signbit(d[4 * k + 1]), "'%s': direction %d: w %g, y %g", text,
+              k, d[4 * k + 3], d[4 * k + 1]);
+    }
+    free(d);
+}
+
+/* One bad text: status 2, nothing returned, and a message holding `want`. */
+static void wi_bad(const char *text, size_t len, int lower, const char *want)
+{
+    float *d = (float *)&d;
+    int n = -1, m = -1;
+    char err[512] = "";
+    int rc = wi_parse(text, len, lower, &d, &n, &m, err, sizeof err);
+    CHECK(rc == 2 && !d && n == 0 && m == 0 && strstr(err, want), "'%.40s': rc %d, n %d: '%s' lacks '%s'", text, rc, n, err,
+          want);
+    free(rc == 0 ? d : NULL);
+}
+
+static void test_wi_file(void)
+{
+    const double s3 = 1.0 / sqrt(3.0), s2 = sqrt(0.5), tol = 1.2e-7;
+    /* x y z: normalised, exactly where that is exact; scaled first, so neither huge nor
+     * subnormal components lose it. */
+    wi_good("0 0 2\n", 0, 1, (const double[]){0, 0, 1}, 0, 0);
+    wi_good("3 4 12", 0, 1, (const double[]){3.0 / 13, 4.0 / 13, 12.0 / 13}, tol, 0);
+    wi_good("1e300 1e300 1e300\n-1e-310 0 1e-310\n", 0, 2, (const double[]){s3, s3, s3, -s2, 0, s2}, tol, 0);
+    wi_good("1 -1 -1\n", 1, 1, (const double[]){s3, s3, -s3}, tol, 1);
+    /* theta phi in degrees, phi from +x; exact at multiples of 90; phi periodic. */
+    wi_good("0 123\n180 7\n", 1, 2, (const double[]){0, 0, 1, 0, 0, -1}, 0, 0);
+    wi_good("60 90\n60 0\n60 180\n", 0, 3,
+            (const double[]){0, sqrt(0.75), 0.5, sqrt(0.75), 0, 0.5, -sqrt(0.75), 0, 0.5}, tol, 0);
+    wi_good("45 -90\n45 270\n30 370\n", 0, 3, (const double[]){0, s2, s2, 0, s2, s2, 0.5 * cos(LSQT_PI / 18),
+                                                               0.5 * sin(LSQT_PI / 18), sqrt(0.75)}, tol, 2);
+    wi_good("30 -45\n", 0, 1, (const double[]){0.5 * s2, 0.5 * s2, sqrt(0.75)}, tol, 1);
+    /* Blank lines, comments (whole lines and after a direction), CRLF, tabs, no final
+     * newline. */
+    wi_good("\r\n\t# x y z\n  1 0 1 # c\r\n\n#\n0\t0  1", 0, 2, (const double[]){s2, 0, s2, 0, 0, 1}, tol, 0);
+    /* Counts up to LSQT_WI_FILE_MAX, one more is an error on its line. */
+    char many[8 * (LSQT_WI_FILE_MAX + 1) + 16];
+    size_t len = 0;
+    for (int k = 0; k < LSQT_WI_FILE_MAX; k++) len += (size_t)snprintf(many + len, sizeof many - len, "0 0 1\n");
+    float *d = NULL;
+    int n = 0, m = 0;
+    char err[512] = "";
+    CHECK(wi_parse(many, len, 0, &d, &n, &m, err, sizeof err) == 0 && n == LSQT_WI_FILE_MAX, "%d directions: %s",
+          LSQT_WI_FILE_MAX, err);
+    free(d);
+    snprintf(many + len, sizeof many - len, "0 0 1\n");
+    wi_bad(many, strlen(many), 0, "w.txt:1025: error: too many directions at '0 0 1'");
+
+    /* Errors: "w.txt:LINE: error: WHAT at 'TOKEN'". */
+    wi_bad("0 0 1\n0 0 0\n", 12, 1, "w.txt:2: error: the zero vector at '0 0 0'");
+    wi_bad("0 0 1\n\n1 0 0 # horizon\n", 24, 1, "w.txt:3: error: a direction on the horizon (z = 0");
+    wi_bad("90 0\n", 5, 1, "w.txt:1: error: a direction on the horizon");
+    wi_bad("1 0 1e-300\n", 11, 1, "w.txt:1: error: a direction on the horizon (z = 0, where the BSDF value tally/|cos| is 0/0) at '1 0 1e-300'");
+    wi_bad("# c\n1 0 -1\n", 11, 0, "w.txt:2: error: a direction below the horizon (z < 0)");
+    wi_bad("91 0\n", 5, 0, "transmits nothing (its value would be 0) at '91 0'");
+    wi_bad("180.5 0\n", 8, 1, "w.txt:1: error: theta out of range at '180.5'");
+    wi_bad("-0.5 0\n", 7, 1, "w.txt:1: error: theta out of range at '-0.5'");
+    wi_bad("0 0 1\n7\n", 8, 0, "w.txt:2: error: a single number at '7'");
+    wi_bad("1 2 3 4 5\n", 10, 0, "w.txt:1: error: trailing text after the direction at '4'");
+    wi_bad("1 2 3x\n", 7, 0, "w.txt:1: error: not a finite number at '3x'");
+    wi_bad("nan 1 1\n", 8, 0, "w.txt:1: error: not a finite number at 'nan'");
+    wi_bad("1 -inf 1\n", 9, 0, "w.txt:1: error: not a finite number at '-inf'");
+    wi_bad("1 1e999 1\n", 10, 0, "w.txt:1: error: not a finite number at '1e999'");
+    wi_bad("0x1p0 0 1\n", 10, 0, "w.txt:1: error: not a finite number at '0x1p0'");
+    wi_bad("1 0 1\0junk\n", 11, 0, "w.txt:1: error: not a finite number at '1?junk'");
+    wi_bad("", 0, 0, "w.txt: error: no directions");
+    wi_bad("# nothing\n \t\r\n", 14, 0, "w.txt: error: no directions");
+    /* A token longer than any number, and a tiny message buffer: cut, never overrun. */
+    char longtok[600];
+    memset(longtok, '1', sizeof longtok);
+    wi_bad(longtok, sizeof longtok, 0, "w.txt:1: error: not a finite number at '1111");
+    char tiny[8];
+    d = (float *)&d;
+    CHECK(wi_parse("0 0 0", 5, 0, &d, &n, &m, tiny, sizeof tiny) == 2 && !d && strlen(tiny) == 7, "tiny buffer: '%s'", tiny);
+    /* The file reader: a missing file is status 1, a file of directions parses. */
+    CHECK(lsqt_wi_file_read(at("nosuch.txt"), 0, &d, &n, &m, err, sizeof err) == 1 && !d && strstr(err, "cannot open"),
+          "missing file: %s", err);
+    CHECK(write_text(at("w.txt"), "# two\n0 0 1\n45 -90\n", err, sizeof err) == 0, "%s", err);
+    CHECK(lsqt_wi_file_read(at("w.txt"), 0, &d, &n, &m, err, sizeof err) == 0 && n == 2 && m == 1 && d &&
+              d[4] == 0.0f && fabs(d[5] - s2) < tol,
+          "file: n %d, mirrored %d: %s", n, m, err);
+    free(d);
+    CHECK(write_text(at("w.txt"), "0 0 1\n\n45 -90 x\n", err, sizeof err) == 0, "%s", err);
+    CHECK(lsqt_wi_file_read(at("w.txt"), 0, &d, &n, &m, err, sizeof err) == 2 && !d && strstr(err, "/w.txt:3: error: ") &&
+              strstr(err, "at 'x'"),
+          "file error: %s", err);
 }
 
 static void test_regular_and_links(void)
@@ -243,6 +361,7 @@ int main(void)
     }
     test_seeds();
     test_device_check();
+    test_wi_file();
     test_regular_and_links();
     test_fifo();
     test_socket();

@@ -16,6 +16,7 @@ typedef struct lsqt_cli {
     const char *input;        /* file or "-" */
     uint64_t paths;           /* -p, per slice */
     int wo_count, wi_count;   /* -wo, -wi */
+    const char *wi_file;      /* --wi-file: the incident directions, instead of -wi */
     double wo_angles[LSQT_MAX_WO]; /* --wo-angles, radians */
     int n_wo_angles;
     int rx;                   /* -rx */

@@ -2,9 +2,13 @@
 #ifndef LSQT_DIRECTIONS_H
 #define LSQT_DIRECTIONS_H
 
+#include <stddef.h>
+
 #ifdef __cplusplus
 extern "C" {
 #endif
+
+#define LSQT_WI_FILE_MAX 1024 /* directions a --wi-file may give */
 
 /* theta_k = k / n * 0.99 * pi / 2, k = 0 .. n-1 (as the original tool). */
 void lsqt_wo_angles(int n, double *theta);
@@ -13,6 +17,31 @@ void lsqt_wo_angles(int n, double *theta);
  * hemisphere with y >= 0, or of the whole sphere when `sphere` is set; 4 floats each
  * (x, y, z, 0). The BSDF is mirror symmetric in y, so y < 0 is the same. */
 void lsqt_wi_spread(int n, int sphere, float *out);
+
+/* Incident directions given by the user (--wi-file), from text[0 .. len) (NUL bytes are
+ * just bad characters). One direction per line, either `x y z` (any length but 0; it is
+ * normalised) or `theta_deg phi_deg` (theta from +z, in [0, 180]; phi from +x, the
+ * azimuth of every slice's wo, any finite value): (sin t cos p, sin t sin p, cos t).
+ * Numbers are finite decimals; tokens are separated by blanks (spaces, tabs, CR); '#'
+ * starts a comment to the end of the line; blank lines are skipped. 1 to
+ * LSQT_WI_FILE_MAX directions. A direction on the horizon (z = 0 in float, where a BSDF
+ * value tally / |cos| is 0 / 0) is refused, and so is one below it (z < 0) unless
+ * `lower` (the stack transmits). The BSDF is mirror symmetric about the xz-plane (the
+ * plane of wo), so a direction with y < 0 is kept as (x, -y, z), as the state keeps them
+ * (RAW writes both mirror images).
+ * On success: 0, *dirs a malloc'd array of *n directions, 4 floats each (x, y, z, 0),
+ * unit, y >= 0, in the order given; *n_mirrored (may be NULL) how many had y < 0.
+ * On failure: 2, *dirs NULL, *n 0, and err "NAME:LINE: error: WHAT at 'TOKEN'; expected
+ * ..." (no LINE when the error is not on one line, as for a file without directions);
+ * -1 when out of memory. */
+int lsqt_wi_parse(const char *text, size_t len, const char *name, int lower, float **dirs, int *n,
+                  int *n_mirrored, char *err, size_t errcap);
+
+/* lsqt_wi_parse of the file at PATH ("-" is stdin), named PATH in messages. Returns 0,
+ * 2 (a content error, as lsqt_wi_parse), 1 when it cannot be read (err "cannot open
+ * 'PATH': ..."), or -1 when out of memory. */
+int lsqt_wi_file_read(const char *path, int lower, float **dirs, int *n, int *n_mirrored, char *err,
+                      size_t errcap);
 
 #ifdef __cplusplus
 }

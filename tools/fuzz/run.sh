@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Builds everything with clang under AddressSanitizer + UBSan (and the libFuzzer targets),
 # runs the whole ctest suite in that build (OpenCL tests included, on the default
-# device), then fuzzes the LSQT parser and the LSS reader for SECONDS in all (default
-# 60), starting from the seed corpora.
+# device), then fuzzes the LSQT parser, the LSS reader and the --wi-file parser for
+# SECONDS in all (default 60), starting from the seed corpora.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 BUDGET=${1:-60}
@@ -13,16 +13,17 @@ export UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1
 (cd build-fuzz && ctest --output-on-failure -j 2)
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-mkdir -p "$work/lsqt" "$work/lss"
+mkdir -p "$work/lsqt" "$work/lss" "$work/wi"
 cp tools/fuzz/corpus/* "$work/lsqt/"
+cp tools/fuzz/corpus_wi/* "$work/wi/"
 # A real LSS as the reader's seed (the release build from tools/test.sh writes it).
 if [ -x build/lsqt-cl ]; then
   build/lsqt-cl -q -R -p 256 -wo 4 -wi 16 --lss "$work/lss/seed.lss" -o "$work/seed.raw" \
     examples/tutorial/Lambertian.lsqt || true
 fi
-for target in lsqt lss; do
-  echo "fuzzing $target for $((BUDGET / 2)) s"
-  if ! ./build-fuzz/fuzz_$target -max_total_time=$((BUDGET / 2)) -print_final_stats=1 \
+for target in lsqt lss wi; do
+  echo "fuzzing $target for $((BUDGET / 3)) s"
+  if ! ./build-fuzz/fuzz_$target -max_total_time=$((BUDGET / 3)) -print_final_stats=1 \
       -artifact_prefix="$work/" "$work/$target" >"$work/$target.log" 2>&1; then
     tail -n 40 "$work/$target.log"
     echo "fuzz_$target found a crash" >&2
