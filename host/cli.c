@@ -44,6 +44,7 @@ int lsqt_parse_u64(const char *s, uint64_t *out)
 void lsqt_cli_help(FILE *f)
 {
     fputs("usage: lsqt-cl [OPTIONS] FILE|-\n"
+          "       lsqt-cl info FILE.lss [--json PATH]   (the same: lssinfo FILE.lss [--json PATH])\n"
           "Simulates the emergent BSDF of a layered assembly (LSQT file; - reads stdin) with\n"
           "OpenCL, writing FILE.raw for raw2sqt and FILE.lss (progressive state: running again\n"
           "adds paths to it).\n"
@@ -82,6 +83,9 @@ void lsqt_cli_help(FILE *f)
           "  -q, --quiet                 print errors only\n"
           "  -v, --verbose               print more (device, kernel build options, launches)\n"
           "  -h, --help                  this text\n"
+          "lsqt-cl info prints what an LSS holds (format, assembly, hash, seed, precision, flags,\n"
+          "path ranges, per-slice R, T, delta_T with errors) without OpenCL; --json writes it as\n"
+          "JSON (- is stdout). See lsqt-cl info --help.\n"
           "Flags take their value as the next argument or after '=' (-wi 300, -wi=300).\n"
           "Outputs: a regular file is replaced atomically (through a symlink, its target is);\n"
           "a device, FIFO or socket is written in place (-o /dev/null discards). An LSS path\n"

@@ -166,52 +166,87 @@ static float get_f32(rbuf *r)
     return f;
 }
 
+/* Bytes before the assembly text: magic, version, 6 layout words, seed, hash, 5 u32
+ * (double, transmits, flags, n_slices, n_wi), paths, text length. */
+#define LSS_HEADER_BYTES (8 + 4 + 6 * 4 + 8 + 8 + 5 * 4 + 8 + 4)
+
 int lsqt_lss_parse(const unsigned char *data, size_t len, lsqt_state *st, char *err, size_t errcap)
 {
     memset(st, 0, sizeof *st);
-    if (len < 12 || memcmp(data, magic, 8) != 0) {
+    /* The checks go from the first byte on, so each message says what is wrong first: not
+     * an LSS at all, another version (whose layout this build cannot know), a file cut
+     * short, damaged bytes (CRC), and last what a valid CRC cannot vouch for. */
+    if (len == 0) {
+        snprintf(err, errcap, "empty file (not an LSS file)");
+        return -1;
+    }
+    if (memcmp(data, magic, len < 8 ? len : 8) != 0) {
         snprintf(err, errcap, "not an LSS file (bad magic)");
         return -1;
     }
-    uint32_t crc = (uint32_t)data[len - 4] | (uint32_t)data[len - 3] << 8 |
-                   (uint32_t)data[len - 2] << 16 | (uint32_t)data[len - 1] << 24;
-#ifndef LSQT_LSS_FUZZING /* the fuzz target skips the CRC to reach the parser behind it */
-    if (lsqt_crc32(0, data, len - 4) != crc) {
-        snprintf(err, errcap, "corrupt or truncated LSS file (CRC mismatch)");
+    if (len < 12) {
+        snprintf(err, errcap, "truncated at byte %zu (inside the header)", len);
         return -1;
     }
-#else
-    (void)crc;
-#endif
-    rbuf r = {data, len - 4, 8, 0};
+    rbuf r = {data, len, 8, 0};
     uint32_t version = get_u32(&r);
     if (version != LSQT_LSS_VERSION) {
-        snprintf(err, errcap, "LSS version %u is not supported (this build reads %u)", version, LSQT_LSS_VERSION);
+        snprintf(err, errcap, "LSS version %u, this lsqt-cl reads version %u", version, LSQT_LSS_VERSION);
         return -1;
     }
+    if (len < LSS_HEADER_BYTES + 4) {
+        snprintf(err, errcap, "truncated at byte %zu (inside the %d-byte header)", len, LSS_HEADER_BYTES);
+        return -1;
+    }
+    static const char *const layout_name[] = {"chunk", "batches", "fixed-point bits", "histogram mu bins",
+                                              "histogram phi bins", "scalar tallies"};
     const uint32_t layout[] = {LSQT_CHUNK, LSQT_BATCHES, LSQT_FIX_BITS, LSQT_HIST_NMU, LSQT_HIST_NPHI, LSQT_T_COUNT};
-    for (size_t i = 0; i < 6; i++)
-        if (get_u32(&r) != layout[i] && !r.bad) {
-            snprintf(err, errcap, "LSS tally layout differs from this build's; cannot continue it");
-            return -1;
-        }
+    uint32_t file_layout[6];
+    for (size_t i = 0; i < 6; i++) file_layout[i] = get_u32(&r);
     uint64_t seed = get_u64(&r), hash = get_u64(&r);
     uint32_t use_double = get_u32(&r), transmits = get_u32(&r), flags = get_u32(&r);
     uint32_t n_slices = get_u32(&r), n_wi = get_u32(&r);
     uint64_t paths = get_u64(&r);
     uint32_t tl = get_u32(&r);
-    if (r.bad || n_slices < 1 || n_slices > 4096 || n_wi < 1 || n_wi > 65536 || use_double > 1 ||
-        transmits > 1 || tl > (1u << 24)) {
-        snprintf(err, errcap, "corrupt LSS header");
+    /* The size the header announces, when its counts are in range (else unknown: 0). */
+    const int sane = n_slices >= 1 && n_slices <= 4096 && n_wi >= 1 && n_wi <= 65536 && tl <= (1u << 24);
+    const size_t per_slice = sane ? 16 + (size_t)n_wi * 12 + (size_t)LSQT_BATCHES * n_wi * 16 +
+                                        LSQT_BATCHES * LSQT_T_COUNT * 16 + LSQT_BATCHES * LSQT_HIST_BINS * 16
+                                  : 0;
+    const size_t want = sane ? LSS_HEADER_BYTES + (size_t)tl + per_slice * n_slices + 4 : 0;
+    uint32_t crc = (uint32_t)data[len - 4] | (uint32_t)data[len - 3] << 8 |
+                   (uint32_t)data[len - 2] << 16 | (uint32_t)data[len - 1] << 24;
+#ifndef LSQT_LSS_FUZZING /* the fuzz target skips the CRC to reach the parser behind it */
+    if (lsqt_crc32(0, data, len - 4) != crc) {
+        if (want && len < want)
+            snprintf(err, errcap, "truncated at byte %zu (its header announces %zu bytes; CRC mismatch)", len, want);
+        else if (want && len > want)
+            snprintf(err, errcap, "corrupt LSS file: %zu bytes where its header announces %zu (CRC mismatch)", len,
+                     want);
+        else
+            snprintf(err, errcap, "corrupt LSS file (CRC mismatch: damaged bytes)");
+        return -1;
+    }
+#else
+    (void)crc;
+#endif
+    for (size_t i = 0; i < 6; i++)
+        if (file_layout[i] != layout[i]) {
+            snprintf(err, errcap, "LSS tally layout differs from this build's (%s %u, this build %u); cannot read it",
+                     layout_name[i], file_layout[i], layout[i]);
+            return -1;
+        }
+    if (r.bad || !sane || use_double > 1 || transmits > 1) {
+        snprintf(err, errcap, "corrupt LSS header (slices %u, wi %u, text %u bytes, double %u, transmits %u)",
+                 n_slices, n_wi, tl, use_double, transmits);
         return -1;
     }
     /* The rest must have exactly the size the header announces. */
-    const size_t per_slice = 16 + (size_t)n_wi * 12 + (size_t)LSQT_BATCHES * n_wi * 16 +
-                             LSQT_BATCHES * LSQT_T_COUNT * 16 + LSQT_BATCHES * LSQT_HIST_BINS * 16;
-    if (r.n - r.at != tl + per_slice * n_slices) {
-        snprintf(err, errcap, "corrupt LSS file (size does not match its header)");
+    if (len != want) {
+        snprintf(err, errcap, "corrupt LSS file (%zu bytes, its header announces %zu)", len, want);
         return -1;
     }
+    r.n = len - 4;
     char *text = malloc((size_t)tl + 1);
     if (!text) {
         snprintf(err, errcap, "out of memory");

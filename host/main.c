@@ -10,6 +10,7 @@
 #include "lsqt/cli.h"
 #include "lsqt/device.h"
 #include "lsqt/directions.h"
+#include "lsqt/info.h"
 #include "lsqt/lss.h"
 #include "lsqt/raw.h"
 #include "lsqt/report.h"
@@ -210,6 +211,8 @@ static int write_outputs(const outputs *o, const lsqt_cli *c, const lsqt_state *
 
 int main(int argc, char **argv)
 {
+    /* lsqt-cl info FILE.lss: reads an LSS, no OpenCL (host/info.c; lssinfo is the same). */
+    if (argc >= 2 && strcmp(argv[1], "info") == 0) return lsqt_info_main("lsqt-cl info", argc - 1, argv + 1);
     /* Signals first: a Ctrl-C during device setup or the kernel build must not be lost,
      * and a closed pipe is a write error to report (other outputs still get written). */
     sigint_setup();

@@ -64,7 +64,14 @@ lsqt_slice_est *lsqt_estimates(const lsqt_state *st)
         e->R = lsqt_batch_estimate(sc + LSQT_T_R, LSQT_T_COUNT, st->paths, LSQT_FIX_SCALE);
         e->T = lsqt_batch_estimate(sc + LSQT_T_T, LSQT_T_COUNT, st->paths, LSQT_FIX_SCALE);
         e->delta_T = lsqt_batch_estimate(sc + LSQT_T_DELTA_T, LSQT_T_COUNT, st->paths, LSQT_FIX_SCALE);
-        for (int b = 0; b < LSQT_BATCHES; b++) e->cut += sc[(size_t)b * LSQT_T_COUNT + LSQT_T_CUT].lo;
+        for (int b = 0; b < LSQT_BATCHES; b++) {
+            const lsqt_u128 *x = sc + (size_t)b * LSQT_T_COUNT;
+            e->cut += x[LSQT_T_CUT].lo;
+            e->layer_events += lsqt_u128_to_double(x[LSQT_T_LAYER_EVENTS]);
+            e->medium_events += lsqt_u128_to_double(x[LSQT_T_MEDIUM_EVENTS]);
+            e->nee_evaluations += lsqt_u128_to_double(x[LSQT_T_NEE_VERTICES]) * (double)nw;
+        }
+        if (st->paths) e->layer_events /= (double)st->paths, e->medium_events /= (double)st->paths;
         e->f = calloc(nw, sizeof *e->f);
         if (!e->f) {
             lsqt_estimates_free(out, st->n_slices);

@@ -107,7 +107,7 @@ printf 'Medium\nLayer z=0 LambertianBsdf fR=0.5\nMedium\n' > L.lsqt
 expect 2 "use -R" -- "$BIN" L.lsqt
 cmp -s keep.lss L.lsqt.lss && ok || bad "LSS changed after a refused run"
 head -c 1000 keep.lss > L.lsqt.lss
-expect 2 "corrupt or truncated" -- "$BIN" L.lsqt
+expect 2 "truncated at byte 1000" -- "$BIN" L.lsqt
 [ "$(wc -c < L.lsqt.lss)" = 1000 ] && ok || bad "damaged LSS was replaced"
 expect 0 "wrote L.lsqt.raw" -- "$BIN" -R -p 1000 L.lsqt
 

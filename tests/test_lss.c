@@ -76,6 +76,32 @@ int main(void)
     CHECK(accepted == 0, "%d bit flips accepted", accepted);
     CHECK(lsqt_lss_parse((const unsigned char *)f1, n1, &b, err, sizeof err) == 0, "intact copy refused: %s", err);
     lsqt_state_free(&b);
+
+    /* The messages say what is wrong. */
+    CHECK(lsqt_lss_parse((const unsigned char *)f1, 0, &b, err, sizeof err) != 0 && strstr(err, "empty file"),
+          "empty: %s", err);
+    CHECK(lsqt_lss_parse((const unsigned char *)f1, 1000, &b, err, sizeof err) != 0 &&
+              strstr(err, "truncated at byte 1000 ("),
+          "truncated: %s", err);
+    CHECK(lsqt_lss_parse((const unsigned char *)f1, 50, &b, err, sizeof err) != 0 &&
+              strstr(err, "truncated at byte 50 (inside the 84-byte header)"),
+          "truncated header: %s", err);
+    f1[n1 / 2] ^= 0x10;
+    CHECK(lsqt_lss_parse((const unsigned char *)f1, n1, &b, err, sizeof err) != 0 && strstr(err, "CRC mismatch"),
+          "flipped: %s", err);
+    f1[n1 / 2] ^= 0x10;
+    f1[8] = 1;
+    char want_v[64];
+    snprintf(want_v, sizeof want_v, "LSS version 1, this lsqt-cl reads version %u", LSQT_LSS_VERSION);
+    CHECK(lsqt_lss_parse((const unsigned char *)f1, n1, &b, err, sizeof err) != 0 && strstr(err, want_v),
+          "version: %s", err);
+    f1[8] = (char)LSQT_LSS_VERSION;
+    f1[0] = 'X';
+    CHECK(lsqt_lss_parse((const unsigned char *)f1, n1, &b, err, sizeof err) != 0 && strstr(err, "bad magic"),
+          "magic: %s", err);
+    f1[0] = 'L';
+    CHECK(lsqt_lss_parse((const unsigned char *)f1, n1, &b, err, sizeof err) == 0, "restored copy refused: %s", err);
+    lsqt_state_free(&b);
     CHECK(lsqt_lss_read("no-such-file.lss", &b, err, sizeof err) != 0 && strstr(err, "no-such-file.lss"),
           "missing file: %s", err);
     free(f1);

@@ -83,7 +83,7 @@ cmp -s L.lsqt "$EX/tutorial/Lambertian.lsqt" && ok || bad "the input was changed
 # A full file system (a small tmpfs, as root): the write fails with ENOSPC, exit 1, the
 # previous files stay whole and no temporary is left.
 mkdir -p small
-if mount -t tmpfs -o size=256k tmpfs small 2>/dev/null; then
+if mount -t tmpfs -o size=8m tmpfs small 2>/dev/null; then
   expect 0 "" -- "$BIN" -q -R "${RUN[@]}" -o small/old.raw --lss small/old.lss L.lsqt
   cp small/old.raw keep.raw
   cp small/old.lss keep.lss

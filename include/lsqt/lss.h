@@ -23,8 +23,12 @@ extern "C" {
 /* Written through lsqt_out (util.h: atomic for regular files). Returns 0 or -1. */
 int lsqt_lss_write(const char *path, const lsqt_state *st, char *err, size_t errcap);
 
-/* Reads and checks everything (sizes, layout constants, CRC). Returns 0, or -1 with err
- * saying what is wrong; never accepts a truncated or corrupt file. */
+/* Reads and checks everything (magic, version, sizes, CRC, layout constants). Returns 0,
+ * or -1 with err saying what is wrong, checked in this order: "empty file", "not an LSS
+ * file (bad magic)", "LSS version N, this lsqt-cl reads version 2", "truncated at byte
+ * N (...)", "corrupt LSS file (CRC mismatch ...)", then what a valid CRC cannot vouch for
+ * (another tally layout, an impossible header); lsqt_lss_read puts the path in front.
+ * Never accepts a truncated or corrupt file. */
 int lsqt_lss_read(const char *path, lsqt_state *st, char *err, size_t errcap);
 int lsqt_lss_parse(const unsigned char *data, size_t len, lsqt_state *st, char *err, size_t errcap);
 

@@ -28,6 +28,8 @@ typedef struct lsqt_slice_est {
     lsqt_est *f;         /* n_wi: non-cosine-weighted BSDF (1/sr) at each wi */
     double max_rel_err;  /* largest err/mean over the finite, positive f (NaN: no errors yet) */
     int n_nonfinite;     /* f values that are not finite (never written to RAW) */
+    double layer_events, medium_events; /* scattering events per path (work counters) */
+    double nee_evaluations;             /* next-event evaluations in all (vertices x n_wi) */
 } lsqt_slice_est;
 
 /* The work counters of a state, summed over slices and batches: paths (per slice times

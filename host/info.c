@@ -1,0 +1,283 @@
+/* lsqt-cl info / lssinfo: prints what an LSS file holds (format, assembly, settings, and
+ * per slice the estimates with their errors), as text or as JSON. It reads the file with
+ * lsqt_lss_read, which checks everything, and reduces the tallies with lsqt_estimates,
+ * the same code a run uses for its summary: no OpenCL anywhere. */
+#include "lsqt/info.h"
+
+#include <errno.h>
+#include <math.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "lsqt/lss.h"
+#include "lsqt/tally.h"
+#include "lsqt/util.h"
+
+static void usage(FILE *f, const char *prog)
+{
+    fprintf(f,
+            "usage: %s FILE.lss [--json PATH]\n"
+            "Prints what an LSS file (the progressive state of lsqt-cl) holds: its format version\n"
+            "and layout, the canonical assembly and its hash, seed, precision, slices, incident\n"
+            "direction count, device flags, the path ranges it holds, and per slice theta_o, paths,\n"
+            "R, T and delta_T with one standard error, the largest relative error of the point\n"
+            "estimates and the count of non-finite ones. Needs no OpenCL device.\n"
+            "\n"
+            "      --json PATH   also write it as JSON (- is stdout; the text then goes to stderr)\n"
+            "  -h, --help        this text\n"
+            "FILE - reads stdin. Exit status: 0 success, 1 an output could not be written,\n"
+            "2 bad flags or a file that is not a readable LSS (missing, not a regular file,\n"
+            "corrupt, truncated, another version).\n",
+            prog);
+}
+
+static int info_fail(const char *prog, int code, const char *msg)
+{
+    fprintf(stderr, "%s: error: %s\n", prog, msg);
+    return code;
+}
+
+/* The names of the raised device flags, comma separated ("" when none). */
+static void flag_names(uint32_t flags, char *buf, size_t cap, const char *quote)
+{
+    static const struct {
+        uint32_t bit;
+        const char *name;
+    } known[] = {{LSQT_FLAG_OVERFLOW, "overflow"}, {LSQT_FLAG_NONFINITE, "non-finite"}};
+    size_t n = 0;
+    buf[0] = '\0';
+    uint32_t rest = flags;
+    for (size_t i = 0; i < sizeof known / sizeof *known; i++)
+        if ((flags & known[i].bit) && n < cap) {
+            n += (size_t)snprintf(buf + n, n < cap ? cap - n : 0, "%s%s%s%s", n ? ", " : "", quote, known[i].name,
+                                  quote);
+            rest &= ~known[i].bit;
+        }
+    if (rest && n < cap) snprintf(buf + n, cap - n, "%s%sunknown 0x%x%s", n ? ", " : "", quote, rest, quote);
+}
+
+/* The path ranges the state holds, [begin, end) of the path indices of every slice:
+ * today always [0, paths) (none before the first path); a shard will hold several. */
+static void info_ranges(FILE *f, const lsqt_state *st, int json)
+{
+    if (json) {
+        if (st->paths) fprintf(f, "[[0, %llu]]", (unsigned long long)st->paths);
+        else fprintf(f, "[]");
+        return;
+    }
+    if (st->paths) fprintf(f, "[0, %llu) on every slice", (unsigned long long)st->paths);
+    else fprintf(f, "none (no paths yet)");
+}
+
+static void json_num(FILE *f, double v)
+{
+    if (isfinite(v)) fprintf(f, "%.17g", v);
+    else fprintf(f, "null");
+}
+
+static void json_str(FILE *f, const char *s)
+{
+    fputc('"', f);
+    for (const unsigned char *p = (const unsigned char *)s; *p; p++) {
+        if (*p == '"' || *p == '\\') fprintf(f, "\\%c", *p);
+        else if (*p == '\n') fputs("\\n", f);
+        else if (*p == '\t') fputs("\\t", f);
+        else if (*p < 0x20 || *p == 0x7f) fprintf(f, "\\u%04x", *p);
+        else fputc(*p, f);
+    }
+    fputc('"', f);
+}
+
+/* The shortest of %.15g, %.16g, %.17g that reads back as v: exact, and 0.3556 rather
+ * than 0.35560000000000003. */
+static const char *exact(double v, char buf[32])
+{
+    for (int prec = 15; prec < 17; prec++) {
+        snprintf(buf, 32, "%.*g", prec, v);
+        if (strtod(buf, NULL) == v) return buf;
+    }
+    snprintf(buf, 32, "%.17g", v);
+    return buf;
+}
+
+/* An error as the summary prints it: n/a while it cannot be estimated. */
+static const char *err_str(double v, char buf[32])
+{
+    if (isnan(v)) snprintf(buf, 32, "n/a");
+    else snprintf(buf, 32, "%.3g", v);
+    return buf;
+}
+
+static void print_text(FILE *f, const char *path, const lsqt_state *st, const lsqt_slice_est *est)
+{
+    char flags[128];
+    flag_names(st->flags, flags, sizeof flags, "");
+    fprintf(f, "file: %s\n", path);
+    fprintf(f, "format: LSS version %u; chunk %d paths, %d batches, %d fixed-point bits, "
+               "histogram 2 x %d x %d = %d bins, %d scalar tallies\n",
+            LSQT_LSS_VERSION, LSQT_CHUNK, LSQT_BATCHES, LSQT_FIX_BITS, LSQT_HIST_NMU, LSQT_HIST_NPHI, LSQT_HIST_BINS,
+            LSQT_T_COUNT);
+    fprintf(f, "assembly hash: %016llx\n", (unsigned long long)st->hash);
+    fprintf(f, "seed: %llu\n", (unsigned long long)st->seed);
+    fprintf(f, "precision: %s\n", st->use_double ? "double" : "float");
+    fprintf(f, "transmits: %s\n", st->transmits ? "yes (incident directions over the sphere)"
+                                                : "no (incident directions over the upper hemisphere)");
+    fprintf(f, "slices: %d, wi per slice: %d\n", st->n_slices, st->n_wi);
+    fprintf(f, "paths: %llu per slice\n", (unsigned long long)st->paths);
+    if (st->flags) fprintf(f, "flags: 0x%x (%s)\n", st->flags, flags);
+    else fprintf(f, "flags: none\n");
+    fprintf(f, "ranges: ");
+    info_ranges(f, st, 0);
+    fprintf(f, "\nassembly:\n");
+    for (const char *p = st->canonical; *p;) {
+        const char *nl = strchr(p, '\n');
+        size_t n = nl ? (size_t)(nl - p) : strlen(p);
+        fprintf(f, "  %.*s\n", (int)n, p);
+        p += n + (nl ? 1 : 0);
+    }
+    for (int s = 0; s < st->n_slices; s++) {
+        const lsqt_slice_est *e = &est[s];
+        char b[32];
+        fprintf(f, "slice %d: theta_o %.6g deg (%s rad), %llu paths\n", s, e->theta_o * 180.0 / LSQT_PI,
+                exact(e->theta_o, b), (unsigned long long)e->paths);
+        char u[32];
+        fprintf(f, "  R       %s +- %s\n", exact(e->R.mean, b), err_str(e->R.err, u));
+        fprintf(f, "  T       %s +- %s\n", exact(e->T.mean, b), err_str(e->T.err, u));
+        fprintf(f, "  delta_T %s +- %s\n", exact(e->delta_T.mean, b), err_str(e->delta_T.err, u));
+        fprintf(f, "  max rel err %s, non-finite %d, paths cut %llu\n", err_str(e->max_rel_err, u), e->n_nonfinite,
+                (unsigned long long)e->cut);
+        fprintf(f, "  events per path: layers %.6g, media %.6g; next-event evaluations %.17g\n", e->layer_events,
+                e->medium_events, e->nee_evaluations);
+    }
+}
+
+static int write_json(const char *out, const char *path, const lsqt_state *st, const lsqt_slice_est *est,
+                      char *err, size_t errcap)
+{
+    lsqt_out af;
+    if (lsqt_out_open(&af, out, err, errcap)) return -1;
+    FILE *f = af.f;
+    char flags[160];
+    flag_names(st->flags, flags, sizeof flags, "\"");
+    fprintf(f, "{\"file\": ");
+    json_str(f, path);
+    fprintf(f, ", \"version\": %u,\n \"layout\": {\"chunk\": %d, \"batches\": %d, \"fix_bits\": %d, "
+               "\"hist_nmu\": %d, \"hist_nphi\": %d, \"hist_bins\": %d, \"t_count\": %d},\n",
+            LSQT_LSS_VERSION, LSQT_CHUNK, LSQT_BATCHES, LSQT_FIX_BITS, LSQT_HIST_NMU, LSQT_HIST_NPHI, LSQT_HIST_BINS,
+            LSQT_T_COUNT);
+    fprintf(f, " \"hash\": \"%016llx\", \"seed\": %llu, \"double\": %s, \"transmits\": %s, \"n_slices\": %d, "
+               "\"n_wi\": %d, \"paths\": %llu,\n \"flags\": %u, \"flag_names\": [%s], \"ranges\": ",
+            (unsigned long long)st->hash, (unsigned long long)st->seed, st->use_double ? "true" : "false",
+            st->transmits ? "true" : "false", st->n_slices, st->n_wi, (unsigned long long)st->paths, st->flags, flags);
+    info_ranges(f, st, 1);
+    fprintf(f, ",\n \"assembly\": ");
+    json_str(f, st->canonical);
+    fprintf(f, ",\n \"slices\": [");
+    for (int s = 0; s < st->n_slices; s++) {
+        const lsqt_slice_est *e = &est[s];
+        fprintf(f, "%s\n  {\"theta_o\": %.17g, \"paths\": %llu, \"R\": ", s ? "," : "", e->theta_o,
+                (unsigned long long)e->paths);
+        json_num(f, e->R.mean);
+        fprintf(f, ", \"R_err\": ");
+        json_num(f, e->R.err);
+        fprintf(f, ", \"T\": ");
+        json_num(f, e->T.mean);
+        fprintf(f, ", \"T_err\": ");
+        json_num(f, e->T.err);
+        fprintf(f, ", \"delta_T\": ");
+        json_num(f, e->delta_T.mean);
+        fprintf(f, ", \"delta_T_err\": ");
+        json_num(f, e->delta_T.err);
+        fprintf(f, ", \"max_rel_err\": ");
+        json_num(f, e->max_rel_err);
+        fprintf(f, ", \"n_nonfinite\": %d, \"cut_paths\": %llu, \"layer_events_per_path\": ", e->n_nonfinite,
+                (unsigned long long)e->cut);
+        json_num(f, e->layer_events);
+        fprintf(f, ", \"medium_events_per_path\": ");
+        json_num(f, e->medium_events);
+        fprintf(f, ", \"nee_evaluations\": %.17g}", e->nee_evaluations);
+    }
+    fprintf(f, "\n ]}\n");
+    return lsqt_out_commit(&af, err, errcap);
+}
+
+int lsqt_info_main(const char *prog, int argc, char **argv)
+{
+    /* A closed pipe is a write error to report, not a silent death. */
+    signal(SIGPIPE, SIG_IGN);
+    const char *input = NULL, *json = NULL;
+    char msg[LSQT_PATH_CAP + 1024];
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        if (strcmp(a, "-h") == 0 || strcmp(a, "--help") == 0) {
+            usage(stdout, prog);
+            return 0;
+        }
+        if (strcmp(a, "--json") == 0 || strncmp(a, "--json=", 7) == 0) {
+            const char *v = a[6] == '=' ? a + 7 : i + 1 < argc ? argv[++i] : NULL;
+            if (!v) snprintf(msg, sizeof msg, "--json needs a value");
+            else if (!*v) snprintf(msg, sizeof msg, "bad value '' for --json: expected a file name");
+            else if (json) snprintf(msg, sizeof msg, "--json given twice");
+            else {
+                json = v;
+                continue;
+            }
+        } else if (a[0] == '-' && a[1] != '\0') {
+            snprintf(msg, sizeof msg, "unknown option '%.64s'", a);
+        } else if (input) {
+            snprintf(msg, sizeof msg, "more than one file: '%.200s' and '%.200s'", input, a);
+        } else {
+            input = a;
+            continue;
+        }
+        fprintf(stderr, "%s: error: %s\n", prog, msg);
+        usage(stderr, prog);
+        return 2;
+    }
+    if (!input) {
+        fprintf(stderr, "%s: error: no LSS file given\n", prog);
+        usage(stderr, prog);
+        return 2;
+    }
+
+    /* Only a regular file (or stdin, "-") is read: a FIFO would block, a device holds no
+     * state, a directory is no file. */
+    const int from_stdin = strcmp(input, "-") == 0;
+    if (!from_stdin) {
+        const char *what = NULL;
+        int t = lsqt_path_type(input, &what);
+        if (t == LSQT_PATH_MISSING) {
+            snprintf(msg, sizeof msg, "cannot open '%s': %s", input, strerror(errno));
+            return info_fail(prog, 2, msg);
+        }
+        if (t != LSQT_PATH_REGULAR) {
+            snprintf(msg, sizeof msg, "'%s' is a %s, not an LSS file (only regular files are read)", input, what);
+            return info_fail(prog, 2, msg);
+        }
+    }
+    if (json && !from_stdin && strcmp(json, "-") != 0 && lsqt_same_file(json, input)) {
+        snprintf(msg, sizeof msg, "the JSON output '%s' would replace the input", json);
+        return info_fail(prog, 2, msg);
+    }
+    lsqt_state st;
+    if (lsqt_lss_read(input, &st, msg, sizeof msg)) return info_fail(prog, 2, msg);
+    lsqt_slice_est *est = lsqt_estimates(&st);
+    if (!est) {
+        lsqt_state_free(&st);
+        return info_fail(prog, 1, "out of memory");
+    }
+    const char *name = from_stdin ? "<stdin>" : input;
+    FILE *text = json && strcmp(json, "-") == 0 ? stderr : stdout;
+    print_text(text, name, &st, est);
+    int rc = 0;
+    if (fflush(text) != 0 || ferror(text)) {
+        snprintf(msg, sizeof msg, "cannot write to %s: %s", text == stdout ? "stdout" : "stderr", strerror(errno));
+        rc = info_fail(prog, 1, msg);
+    }
+    if (json && write_json(json, name, &st, est, msg, sizeof msg)) rc = info_fail(prog, 1, msg);
+    lsqt_estimates_free(est, st.n_slices);
+    lsqt_state_free(&st);
+    return rc;
+}
