@@ -62,8 +62,10 @@ void lsqt_cli_help(FILE *f)
           "                              The BSDF is mirror symmetric about the plane of wo (xz):\n"
           "                              a direction with y < 0 is simulated at (x, -y, z), and\n"
           "                              the RAW, which holds both mirror images, has it as given\n"
-          "  -rx, --rrss-oversampling N  RRSS oversampling, 2-8 (default 4; RRSS not yet used)\n"
-          "  -rp, --rrss-path-frac F     RRSS path fraction, (0,1] (default 0.8; not yet used)\n"
+          "  -rx, --rrss-oversampling N  RRSS candidates per incident direction, 2-8 (default 4)\n"
+          "  -rp, --rrss-path-frac F     share of the first run's -p spent on the RRSS pilot, (0,1]\n"
+          "                              (default 0.8; its tallies are kept)\n"
+          "      --wi-spread             an even spread of incident directions instead of RRSS\n"
           "  -R, --restart               ignore an existing LSS and start over\n"
           "  -s, --seed N                random seed, an integer in 0 to 2^64-1 (default 0)\n"
           "  -t, --thread-count N        threads of a CPU (PoCL) device (default: all)\n"
@@ -96,7 +98,7 @@ void lsqt_cli_help(FILE *f)
 
 enum flag_id {
     F_PATHS, F_WO, F_WO_ANGLES, F_WI, F_WI_FILE, F_RX, F_RP, F_RESTART, F_SEED, F_THREADS, F_OUTPUT,
-    F_HEMI, F_DEVICE, F_LIST, F_DOUBLE, F_TIME, F_TARGET, F_LSS, F_JSON, F_QUIET, F_VERBOSE, F_HELP
+    F_HEMI, F_SPREAD, F_DEVICE, F_LIST, F_DOUBLE, F_TIME, F_TARGET, F_LSS, F_JSON, F_QUIET, F_VERBOSE, F_HELP
 };
 
 static const struct flag {
@@ -114,7 +116,7 @@ static const struct flag {
     {NULL, "--time-limit", F_TIME, 1},       {NULL, "--lss", F_LSS, 1},
     {NULL, "--json", F_JSON, 1},             {"-q", "--quiet", F_QUIET, 0},
     {"-v", "--verbose", F_VERBOSE, 0},       {"-h", "--help", F_HELP, 0},
-    {NULL, "--target-error", F_TARGET, 1},
+    {NULL, "--target-error", F_TARGET, 1},  {NULL, "--wi-spread", F_SPREAD, 0},
 };
 
 static int parse_angles(const char *s, lsqt_cli *c)
@@ -157,6 +159,7 @@ static int apply(const struct flag *fl, const char *name, const char *v, lsqt_cl
     case F_JSON: if (!*v) expect = "a file name"; c->json = v; break;
     case F_RESTART: c->restart = 1; break;
     case F_HEMI: c->only_hemispherical = 1; break;
+    case F_SPREAD: c->wi_spread = 1; c->sampling_given = 1; break;
     case F_LIST: c->list_devices = 1; break;
     case F_DOUBLE: c->use_double = 1; break;
     case F_QUIET: c->quiet = 1; break;

@@ -78,6 +78,9 @@ int lsqt_lss_write(const char *path, const lsqt_state *st, char *err, size_t err
     put_u32(&w, (uint32_t)st->use_double);
     put_u32(&w, (uint32_t)st->transmits);
     put_u32(&w, st->flags);
+    put_u32(&w, st->dir_method);
+    put_u32(&w, st->rx);
+    put_u64(&w, st->pilot_paths);
     put_u32(&w, (uint32_t)st->n_slices);
     put_u32(&w, (uint32_t)st->n_wi);
     put_u64(&w, st->paths);
@@ -168,7 +171,7 @@ static float get_f32(rbuf *r)
 
 /* Bytes before the assembly text: magic, version, 6 layout words, seed, hash, 5 u32
  * (double, transmits, flags, n_slices, n_wi), paths, text length. */
-#define LSS_HEADER_BYTES (8 + 4 + 6 * 4 + 8 + 8 + 5 * 4 + 8 + 4)
+#define LSS_HEADER_BYTES (8 + 4 + 6 * 4 + 8 + 8 + 3 * 4 + 4 + 4 + 8 + 2 * 4 + 8 + 4)
 
 int lsqt_lss_parse(const unsigned char *data, size_t len, lsqt_state *st, char *err, size_t errcap)
 {
@@ -205,6 +208,8 @@ int lsqt_lss_parse(const unsigned char *data, size_t len, lsqt_state *st, char *
     for (size_t i = 0; i < 6; i++) file_layout[i] = get_u32(&r);
     uint64_t seed = get_u64(&r), hash = get_u64(&r);
     uint32_t use_double = get_u32(&r), transmits = get_u32(&r), flags = get_u32(&r);
+    uint32_t dir_method = get_u32(&r), rx = get_u32(&r);
+    uint64_t pilot_paths = get_u64(&r);
     uint32_t n_slices = get_u32(&r), n_wi = get_u32(&r);
     uint64_t paths = get_u64(&r);
     uint32_t tl = get_u32(&r);
@@ -236,7 +241,8 @@ int lsqt_lss_parse(const unsigned char *data, size_t len, lsqt_state *st, char *
                      layout_name[i], file_layout[i], layout[i]);
             return -1;
         }
-    if (r.bad || !sane || use_double > 1 || transmits > 1) {
+    if (r.bad || !sane || use_double > 1 || transmits > 1 || dir_method > LSQT_DIRS_FILE || rx > 8 ||
+        pilot_paths > paths) {
         snprintf(err, errcap, "corrupt LSS header (slices %u, wi %u, text %u bytes, double %u, transmits %u)",
                  n_slices, n_wi, tl, use_double, transmits);
         return -1;
@@ -262,6 +268,9 @@ int lsqt_lss_parse(const unsigned char *data, size_t len, lsqt_state *st, char *
     }
     st->use_double = (int)use_double;
     st->flags = flags;
+    st->dir_method = dir_method;
+    st->rx = rx;
+    st->pilot_paths = pilot_paths;
     st->paths = paths;
     const size_t nw = n_wi;
     for (size_t s = 0; s < n_slices; s++) {

@@ -1,4 +1,5 @@
 /* lsqt-cl: LSQT text -> assembly -> device simulation -> LSS, RAW, summary. */
+#include <math.h>
 #include <pthread.h>
 #include <signal.h>
 #include <stdio.h>
@@ -14,6 +15,7 @@
 #include "lsqt/lss.h"
 #include "lsqt/raw.h"
 #include "lsqt/report.h"
+#include "lsqt/rrss.h"
 #include "lsqt/simulate.h"
 #include "lsqt/tally.h"
 #include "lsqt/util.h"
@@ -101,6 +103,9 @@ static int new_state(lsqt_state *st, const lsqt_cli *c, const lsqt_assembly *a, 
     st->use_double = c->use_double;
     if (c->n_wo_angles) memcpy(st->theta_o, c->wo_angles, (size_t)n_slices * sizeof(double));
     else lsqt_wo_angles(n_slices, st->theta_o);
+    /* RRSS directions are chosen once the device is ready (lsqt_rrss); the spread stands
+     * in until then. */
+    st->dir_method = wi_file ? LSQT_DIRS_FILE : c->wi_spread ? LSQT_DIRS_SPREAD : LSQT_DIRS_RRSS;
     for (int s = 0; s < n_slices; s++) {
         float *dst = st->wi + (size_t)s * (size_t)st->n_wi * 4;
         if (wi_file) memcpy(dst, wi_file, (size_t)st->n_wi * 4 * sizeof *dst);
@@ -271,7 +276,7 @@ int main(int argc, char **argv)
 
     /* Over the sphere the equal-area lattice puts its middle direction of an odd count on
      * the horizon, where a BSDF value (tally / |cos|) is 0 / 0. */
-    if (!c.wi_file && lsqt_assembly_transmits(&a) && c.wi_count % 2) {
+    if (!c.wi_file && c.wi_spread && lsqt_assembly_transmits(&a) && c.wi_count % 2) {
         lsqt_assembly_free(&a);
         snprintf(err, sizeof err, "-wi %d: this stack transmits, so the directions cover the sphere", c.wi_count);
         return fail(2, "%s%s", err, " and their count must be even");
@@ -373,10 +378,35 @@ int main(int argc, char **argv)
 
     lsqt_sim_opts so = {isatty(STDERR_FILENO) && !c.quiet, c.time_limit, 0, &g_stop, NULL, c.verbose, c.target_error};
     lsqt_sim_stats stats;
+    memset(&stats, 0, sizeof stats);
     const lsqt_work before = lsqt_work_totals(&st);
     /* With a target error, -p is a cap when given, else there is none. */
-    const uint64_t add = c.target_error > 0 && !c.paths_given ? UINT64_MAX : c.paths;
-    rc = lsqt_simulate(&cx, &a, &st, add, &so, &stats, err, sizeof err);
+    uint64_t add = c.target_error > 0 && !c.paths_given ? UINT64_MAX : c.paths;
+    /* A fresh RRSS state: the pilot is the first rp of this run's -p (its tallies stay). */
+    uint64_t pilot = 0;
+    lsqt_rrss_info rinfo;
+    memset(&rinfo, 0, sizeof rinfo);
+    if (st.dir_method == LSQT_DIRS_RRSS && st.paths == 0) {
+        pilot = (uint64_t)ceil(c.rp * (double)c.paths);
+        if (pilot < 1) pilot = 1;
+        if (pilot > c.paths) pilot = c.paths;
+        rc = lsqt_rrss(&cx, &a, &st, c.rx, pilot, &so, &rinfo, err, sizeof err);
+        if (!rc) {
+            st.rx = (uint32_t)c.rx, st.pilot_paths = pilot;
+            if (add != UINT64_MAX) add -= pilot;
+            if (!c.quiet && rinfo.short_slices)
+                fprintf(stderr, "note: RRSS: in %d slice%s the walks left too few directions to choose from "
+                                "(a BSDF that is zero almost everywhere); the even spread filled the rest\n",
+                        rinfo.short_slices, rinfo.short_slices > 1 ? "s" : "");
+            if (!c.quiet && rinfo.density_fallback)
+                fprintf(stderr, "note: RRSS: in %d slice%s the pilot's BSDF integral was not usable; directions "
+                                "follow the walks' exit density there\n",
+                        rinfo.density_fallback, rinfo.density_fallback > 1 ? "s" : "");
+        }
+    }
+    if (!rc) rc = lsqt_simulate(&cx, &a, &st, add, &so, &stats, err, sizeof err);
+    stats.seconds += rinfo.seconds;
+    stats.paths_added += pilot;
     if (rc) {
         fail(1, "%s%s", err, "");
     } else {

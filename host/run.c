@@ -67,6 +67,15 @@ int lsqt_simulate(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint
     memset(stats, 0, sizeof *stats);
     lsqt_session s;
     if (lsqt_session_open(&s, cx, a, st, o->extra_options, o->local_size, o->verbose, err, errcap)) return 1;
+    int rc = lsqt_run_session(&s, st, add_paths, o, stats, err, errcap);
+    lsqt_session_close(&s);
+    return rc;
+}
+
+int lsqt_run_session(lsqt_session *sp, lsqt_state *st, uint64_t add_paths, const lsqt_sim_opts *o,
+                     lsqt_sim_stats *stats, char *err, size_t errcap)
+{
+    memset(stats, 0, sizeof *stats);
 
     /* Launches cover whole chunks; their size adapts so each takes about 0.3 s, which
      * keeps the progress bar and Ctrl-C responsive without starving the device. */
@@ -89,7 +98,7 @@ int lsqt_simulate(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint
     const double t0 = lsqt_now();
     if (o->verbose)
         fprintf(stderr, "simulating %llu paths per slice x %d slices (work-group size %zu)%s\n",
-                (unsigned long long)(target - first), st->n_slices, s.local_size,
+                (unsigned long long)(target - first), st->n_slices, sp->local_size,
                 goal > 0 ? ", or fewer if the target error is reached" : "");
     stats->stop_reason = LSQT_STOP_PATHS;
     while (pos < target) {
@@ -97,7 +106,7 @@ int lsqt_simulate(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint
         if (end > target) end = target;
         if (end > check) end = check;
         double t = lsqt_now();
-        if (lsqt_session_launch(&s, pos, end, err, errcap)) goto done;
+        if (lsqt_session_launch(sp, pos, end, err, errcap)) goto done;
         double dt = lsqt_now() - t;
         pos = end;
         stats->launches++;
@@ -106,7 +115,7 @@ int lsqt_simulate(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint
         chunks_per_launch = (uint64_t)((double)chunks_per_launch * grow);
         if (chunks_per_launch < 1) chunks_per_launch = 1;
         if (pos == check) {
-            if (lsqt_session_read(&s, st, err, errcap)) goto done;
+            if (lsqt_session_read(sp, st, err, errcap)) goto done;
             st->paths = pos;
             cur_err = lsqt_max_rel_err(st);
             if (!isnan(cur_err) && cur_err <= goal) {
@@ -129,13 +138,12 @@ int lsqt_simulate(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint
     }
     if (o->progress) fprintf(stderr, "\n");
     if (o->verbose) fprintf(stderr, "%d launches in %.3g s\n", stats->launches, lsqt_now() - t0);
-    if (lsqt_session_read(&s, st, err, errcap)) goto done;
+    if (lsqt_session_read(sp, st, err, errcap)) goto done;
     stats->paths_added = pos - first;
     stats->seconds = lsqt_now() - t0;
     st->paths = pos;
     if (lsqt_tally_flags_error(st->flags, err, errcap)) goto done;
     rc = 0;
 done:
-    lsqt_session_close(&s);
     return rc;
 }

@@ -28,6 +28,28 @@ static int build_options(lsqt_context *cx, const lsqt_assembly *a, const lsqt_st
     return 0;
 }
 
+/* The directions as the kernel reads them: coordinate arrays zero-padded to fours, in
+ * the kernel's precision (double ones normalised again: float leaves |wi| - 1 at 1e-7). */
+static void *directions_of(const lsqt_state *st, size_t *bytes)
+{
+    const size_t pad = LSQT_PAD4((size_t)st->n_wi), n = (size_t)st->n_slices * 3 * pad;
+    const size_t sz = st->use_double ? sizeof(double) : sizeof(float);
+    void *buf = calloc(n ? n : 1, sz);
+    if (!buf) return NULL;
+    for (int sl = 0; sl < st->n_slices; sl++)
+        for (size_t i = 0; i < (size_t)st->n_wi; i++) {
+            const float *d = st->wi + ((size_t)sl * (size_t)st->n_wi + i) * 4;
+            double len = sqrt((double)d[0] * d[0] + (double)d[1] * d[1] + (double)d[2] * d[2]);
+            for (size_t j = 0; j < 3; j++) {
+                size_t at = ((size_t)sl * 3 + j) * pad + i;
+                if (st->use_double) ((double *)buf)[at] = len > 0 ? d[j] / len : d[j];
+                else ((float *)buf)[at] = d[j];
+            }
+        }
+    *bytes = n * sz;
+    return buf;
+}
+
 /* The tables, the directions and the tallies go up; the direction tables (T, Lambda,
  * lgamma(1 + Lambda) per slice, layer and direction) are made on the device, once. */
 static int upload(lsqt_session *s, const lsqt_assembly *a, const lsqt_state *st, char *err, size_t errcap)
@@ -40,12 +62,14 @@ static int upload(lsqt_session *s, const lsqt_assembly *a, const lsqt_state *st,
     lsqt_dev_medium *media_f = calloc((size_t)n + 1, sizeof *media_f);
     lsqt_dev_layer *layers_f = calloc((size_t)n, sizeof *layers_f);
     /* Directions go to the device in the kernel's precision: double for --double. */
-    const size_t pad = LSQT_PAD4((size_t)st->n_wi), n_wo = (size_t)st->n_slices * 4, n_wi = (size_t)st->n_slices * 3 * pad;
-    double *wo = calloc(n_wo, sizeof *wo), *wi = calloc(n_wi, sizeof *wi);
-    float *wo_f = calloc(n_wo, sizeof *wo_f), *wi_f = calloc(n_wi, sizeof *wi_f);
+    const size_t pad = LSQT_PAD4((size_t)st->n_wi), n_wo = (size_t)st->n_slices * 4;
+    double *wo = calloc(n_wo, sizeof *wo);
+    float *wo_f = calloc(n_wo, sizeof *wo_f);
+    size_t wi_bytes = 0;
+    void *wi_up = directions_of(st, &wi_bytes);
     int rc = 1;
     cl_int e = CL_SUCCESS;
-    if (!media || !layers || !media_f || !layers_f || !wo || !wi || !wo_f || !wi_f) {
+    if (!media || !layers || !media_f || !layers_f || !wo || !wo_f || !wi_up) {
         snprintf(err, errcap, "out of memory");
         goto done;
     }
@@ -57,33 +81,23 @@ static int upload(lsqt_session *s, const lsqt_assembly *a, const lsqt_state *st,
     const size_t media_size = st->use_double ? sizeof *media : sizeof *media_f;
     const size_t layer_size = st->use_double ? sizeof *layers : sizeof *layers_f;
     scene.n_wi = st->n_wi;
+    scene.slice_group = s->slice_group;
     scene.seed_lo = (lsqt_u32)st->seed;
     scene.seed_hi = (lsqt_u32)(st->seed >> 32);
     for (int sl = 0; sl < st->n_slices; sl++) {
         wo[4 * sl] = sin(st->theta_o[sl]);
         wo[4 * sl + 2] = cos(st->theta_o[sl]);
-        /* Incident directions as coordinate arrays, zero-padded to fours. The state holds
-         * them in float; in double they are normalised again (float leaves |wi| - 1 at
-         * 1e-7), in float they go as they are. */
-        for (size_t i = 0; i < (size_t)st->n_wi; i++) {
-            const float *d = st->wi + ((size_t)sl * (size_t)st->n_wi + i) * 4;
-            double len = sqrt((double)d[0] * d[0] + (double)d[1] * d[1] + (double)d[2] * d[2]);
-            for (size_t j = 0; j < 3; j++) {
-                wi[((size_t)sl * 3 + j) * pad + i] = st->use_double && len > 0 ? d[j] / len : d[j];
-                wi_f[((size_t)sl * 3 + j) * pad + i] = d[j];
-            }
-        }
     }
     for (size_t i = 0; i < n_wo; i++) wo_f[i] = (float)wo[i];
     const size_t dir_size = st->use_double ? sizeof(double) : sizeof(float);
-    void *wo_up = st->use_double ? (void *)wo : (void *)wo_f, *wi_up = st->use_double ? (void *)wi : (void *)wi_f;
+    void *wo_up = st->use_double ? (void *)wo : (void *)wo_f;
     cl_mem_flags ro = CL_MEM_READ_ONLY, rw = CL_MEM_READ_WRITE;
     cl_uint flags0 = 0;
     s->scene = make_buffer(cx, ro, sizeof scene, &scene, &e);
     s->media = make_buffer(cx, ro, ((size_t)n + 1) * media_size, (void *)media_up, &e);
     s->layers = make_buffer(cx, ro, (size_t)n * layer_size, (void *)layers_up, &e);
     s->wo = make_buffer(cx, ro, n_wo * dir_size, wo_up, &e);
-    s->wi = make_buffer(cx, ro, n_wi * dir_size, wi_up, &e);
+    s->wi = make_buffer(cx, ro, wi_bytes, wi_up, &e);
     const size_t tab_size = (size_t)st->n_slices * (size_t)n * 3 * pad * dir_size;
     s->tab = make_buffer(cx, rw, tab_size, NULL, &e);
     s->nee = make_buffer(cx, rw, s->n_nee * sizeof *st->nee, st->nee, &e);
@@ -117,17 +131,25 @@ done:
     free(media_f);
     free(layers_f);
     free(wo);
-    free(wi);
     free(wo_f);
-    free(wi_f);
+    free(wi_up);
     return rc;
 }
 
 int lsqt_session_open(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st,
                       const char *extra_options, size_t local_size, int verbose, char *err, size_t errcap)
 {
+    return lsqt_session_open_grouped(s, cx, a, st, 1, extra_options, local_size, verbose, err, errcap);
+}
+
+int lsqt_session_open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st,
+                              int slice_group, const char *extra_options, size_t local_size, int verbose,
+                              char *err, size_t errcap)
+{
     memset(s, 0, sizeof *s);
     s->cx = cx;
+    s->slice_group = slice_group > 0 ? slice_group : 1;
+    s->use_double = st->use_double;
     s->n_slices = st->n_slices;
     s->n_wi = st->n_wi;
     s->n_nee = lsqt_state_nee_count(st);
@@ -156,8 +178,10 @@ int lsqt_session_open(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a,
     cl_int e = CL_SUCCESS, e2 = CL_SUCCESS;
     s->walk = clCreateKernel(s->prog, "lsqt_walk", &e);
     s->prepare = clCreateKernel(s->prog, "lsqt_prepare", &e2);
-    if (e != CL_SUCCESS || e2 != CL_SUCCESS) {
-        if (e == CL_SUCCESS) e = e2;
+    cl_int e3 = CL_SUCCESS;
+    s->exits = clCreateKernel(s->prog, "lsqt_exits", &e3);
+    if (e != CL_SUCCESS || e2 != CL_SUCCESS || e3 != CL_SUCCESS) {
+        if (e == CL_SUCCESS) e = e2 != CL_SUCCESS ? e2 : e3;
         snprintf(err, errcap, "clCreateKernel: %s (%d)", lsqt_cl_error_name(e), (int)e);
         lsqt_session_close(s);
         return 1;
@@ -207,6 +231,63 @@ int lsqt_session_read(lsqt_session *s, lsqt_state *st, char *err, size_t errcap)
     return 0;
 }
 
+int lsqt_session_set_directions(lsqt_session *s, const lsqt_state *st, char *err, size_t errcap)
+{
+    size_t bytes = 0;
+    void *dirs = directions_of(st, &bytes);
+    if (!dirs) {
+        snprintf(err, errcap, "out of memory");
+        return 1;
+    }
+    cl_int e = clEnqueueWriteBuffer(s->cx->queue, s->wi, CL_TRUE, 0, bytes, dirs, 0, NULL, NULL);
+    free(dirs);
+    if (e == CL_SUCCESS) {
+        size_t pglobal[2] = {LSQT_PAD4((size_t)st->n_wi), (size_t)st->n_slices};
+        e = clEnqueueNDRangeKernel(s->cx->queue, s->prepare, 2, NULL, pglobal, NULL, 0, NULL, NULL);
+    }
+    if (e == CL_SUCCESS) e = clFinish(s->cx->queue);
+    if (e != CL_SUCCESS) {
+        snprintf(err, errcap, "cannot upload the directions: %s (%d)", lsqt_cl_error_name(e), (int)e);
+        return 1;
+    }
+    return 0;
+}
+
+int lsqt_session_exits(lsqt_session *s, uint64_t begin, uint32_t n, float *out, char *err, size_t errcap)
+{
+    const size_t n_sim = (size_t)(s->n_slices / s->slice_group), count = n_sim * n * 4;
+    const size_t sz = s->use_double ? sizeof(double) : sizeof(float);
+    cl_int e = CL_SUCCESS;
+    cl_mem buf = clCreateBuffer(s->cx->ctx, CL_MEM_WRITE_ONLY, count * sz, NULL, &e);
+    void *host = malloc(count * sz);
+    cl_ulong b = begin;
+    cl_uint nn = n;
+    if (e == CL_SUCCESS && host) {
+        cl_mem args[] = {s->scene, s->media, s->layers, s->wo, s->wi, s->tab};
+        for (cl_uint i = 0; i < 6; i++) e |= clSetKernelArg(s->exits, i, sizeof(cl_mem), &args[i]);
+        e |= clSetKernelArg(s->exits, 6, sizeof b, &b);
+        e |= clSetKernelArg(s->exits, 7, sizeof nn, &nn);
+        e |= clSetKernelArg(s->exits, 8, sizeof(cl_mem), &buf);
+        e |= clSetKernelArg(s->exits, 9, sizeof(cl_mem), &s->flags);
+        size_t global[2] = {n, n_sim};
+        if (e == CL_SUCCESS) e = clEnqueueNDRangeKernel(s->cx->queue, s->exits, 2, NULL, global, NULL, 0, NULL, NULL);
+        if (e == CL_SUCCESS) e = clEnqueueReadBuffer(s->cx->queue, buf, CL_TRUE, 0, count * sz, host, 0, NULL, NULL);
+    }
+    int rc = 0;
+    if (!host) {
+        snprintf(err, errcap, "out of memory");
+        rc = 1;
+    } else if (e != CL_SUCCESS) {
+        snprintf(err, errcap, "the RRSS candidate walks failed: %s (%d)", lsqt_cl_error_name(e), (int)e);
+        rc = 1;
+    } else {
+        for (size_t i = 0; i < count; i++) out[i] = s->use_double ? (float)((double *)host)[i] : ((float *)host)[i];
+    }
+    free(host);
+    if (buf) clReleaseMemObject(buf);
+    return rc;
+}
+
 void lsqt_session_close(lsqt_session *s)
 {
     cl_mem *all[] = {&s->scene, &s->media, &s->layers, &s->wo, &s->wi, &s->tab,
@@ -215,6 +296,7 @@ void lsqt_session_close(lsqt_session *s)
         if (*all[i]) clReleaseMemObject(*all[i]);
     if (s->walk) clReleaseKernel(s->walk);
     if (s->prepare) clReleaseKernel(s->prepare);
+    if (s->exits) clReleaseKernel(s->exits);
     if (s->prog) clReleaseProgram(s->prog);
     memset(s, 0, sizeof *s);
 }

@@ -35,6 +35,7 @@ typedef struct {
 } rng_t;
 
 #define RNG_PURPOSE_WALK 0u
+#define RNG_PURPOSE_CANDIDATES 1u /* RRSS: the analog walks whose exits are candidate directions */
 
 inline rng_t rng_init(uint seed_lo, uint seed_hi, uint slice, ulong path, uint purpose)
 {

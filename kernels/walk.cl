@@ -29,6 +29,8 @@ typedef struct {
     ulong *work;                       /* this work-item's work counters (LSQT_T_LAYER_EVENTS ...) */
     volatile __local acc_word *acc;    /* the work-group's tallies, LSQT_ACC_WORDS each */
     volatile __global uint *flags;
+    int nee_on;                        /* 0: no point estimates (the RRSS candidate walks) */
+    __global real *exit_dir;           /* non-0: the path only writes its exit direction here */
 } walk_ctx;
 
 inline void acc_add(const walk_ctx *c, int k, real v)
@@ -136,7 +138,7 @@ inline real layer_vertex(const walk_ctx *c, int li, real3 d, real w, rng_t *rng,
     __global const lsqt_dev_medium *above = &c->media[li], *below = &c->media[li + 1];
     real tau_up = above->tau_above + above->mut * above->thickness;
     real tau_down = below->tau_below + below->mut * below->thickness;
-    const int visible = nee_visible(tau_up, tau_down, up, down);
+    const int visible = c->nee_on && nee_visible(tau_up, tau_down, up, down);
     __global const real *tab = c->tab + li * LSQT_TAB_STRIDE;
     c->work[WORK_LAYER]++;
 #if defined(LSQT_HAS_BSDF_MS_LAMBERTIAN) || defined(LSQT_HAS_BSDF_MS_DIELECTRIC) || defined(LSQT_HAS_BSDF_MS_CONDUCTIVE)
@@ -160,7 +162,7 @@ inline void nee_medium(const walk_ctx *c, int mi, real h, real3 d, real w, const
     const int up = top < 0 || mi <= top, down = bottom < 0 || mi > bottom;
     real tau_up = m->tau_above + m->mut * (m->thickness - h);
     real tau_down = m->tau_below + m->mut * h;
-    if (!nee_visible(tau_up, tau_down, up, down)) return;
+    if (!c->nee_on || !nee_visible(tau_up, tau_down, up, down)) return;
     c->work[WORK_NEE]++;
     for (int k = 0; k < LSQT_NWI_PAD; k += 4) {
         dir4 wi = load_dir4(c->wi, k);
@@ -223,6 +225,10 @@ inline void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulong *hi
              * moves consistently and leaves). */
             if (medium == 0 || medium == n) {
                 int up = medium == 0;
+                if (c->exit_dir) { /* a candidate walk: its scattered exit, (0, 0, 0) if none */
+                    vstore4(scattered ? (real4)(d.x, d.y, d.z, R(1.0)) : (real4)(R(0.0)), 0, c->exit_dir);
+                    return;
+                }
                 acc_add(c, LSQT_NWI + (up ? LSQT_T_R : LSQT_T_T), w);
                 if (scattered) {
                     fix1 q = to_fixed(w, c->flags);
@@ -262,6 +268,30 @@ inline void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulong *hi
     }
 }
 
+/* The RRSS candidates: analog walks (purpose RNG_PURPOSE_CANDIDATES, no point estimates)
+ * of paths [path_begin, path_begin + n) of every simulated slice; out[slice][path] is the
+ * direction of its scattered exit, w = 1, or all 0 (absorbed, unscattered, cut). Global
+ * size (n rounded up, simulated slices); a simulated slice s reads launch slice
+ * s * slice_group's outgoing direction and tables. */
+__kernel void lsqt_exits(__constant lsqt_dev_scene *scene, __global const lsqt_dev_medium *media,
+                         __global const lsqt_dev_layer *layers, __global const real *wo_dirs,
+                         __global const real *wi_dirs, __global const real *tab, ulong path_begin, uint n,
+                         __global real *out, volatile __global uint *flags)
+{
+    __local acc_word acc[LSQT_ACC_WORDS * ACC_N]; /* the safety cap's count, unused */
+    const uint i = (uint)get_global_id(0), slice = (uint)get_global_id(1);
+    const uint v = slice * (uint)max(scene->slice_group, 1);
+    ulong nee_priv[LSQT_NWI_PAD], work[WORK_N] = {0, 0, 0};
+    real path_sum[LSQT_NWI_PAD];
+    walk_ctx c = {scene, media, layers, wi_dirs + 3 * LSQT_NWI_PAD * v, tab + (size_t)v * scene->n_layers * LSQT_TAB_STRIDE,
+                  path_sum, nee_priv, work, acc, flags, 0, out + 4 * ((size_t)slice * n + i)};
+    if (i >= n) return;
+    real3 wo = make_real3(wo_dirs[4 * v], wo_dirs[4 * v + 1], wo_dirs[4 * v + 2]);
+    rng_t rng = rng_init(scene->seed_lo, scene->seed_hi, slice, path_begin + i, RNG_PURPOSE_CANDIDATES);
+    vstore4((real4)(R(0.0)), 0, c.exit_dir);
+    run_path(&c, wo, &rng, 0);
+}
+
 /* One work-group per (chunk of LSQT_CHUNK paths, slice): global size
  * (n_chunks * local size, n_slices). It runs the paths of its chunk that fall in
  * [path_begin, path_end), sums in local memory and adds once per chunk to the batch. */
@@ -289,10 +319,12 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
     real path_sum[LSQT_NWI_PAD];
     for (int k = 0; k < LSQT_NWI_PAD; k++) nee_priv[k] = 0, path_sum[k] = R(0.0);
     walk_ctx c = {scene, media, layers, wi_dirs + 3 * LSQT_NWI_PAD * slice,
-                  tab + (size_t)slice * scene->n_layers * LSQT_TAB_STRIDE, path_sum, nee_priv, work, acc, flags};
+                  tab + (size_t)slice * scene->n_layers * LSQT_TAB_STRIDE, path_sum, nee_priv, work, acc, flags, 1, 0};
+    /* the paths of simulated slice slice / slice_group (RRSS pilot: each candidate block) */
+    const uint rng_slice = slice / (uint)max(scene->slice_group, 1);
     real3 wo = make_real3(wo_dirs[4 * slice], wo_dirs[4 * slice + 1], wo_dirs[4 * slice + 2]);
     for (ulong p = begin + (ulong)lid; p < end; p += (ulong)lsz) {
-        rng_t rng = rng_init(scene->seed_lo, scene->seed_hi, slice, p, RNG_PURPOSE_WALK);
+        rng_t rng = rng_init(scene->seed_lo, scene->seed_hi, rng_slice, p, RNG_PURPOSE_WALK);
         run_path(&c, wo, &rng, hist + 2 * ((ulong)slice * LSQT_BATCHES + (ulong)batch) * LSQT_HIST_BINS);
         nee_flush(&c);
     }

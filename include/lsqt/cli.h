@@ -20,6 +20,7 @@ typedef struct lsqt_cli {
     double wo_angles[LSQT_MAX_WO]; /* --wo-angles, radians */
     int n_wo_angles;
     int rx;                   /* -rx */
+    int wi_spread;            /* --wi-spread: the even spread instead of RRSS */
     double rp;                /* -rp */
     int restart;              /* -R */
     uint64_t seed;            /* -s */

@@ -106,7 +106,9 @@ typedef struct lsqt_dev_scene {
     lsqt_i32 top_nonnull;     /* index of the topmost non-null layer, -1 if none */
     lsqt_i32 bottom_nonnull;  /* index of the bottommost non-null layer, -1 if none */
     lsqt_u32 seed_lo, seed_hi;
-    lsqt_i32 pad0, pad1;
+    lsqt_i32 slice_group;     /* launch slices per simulated slice (the RRSS pilot runs each
+                                 slice's candidates as that many slices of the same paths) */
+    lsqt_i32 pad1;
 } lsqt_dev_scene;
 
 #endif

@@ -1,6 +1,7 @@
 /* LSS: the progressive state file (SPEC §7). Versioned little-endian binary:
  *   "LSQTLSS\0", u32 version, u32 chunk, batches, fix_bits, hist_nmu, hist_nphi, t_count,
- *   u64 seed, u64 assembly hash, u32 double, transmits, flags,
+ *   u64 seed, u64 assembly hash, u32 double, transmits, flags, u32 direction method
+ *   (0 spread, 1 RRSS, 2 file), u32 RRSS rx, u64 RRSS pilot paths,
  *   u32 n_slices, n_wi, u64 paths, u32 text length, canonical assembly text,
  *   per slice: f64 theta_o, u64 paths, n_wi x f32 (x, y, z),
  *              [batch][n_wi] point-estimate sums, [batch][t_count] scalars,
@@ -18,7 +19,8 @@
 extern "C" {
 #endif
 
-#define LSQT_LSS_VERSION 3u /* 3: work counters, histogram per batch; 2: 128-bit tallies of 2^-40 (1: 64-bit of 2^-30) */
+#define LSQT_LSS_VERSION 4u /* 4: direction method, RRSS rx and pilot paths; 3: work counters, histogram per
+                             batch; 2: 128-bit tallies of 2^-40 (1: 64-bit of 2^-30) */
 
 /* Written through lsqt_out (util.h: atomic for regular files). Returns 0 or -1. */
 int lsqt_lss_write(const char *path, const lsqt_state *st, char *err, size_t errcap);

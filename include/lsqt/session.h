@@ -17,10 +17,12 @@ extern "C" {
 typedef struct lsqt_session {
     lsqt_context *cx;
     cl_program prog;
-    cl_kernel walk, prepare;
+    cl_kernel walk, prepare, exits;
     cl_mem scene, media, layers, wo, wi, tab, nee, scalars, hist, flags;
     size_t local_size; /* work-group size of the walk */
     int n_slices, n_wi;
+    int slice_group;   /* launch slices per simulated slice (1; rx for the RRSS pilot) */
+    int use_double;
     size_t n_nee, n_scalars, n_hist; /* tally counts (lsqt_u128 each) */
 } lsqt_session;
 
@@ -30,6 +32,20 @@ typedef struct lsqt_session {
  * Returns 0, or 1 with err filled (a build log, if any, already printed to stderr). */
 int lsqt_session_open(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st,
                       const char *extra_options, size_t local_size, int verbose, char *err, size_t errcap);
+
+/* The same, where every slice_group consecutive slices of ST are one simulated slice run
+ * with several direction sets (the RRSS pilot): their paths are the same. */
+int lsqt_session_open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st,
+                              int slice_group, const char *extra_options, size_t local_size, int verbose,
+                              char *err, size_t errcap);
+
+/* Uploads ST's directions again (same count) and remakes their tables. Returns 0 or 1. */
+int lsqt_session_set_directions(lsqt_session *s, const lsqt_state *st, char *err, size_t errcap);
+
+/* RRSS candidate walks: paths [begin, begin + n) of every simulated slice; out gets
+ * n_slices / slice_group x n x 4 floats (x, y, z, 1 for a scattered exit, else all 0).
+ * Returns 0 or 1. */
+int lsqt_session_exits(lsqt_session *s, uint64_t begin, uint32_t n, float *out, char *err, size_t errcap);
 
 /* Runs paths [begin, end) of every slice (the chunks they touch) and waits for them.
  * Returns 0, or 1 with err filled. */

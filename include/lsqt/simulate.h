@@ -50,6 +50,10 @@ typedef struct lsqt_sim_stats {
 int lsqt_simulate(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint64_t add_paths,
                   const lsqt_sim_opts *o, lsqt_sim_stats *stats, char *err, size_t errcap);
 
+/* The launch loop of lsqt_simulate on an open session (whose tallies are ST's). */
+int lsqt_run_session(lsqt_session *s, lsqt_state *st, uint64_t add_paths, const lsqt_sim_opts *o,
+                     lsqt_sim_stats *stats, char *err, size_t errcap);
+
 /* The largest over the slices of the largest relative standard error of the point
  * estimates; NaN while a run may not stop on it (fewer than LSQT_STOP_ERR_PATHS paths). */
 double lsqt_max_rel_err(const lsqt_state *st);

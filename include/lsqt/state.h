@@ -27,7 +27,12 @@ typedef struct lsqt_state {
     lsqt_u128 *scalars;     /* [slice][LSQT_BATCHES][LSQT_T_COUNT] */
     lsqt_u128 *hist;        /* [slice][LSQT_BATCHES][LSQT_HIST_BINS] fixed point */
     uint32_t flags;         /* LSQT_FLAG_* raised so far */
+    uint32_t dir_method;    /* LSQT_DIRS_*: how the directions were chosen */
+    uint32_t rx;            /* RRSS: candidates per direction (0 otherwise) */
+    uint64_t pilot_paths;   /* RRSS: paths of the pilot, the first of every slice's paths */
 } lsqt_state;
+
+enum { LSQT_DIRS_SPREAD = 0, LSQT_DIRS_RRSS = 1, LSQT_DIRS_FILE = 2 };
 
 /* Allocates zeroed tallies for the given shape; copies canonical. Returns 0 or -1. */
 int lsqt_state_init(lsqt_state *st, const char *canonical, uint64_t hash, uint64_t seed,

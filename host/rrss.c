@@ -1,0 +1,205 @@
+/* RRSS (rrss.h): candidates from the slices' own walks, a pilot that estimates the BSDF
+ * at all of them, and the redundancy reduction of SPEC §5. */
+#include "lsqt/rrss.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "lsqt/directions.h"
+#include "lsqt/tally.h"
+#include "lsqt/util.h"
+
+#define NB_MU 8       /* equal-area bins of the BSDF integral: |cos| x phi in [0, pi] */
+#define NB_PHI 8
+#define FLOOR 0.1     /* share of the uniform density in the target: no region is left bare */
+
+static int bin_of(const float *d)
+{
+    double mu = fabs((double)d[2]), phi = atan2(fabs((double)d[1]), (double)d[0]);
+    int bm = (int)(mu * NB_MU), bp = (int)(phi * (NB_PHI / LSQT_PI));
+    bm = bm < 0 ? 0 : bm >= NB_MU ? NB_MU - 1 : bm;
+    bp = bp < 0 ? 0 : bp >= NB_PHI ? NB_PHI - 1 : bp;
+    return ((d[2] < 0 ? 1 : 0) * NB_MU + bm) * NB_PHI + bp;
+}
+
+int lsqt_rrss_select(const float *dirs, const double *f, int m, int n, int sphere, unsigned char *keep)
+{
+    const int nb = 2 * NB_MU * NB_PHI;
+    const double bin_area = LSQT_PI / (NB_MU * NB_PHI), domain = sphere ? 2 * LSQT_PI : LSQT_PI; /* y >= 0 */
+    double *q = calloc((size_t)m, sizeof *q), *fsum = calloc((size_t)nb, sizeof *fsum);
+    int *count = calloc((size_t)nb, sizeof *count), *bin = calloc((size_t)m, sizeof *bin);
+    if (!q || !fsum || !count || !bin) {
+        free(q), free(fsum), free(count), free(bin);
+        return -1;
+    }
+    /* Z = integral of f over D: the mean value of each bin times its area. */
+    for (int i = 0; i < m; i++) {
+        bin[i] = bin_of(dirs + 4 * i);
+        count[bin[i]]++;
+        fsum[bin[i]] += isfinite(f[i]) && f[i] > 0 ? f[i] : 0.0;
+    }
+    double z = 0.0;
+    for (int b = 0; b < nb; b++)
+        if (count[b]) z += bin_area * fsum[b] / count[b];
+    const int fallback = !(isfinite(z) && z > 0);
+    for (int i = 0; i < m; i++) {
+        double fi = isfinite(f[i]) && f[i] > 0 ? f[i] : 0.0;
+        q[i] = fallback ? count[bin[i]] / (m * bin_area) : (1 - FLOOR) * fi / z + FLOOR / domain;
+    }
+    /* Disable the most redundant candidate until n remain (ties: the lowest index). */
+    for (int i = 0; i < m; i++) keep[i] = 1;
+    for (int enabled = m; enabled > n; enabled--) {
+        int worst = -1;
+        double worst_r = -1.0;
+        for (int i = 0; i < m; i++) {
+            if (!keep[i]) continue;
+            double r = sqrt(1.0 / (LSQT_PI * q[i] * enabled)), c = r >= LSQT_PI ? -2.0 : cos(r);
+            const float *di = dirs + 4 * i;
+            double e = 0, a = 0, qs = 0;
+            for (int j = 0; j < m; j++) {
+                const float *dj = dirs + 4 * j;
+                double dot = (double)di[0] * dj[0] + (double)di[1] * dj[1] + (double)di[2] * dj[2];
+                if (dot < c) continue;
+                a += 1, qs += q[j], e += keep[j];
+            }
+            double red = e * a * q[i] / qs;
+            if (red > worst_r) worst_r = red, worst = i;
+        }
+        keep[worst] = 0;
+    }
+    free(q), free(fsum), free(count), free(bin);
+    return fallback;
+}
+
+/* Candidates: the first m scattered exits of each slice's candidate walks, by path index,
+ * mirrored to y >= 0 (off the horizon, where a BSDF value is 0/0); a slice whose walks
+ * give too few (a BSDF that is zero almost everywhere) is filled from the spread. */
+static int candidates(lsqt_session *s, int n_sim, int m, int sphere, float *cand, int *short_slices, char *err,
+                      size_t errcap)
+{
+    int *have = calloc((size_t)n_sim, sizeof *have);
+    const uint32_t block = (uint32_t)(4 * m > 4096 ? 4 * m : 4096);
+    float *out = malloc((size_t)n_sim * block * 4 * sizeof *out);
+    int rc = 1;
+    if (!have || !out) {
+        snprintf(err, errcap, "out of memory");
+        goto done;
+    }
+    for (uint64_t begin = 0; begin < (uint64_t)block * 64; begin += block) {
+        if (lsqt_session_exits(s, begin, block, out, err, errcap)) goto done;
+        int missing = 0;
+        for (int sl = 0; sl < n_sim; sl++) {
+            for (uint32_t p = 0; p < block && have[sl] < m; p++) {
+                const float *d = out + ((size_t)sl * block + p) * 4;
+                if (d[3] != 1.0f || !(fabsf(d[2]) > 1e-6f) || (!sphere && d[2] < 0)) continue;
+                float *c = cand + ((size_t)sl * m + (size_t)have[sl]++) * 4;
+                double len = sqrt((double)d[0] * d[0] + (double)d[1] * d[1] + (double)d[2] * d[2]);
+                c[0] = (float)(d[0] / len), c[1] = (float)(fabs(d[1]) / len), c[2] = (float)(d[2] / len), c[3] = 0;
+            }
+            missing += have[sl] < m;
+        }
+        if (!missing) break;
+    }
+    *short_slices = 0;
+    float *spread = malloc((size_t)m * 4 * sizeof *spread);
+    if (!spread) {
+        snprintf(err, errcap, "out of memory");
+        goto done;
+    }
+    lsqt_wi_spread(m, sphere, spread);
+    for (int sl = 0; sl < n_sim; sl++) {
+        if (have[sl] < m) ++*short_slices;
+        for (int k = 0; have[sl] < m; k++) memcpy(cand + ((size_t)sl * m + (size_t)have[sl]++) * 4, spread + 4 * k, 16);
+    }
+    free(spread);
+    rc = 0;
+done:
+    free(have);
+    free(out);
+    return rc;
+}
+
+int lsqt_rrss(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, int rx, uint64_t pilot_paths,
+              const lsqt_sim_opts *o, lsqt_rrss_info *info, char *err, size_t errcap)
+{
+    memset(info, 0, sizeof *info);
+    const int n = st->n_wi, m = rx * n, ns = st->n_slices;
+    info->candidates = m;
+    lsqt_state ps; /* the pilot: slice s's candidate block j is launch slice s * rx + j */
+    if (lsqt_state_init(&ps, st->canonical, st->hash, st->seed, ns * rx, n, st->transmits)) {
+        snprintf(err, errcap, "out of memory");
+        return 1;
+    }
+    ps.use_double = st->use_double;
+    for (int v = 0; v < ns * rx; v++) ps.theta_o[v] = st->theta_o[v / rx];
+    float *cand = calloc((size_t)ns * m * 4, sizeof *cand);
+    double *f = calloc((size_t)m, sizeof *f);
+    unsigned char *keep = calloc((size_t)m, 1);
+    lsqt_slice_est *est = NULL;
+    lsqt_session s;
+    memset(&s, 0, sizeof s);
+    int rc = 1;
+    if (!cand || !f || !keep) {
+        snprintf(err, errcap, "out of memory");
+        goto done;
+    }
+    if (lsqt_session_open_grouped(&s, cx, a, &ps, rx, o->extra_options, o->local_size, o->verbose, err, errcap))
+        goto done;
+    const double t1 = lsqt_now(); /* the program build is not RRSS's time */
+    if (candidates(&s, ns, m, st->transmits, cand, &info->short_slices, err, errcap)) goto done;
+    memcpy(ps.wi, cand, (size_t)ns * m * 4 * sizeof *cand); /* block j of slice s is candidates j n ... */
+    if (lsqt_session_set_directions(&s, &ps, err, errcap)) goto done;
+    lsqt_sim_opts po = *o;
+    po.target_error = 0.0;
+    lsqt_sim_stats stats;
+    if (o->verbose) fprintf(stderr, "RRSS: %d candidates per slice, pilot of %llu paths\n", m, (unsigned long long)pilot_paths);
+    if (lsqt_run_session(&s, &ps, pilot_paths, &po, &stats, err, errcap)) goto done;
+    if (stats.interrupted) {
+        snprintf(err, errcap, "interrupted during the RRSS pilot: nothing to write");
+        goto done;
+    }
+    est = lsqt_estimates(&ps);
+    if (!est) {
+        snprintf(err, errcap, "out of memory");
+        goto done;
+    }
+    const size_t B = LSQT_BATCHES;
+    for (int sl = 0; sl < ns; sl++) {
+        for (int c = 0; c < m; c++) f[c] = est[sl * rx + c / n].f[c % n].mean;
+        int fb = lsqt_rrss_select(cand + (size_t)sl * m * 4, f, m, n, st->transmits, keep);
+        if (fb < 0) {
+            snprintf(err, errcap, "out of memory");
+            goto done;
+        }
+        info->density_fallback += fb;
+        /* the kept candidates, in candidate order, with their pilot tallies */
+        int k = 0;
+        for (int c = 0; c < m; c++) {
+            if (!keep[c]) continue;
+            const int v = sl * rx + c / n, kk = c % n;
+            memcpy(st->wi + ((size_t)sl * n + (size_t)k) * 4, cand + ((size_t)sl * m + (size_t)c) * 4, 16);
+            for (size_t b = 0; b < B; b++)
+                st->nee[((size_t)sl * B + b) * (size_t)n + (size_t)k] = ps.nee[((size_t)v * B + b) * (size_t)n + (size_t)kk];
+            k++;
+        }
+        /* the paths are those of every block: their scalars and histogram are block 0's */
+        memcpy(st->scalars + (size_t)sl * B * LSQT_T_COUNT, ps.scalars + (size_t)sl * rx * B * LSQT_T_COUNT,
+               B * LSQT_T_COUNT * sizeof *st->scalars);
+        memcpy(st->hist + (size_t)sl * B * LSQT_HIST_BINS, ps.hist + (size_t)sl * rx * B * LSQT_HIST_BINS,
+               B * LSQT_HIST_BINS * sizeof *st->hist);
+    }
+    st->paths = ps.paths;
+    st->flags |= ps.flags;
+    info->seconds = lsqt_now() - t1;
+    rc = 0;
+done:
+    lsqt_estimates_free(est, ns * rx);
+    lsqt_session_close(&s);
+    lsqt_state_free(&ps);
+    free(cand);
+    free(f);
+    free(keep);
+    return rc;
+}

@@ -1,0 +1,42 @@
+/* RRSS: the incident directions of every slice chosen from the slice's own walks (SPEC §5,
+ * the original tool's Redundancy-Reduced Sample Set). */
+#ifndef LSQT_RRSS_H
+#define LSQT_RRSS_H
+
+#include "lsqt/simulate.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct lsqt_rrss_info {
+    int candidates;        /* per slice: rx * n_wi */
+    int short_slices;      /* slices whose walks gave too few candidates (filled from the spread) */
+    int density_fallback;  /* slices whose BSDF integral was unusable (sampling density used) */
+    double seconds;        /* candidates, pilot and selection */
+} lsqt_rrss_info;
+
+/* Chooses ST's directions (st->n_wi per slice; st is fresh: 0 paths) and runs the pilot:
+ *  - candidates: rx * n_wi per slice, the scattered exits of analog walks of that slice
+ *    (RNG purpose "candidates", paths in index order), mirrored to y >= 0;
+ *  - pilot: pilot_paths paths estimate the BSDF at every candidate (one walk serves all);
+ *  - selection: target density q = 0.9 f / Z + 0.1 / |D| (f the BSDF value, Z its integral
+ *    over the domain D by an equal-area bin rule; the sampling density where Z is not
+ *    usable), then the most redundant candidate is disabled until n_wi remain (ties by
+ *    index): redundancy = e a q / Q over the candidates within r = sqrt(1/(pi q m)).
+ * On return ST holds the kept directions with their pilot tallies (st->paths =
+ * pilot_paths), exactly what a run of pilot_paths paths with those directions gives.
+ * Returns 0, or 1 with err filled. */
+int lsqt_rrss(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, int rx, uint64_t pilot_paths,
+              const lsqt_sim_opts *o, lsqt_rrss_info *info, char *err, size_t errcap);
+
+/* The selection alone (exposed for the tests): keeps n of the m candidates dirs (x, y, z,
+ * pad per direction, unit, y >= 0) with BSDF values f (>= 0), over the upper hemisphere
+ * or the sphere; keep[i] = 1 for the kept ones. Returns 1 when it fell back to the
+ * sampling density, else 0; -1 when out of memory. */
+int lsqt_rrss_select(const float *dirs, const double *f, int m, int n, int sphere, unsigned char *keep);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
