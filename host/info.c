@@ -125,6 +125,10 @@ static void print_text(FILE *f, const char *path, const lsqt_state *st, const ls
     fprintf(f, "transmits: %s\n", st->transmits ? "yes (incident directions over the sphere)"
                                                 : "no (incident directions over the upper hemisphere)");
     fprintf(f, "slices: %d, wi per slice: %d\n", st->n_slices, st->n_wi);
+    if (st->dir_method == LSQT_DIRS_RRSS)
+        fprintf(f, "directions: RRSS (%u candidates per direction, pilot of %llu paths)\n", st->rx,
+                (unsigned long long)st->pilot_paths);
+    else fprintf(f, "directions: %s\n", st->dir_method == LSQT_DIRS_FILE ? "from a file (--wi-file)" : "even spread");
     fprintf(f, "paths: %llu per slice\n", (unsigned long long)st->paths);
     if (st->flags) fprintf(f, "flags: 0x%x (%s)\n", st->flags, flags);
     else fprintf(f, "flags: none\n");
@@ -168,9 +172,12 @@ static int write_json(const char *out, const char *path, const lsqt_state *st, c
             LSQT_LSS_VERSION, LSQT_CHUNK, LSQT_BATCHES, LSQT_FIX_BITS, LSQT_HIST_NMU, LSQT_HIST_NPHI, LSQT_HIST_BINS,
             LSQT_T_COUNT);
     fprintf(f, " \"hash\": \"%016llx\", \"seed\": %llu, \"double\": %s, \"transmits\": %s, \"n_slices\": %d, "
-               "\"n_wi\": %d, \"paths\": %llu,\n \"flags\": %u, \"flag_names\": [%s], \"ranges\": ",
+               "\"n_wi\": %d, \"paths\": %llu,\n \"directions\": {\"method\": \"%s\", \"rx\": %u, \"pilot_paths\": %llu},\n"
+               " \"flags\": %u, \"flag_names\": [%s], \"ranges\": ",
             (unsigned long long)st->hash, (unsigned long long)st->seed, st->use_double ? "true" : "false",
-            st->transmits ? "true" : "false", st->n_slices, st->n_wi, (unsigned long long)st->paths, st->flags, flags);
+            st->transmits ? "true" : "false", st->n_slices, st->n_wi, (unsigned long long)st->paths,
+            st->dir_method == LSQT_DIRS_RRSS ? "rrss" : st->dir_method == LSQT_DIRS_FILE ? "file" : "spread", st->rx,
+            (unsigned long long)st->pilot_paths, st->flags, flags);
     info_ranges(f, st, 1);
     fprintf(f, ",\n \"assembly\": ");
     json_str(f, st->canonical);

@@ -392,8 +392,10 @@ int main(int argc, char **argv)
         if (pilot > c.paths) pilot = c.paths;
         rc = lsqt_rrss(&cx, &a, &st, c.rx, pilot, &so, &rinfo, err, sizeof err);
         if (!rc) {
+            pilot = st.paths; /* fewer when the pilot was interrupted */
             st.rx = (uint32_t)c.rx, st.pilot_paths = pilot;
             if (add != UINT64_MAX) add -= pilot;
+            if (rinfo.interrupted) add = 0;
             if (!c.quiet && rinfo.short_slices)
                 fprintf(stderr, "note: RRSS: in %d slice%s the walks left too few directions to choose from "
                                 "(a BSDF that is zero almost everywhere); the even spread filled the rest\n",
@@ -407,6 +409,7 @@ int main(int argc, char **argv)
     if (!rc) rc = lsqt_simulate(&cx, &a, &st, add, &so, &stats, err, sizeof err);
     stats.seconds += rinfo.seconds;
     stats.paths_added += pilot;
+    if (rinfo.interrupted) stats.interrupted = 1, stats.stop_reason = g_stop ? LSQT_STOP_INTERRUPT : LSQT_STOP_TIME;
     if (rc) {
         fail(1, "%s%s", err, "");
     } else {

@@ -11,42 +11,53 @@
 #include "lsqt/tally.h"
 #include "lsqt/util.h"
 
-#define NB_MU 8       /* equal-area bins of the BSDF integral: |cos| x phi in [0, pi] */
-#define NB_PHI 8
+#define KNN 8         /* neighbours behind the candidates' density estimate */
 #define FLOOR 0.1     /* share of the uniform density in the target: no region is left bare */
 
-static int bin_of(const float *d)
+/* The density of the m candidates (per steradian) at each of them: k of them within the
+ * cap out to the k-th nearest other one, k / (m * 2 pi (1 - cos)). It resolves a narrow
+ * lobe, where the candidates crowd, as no fixed bin can. */
+static void candidate_density(const float *dirs, int m, double *p)
 {
-    double mu = fabs((double)d[2]), phi = atan2(fabs((double)d[1]), (double)d[0]);
-    int bm = (int)(mu * NB_MU), bp = (int)(phi * (NB_PHI / LSQT_PI));
-    bm = bm < 0 ? 0 : bm >= NB_MU ? NB_MU - 1 : bm;
-    bp = bp < 0 ? 0 : bp >= NB_PHI ? NB_PHI - 1 : bp;
-    return ((d[2] < 0 ? 1 : 0) * NB_MU + bm) * NB_PHI + bp;
+    const int k = m - 1 < KNN ? m - 1 : KNN;
+    for (int i = 0; i < m; i++) {
+        double best[KNN]; /* the k largest dot products, descending */
+        int have = 0;
+        const float *di = dirs + 4 * i;
+        for (int j = 0; j < m; j++) {
+            if (j == i) continue;
+            const float *dj = dirs + 4 * j;
+            double dot = (double)di[0] * dj[0] + (double)di[1] * dj[1] + (double)di[2] * dj[2];
+            if (have < k) best[have++] = dot;
+            else if (dot > best[k - 1]) best[k - 1] = dot;
+            else continue;
+            for (int t = have - 1; t > 0 && best[t] > best[t - 1]; t--) {
+                double x = best[t];
+                best[t] = best[t - 1], best[t - 1] = x;
+            }
+        }
+        double cap = k > 0 ? 2 * LSQT_PI * (1 - fmin(best[k - 1], 1.0)) : 0.0;
+        cap = fmax(cap, 1e-12); /* coincident candidates */
+        p[i] = k > 0 ? k / (m * cap) : 1.0;
+    }
 }
 
 int lsqt_rrss_select(const float *dirs, const double *f, int m, int n, int sphere, unsigned char *keep)
 {
-    const int nb = 2 * NB_MU * NB_PHI;
-    const double bin_area = LSQT_PI / (NB_MU * NB_PHI), domain = sphere ? 2 * LSQT_PI : LSQT_PI; /* y >= 0 */
-    double *q = calloc((size_t)m, sizeof *q), *fsum = calloc((size_t)nb, sizeof *fsum);
-    int *count = calloc((size_t)nb, sizeof *count), *bin = calloc((size_t)m, sizeof *bin);
-    if (!q || !fsum || !count || !bin) {
-        free(q), free(fsum), free(count), free(bin);
+    const double domain = sphere ? 2 * LSQT_PI : LSQT_PI; /* the directions have y >= 0 */
+    double *q = calloc((size_t)m, sizeof *q), *pe = calloc((size_t)m, sizeof *pe);
+    if (!q || !pe) {
+        free(q), free(pe);
         return -1;
     }
-    /* Z = integral of f over D: the mean value of each bin times its area. */
-    for (int i = 0; i < m; i++) {
-        bin[i] = bin_of(dirs + 4 * i);
-        count[bin[i]]++;
-        fsum[bin[i]] += isfinite(f[i]) && f[i] > 0 ? f[i] : 0.0;
-    }
+    /* Z = integral of f over D, by importance sampling with the candidates' density */
+    candidate_density(dirs, m, pe);
     double z = 0.0;
-    for (int b = 0; b < nb; b++)
-        if (count[b]) z += bin_area * fsum[b] / count[b];
+    for (int i = 0; i < m; i++) z += (isfinite(f[i]) && f[i] > 0 ? f[i] : 0.0) / pe[i] / m;
     const int fallback = !(isfinite(z) && z > 0);
     for (int i = 0; i < m; i++) {
         double fi = isfinite(f[i]) && f[i] > 0 ? f[i] : 0.0;
-        q[i] = fallback ? count[bin[i]] / (m * bin_area) : (1 - FLOOR) * fi / z + FLOOR / domain;
+        q[i] = fallback ? pe[i] : (1 - FLOOR) * fi / z + FLOOR / domain;
     }
     /* Disable the most redundant candidate until n remain (ties: the lowest index). */
     for (int i = 0; i < m; i++) keep[i] = 1;
@@ -61,15 +72,16 @@ int lsqt_rrss_select(const float *dirs, const double *f, int m, int n, int spher
             for (int j = 0; j < m; j++) {
                 const float *dj = dirs + 4 * j;
                 double dot = (double)di[0] * dj[0] + (double)di[1] * dj[1] + (double)di[2] * dj[2];
-                if (dot < c) continue;
+                if (j == i || dot < c) continue;
                 a += 1, qs += q[j], e += keep[j];
             }
-            double red = e * a * q[i] / qs;
+            /* the neighbours are the other candidates: one with none is not redundant */
+            double red = a > 0 ? e * a * q[i] / qs : 0.0;
             if (red > worst_r) worst_r = red, worst = i;
         }
         keep[worst] = 0;
     }
-    free(q), free(fsum), free(count), free(bin);
+    free(q), free(pe);
     return fallback;
 }
 
@@ -156,10 +168,7 @@ int lsqt_rrss(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, int rx, 
     lsqt_sim_stats stats;
     if (o->verbose) fprintf(stderr, "RRSS: %d candidates per slice, pilot of %llu paths\n", m, (unsigned long long)pilot_paths);
     if (lsqt_run_session(&s, &ps, pilot_paths, &po, &stats, err, errcap)) goto done;
-    if (stats.interrupted) {
-        snprintf(err, errcap, "interrupted during the RRSS pilot: nothing to write");
-        goto done;
-    }
+    info->interrupted = stats.interrupted; /* the pilot is what was done: choose from it */
     est = lsqt_estimates(&ps);
     if (!est) {
         snprintf(err, errcap, "out of memory");

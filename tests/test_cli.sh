@@ -83,18 +83,19 @@ if [ -f L.lsqt.raw ] && [ -f L.lsqt.lss ]; then ok; else bad "no L.lsqt.raw / L.
 awk 'NR > 3 { d = $5 / (0.6 / 3.14159265358979) - 1; if (d > 1e-5 || d < -1e-5) bad++ } END { exit bad > 0 }' L.lsqt.raw \
   && ok || bad "RAW values are not 0.6/pi"
 
-# Continuation adds paths; the split run equals the single run byte for byte. The slab's
-# RAW depends on the random paths (another seed changes it, checked), so these can fail.
+# Continuation adds paths; the split run equals the single run byte for byte (with the
+# even spread: RRSS takes its pilot from the first run's -p, see below). The slab's RAW
+# depends on the random paths (another seed changes it, checked), so these can fail.
 expect 0 "continuing L.lsqt.lss (2000 paths per slice so far)" -- "$BIN" -p 3000 L.lsqt
 cp "$EX/slab.lsqt" S.lsqt
-"$BIN" -q -p 2000 -wo 4 -wi 16 S.lsqt && ok || bad "slab run"
+"$BIN" -q -p 2000 -wo 4 -wi 16 --wi-spread S.lsqt && ok || bad "slab run"
 expect 0 "continuing S.lsqt.lss (2000 paths per slice so far)" -- "$BIN" -p 3000 S.lsqt
-"$BIN" -q -R -p 5000 -wo 4 -wi 16 -o once.raw --lss once.lss S.lsqt && ok || bad "single run"
+"$BIN" -q -R -p 5000 -wo 4 -wi 16 --wi-spread -o once.raw --lss once.lss S.lsqt && ok || bad "single run"
 cmp -s once.raw S.lsqt.raw && ok || bad "split run RAW differs from single run"
 cmp -s once.lss S.lsqt.lss && ok || bad "split run LSS differs from single run"
-"$BIN" -q -R -p 5000 -wo 4 -wi 16 -o again.raw --lss again.lss S.lsqt && cmp -s once.raw again.raw && ok \
+"$BIN" -q -R -p 5000 -wo 4 -wi 16 --wi-spread -o again.raw --lss again.lss S.lsqt && cmp -s once.raw again.raw && ok \
   || bad "same seed and -p give different RAW"
-"$BIN" -q -R -p 5000 -wo 4 -wi 16 -s 1 -o seed1.raw --lss seed1.lss S.lsqt && ! cmp -s once.raw seed1.raw && ok \
+"$BIN" -q -R -p 5000 -wo 4 -wi 16 --wi-spread -s 1 -o seed1.raw --lss seed1.lss S.lsqt && ! cmp -s once.raw seed1.raw && ok \
   || bad "another seed gives the same RAW: the determinism checks above could not fail"
 # Each estimate is written twice, at (x, y, z) with y >= 0 and then at (x, -y, z), same value.
 awk 'NR > 3 && NR % 2 == 0 { s = $1; x = $2; y = $3; z = $4; v = $5 }
@@ -189,9 +190,11 @@ grep -q '"seed": 9007199254740993,' s1.json && ok || bad "JSON seed: $(grep -o '
 expect 0 "kernel build options: " -- "$BIN" -v -R -p 300 -wo 4 -wi 16 -o v.raw --lss v.lss L.lsqt
 expect 0 "-cl-std=CL1.2" -- "$BIN" -v -R -p 300 -wo 4 -wi 16 -o v.raw --lss v.lss L.lsqt
 
-# An odd direction count over the sphere would put a direction on the horizon: refused.
+# An odd direction count of the spread over the sphere would put a direction on the
+# horizon: refused (RRSS directions come from exits, never on it).
 printf 'Medium\nLayer z=0 LambertianBsdf fR=0.5 fT=0.5\nMedium\n' > odd.lsqt
-expect 2 "count must be even" -- "$BIN" -p 100 -wi 63 odd.lsqt
+expect 2 "count must be even" -- "$BIN" -p 100 -wi 63 --wi-spread odd.lsqt
+expect 0 "wrote" -- "$BIN" -p 100 -wi 63 odd.lsqt
 
 # The microsurface examples, and those of the phase functions and Oren-Nayar (in examples/
 # itself), run end to end: RAW values finite and non-negative, every slice and direction
@@ -219,7 +222,7 @@ expect 3 "pocl-opencl-icd" -- env OCL_ICD_VENDORS="$T/novendors" "$BIN" L.lsqt
 expect 0 "" -- "$BIN" --list-devices
 
 # -t limits PoCL's threads and changes nothing in the result.
-"$BIN" -q -R -t 1 -p 5000 -wo 4 -wi 16 -o t1.raw --lss t1.lss S.lsqt && cmp -s t1.raw once.raw \
+"$BIN" -q -R -t 1 -p 5000 -wo 4 -wi 16 --wi-spread -o t1.raw --lss t1.lss S.lsqt && cmp -s t1.raw once.raw \
   && cmp -s t1.lss once.lss && ok || bad "-t 1 gives another RAW or LSS"
 
 # Ctrl-C: the current launch finishes, LSS and RAW are written, exit status is non-zero.

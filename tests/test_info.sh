@@ -80,7 +80,7 @@ for b, s in zip(blocks, run["slices"]):
 for line in ("seed: %d" % seed, "assembly hash: %s" % run["assembly_hash"], "precision: float",
              "transmits: %s" % ("yes" if transmits else "no"), "slices: 4, wi per slice: 16",
              "paths: %d per slice" % paths, "flags: none", "ranges: [0, %d) on every slice" % paths,
-             "format: LSS version 3; chunk 256 paths, 32 batches, 40 fixed-point bits, histogram 2 x 32 x 16 = 1024 bins"):
+             "format: LSS version 4; chunk 256 paths, 32 batches, 40 fixed-point bits, histogram 2 x 32 x 16 = 1024 bins"):
     if not re.search("^" + re.escape(line), text, re.M): p.append("text lacks '%s'" % line)
 asm = re.search(r"^assembly:\n((?:  .*\n)+)", text, re.M)
 if not asm or "\n".join(l[2:] for l in asm.group(1).splitlines()) + "\n" != info.get("assembly"):
@@ -89,7 +89,7 @@ if not asm or "\n".join(l[2:] for l in asm.group(1).splitlines()) + "\n" != info
 for k in ("version", "seed", "hash", "double", "transmits", "n_wi", "assembly", "flags", "ranges", "slices"):
     if k not in info: p.append("JSON lacks %s" % k)
 if p: sys.exit("; ".join(p))
-if info["version"] != 3 or info["seed"] != seed or info["seed"] != run["seed"]: p.append("JSON version/seed")
+if info["version"] != 4 or info["seed"] != seed or info["seed"] != run["seed"]: p.append("JSON version/seed")
 if info["hash"] != run["assembly_hash"] or not re.fullmatch(r"[0-9a-f]{16}", info["hash"]): p.append("JSON hash")
 if info["double"] is not False or info["double"] != run["double"] or info["transmits"] is not transmits: p.append("JSON double/transmits")
 if info["n_wi"] != 16 or info["flags"] != 0 or info["ranges"] != [[0, paths]]: p.append("JSON n_wi/flags/ranges")
@@ -163,8 +163,8 @@ cp L.lsqt.lss magic.lss
 printf 'XSQT' | dd of=magic.lss bs=1 seek=0 conv=notrunc status=none
 cp L.lsqt.lss v1.lss
 printf '\001\000\000\000' | dd of=v1.lss bs=1 seek=8 conv=notrunc status=none
-cp L.lsqt.lss v4.lss
-printf '\004\000\000\000' | dd of=v4.lss bs=1 seek=8 conv=notrunc status=none
+cp L.lsqt.lss v5.lss
+printf '\005\000\000\000' | dd of=v5.lss bs=1 seek=8 conv=notrunc status=none
 : > empty.lss
 printf 'Medium\nLayer z=0 NullBsdf\nMedium\n' > text.lss
 mkdir dir.lss
@@ -183,14 +183,14 @@ while IFS='|' read -r file text; do
   done
 done <<TABLE
 trunc.lss|truncated at byte 1000 (its header announces $n bytes
-trunc_header.lss|truncated at byte 40 (inside the 84-byte header)
+trunc_header.lss|truncated at byte 40 (inside the 100-byte header)
 trunc_crc.lss|truncated at byte $((n - 1))
 flip.lss|corrupt LSS file (CRC mismatch
 long.lss|corrupt LSS file: $((n + 1)) bytes where its header announces $n
 magic.lss|not an LSS file (bad magic)
 text.lss|not an LSS file (bad magic)
-v1.lss|LSS version 1, this lsqt-cl reads version 3
-v4.lss|LSS version 4, this lsqt-cl reads version 3
+v1.lss|LSS version 1, this lsqt-cl reads version 4
+v5.lss|LSS version 5, this lsqt-cl reads version 4
 empty.lss|empty file (not an LSS file)
 dir.lss|is a directory, not an LSS file
 fifo.lss|is a FIFO, not an LSS file
@@ -208,7 +208,7 @@ def put(name, off, value):
     b[off:off + 4] = struct.pack("<I", value)
     open(name, "wb").write(bytes(b) + struct.pack("<I", zlib.crc32(bytes(b))))
 put("chunk128.lss", 12, 128)     # layout: chunk
-put("noslices.lss", 64, 0)       # n_slices
+put("noslices.lss", 80, 0)       # n_slices (after flags, direction method, rx, pilot paths)
 put("flags.lss", 60, 2 | 8)      # flags: non-finite and an unknown bit
 put("same.lss", 60, 0)           # unchanged (flags 0): proves the CRC is recomputed right
 PY

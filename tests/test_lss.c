@@ -84,7 +84,7 @@ int main(void)
               strstr(err, "truncated at byte 1000 ("),
           "truncated: %s", err);
     CHECK(lsqt_lss_parse((const unsigned char *)f1, 50, &b, err, sizeof err) != 0 &&
-              strstr(err, "truncated at byte 50 (inside the 84-byte header)"),
+              strstr(err, "truncated at byte 50 (inside the 100-byte header)"),
           "truncated header: %s", err);
     f1[n1 / 2] ^= 0x10;
     CHECK(lsqt_lss_parse((const unsigned char *)f1, n1, &b, err, sizeof err) != 0 && strstr(err, "CRC mismatch"),

@@ -14,7 +14,9 @@ T=$(mktemp -d)
 trap 'rm -rf "$T"' EXIT
 cd "$T"
 cp "$EX/slab.lsqt" S.lsqt
-F=(-wo 4 -wi 16 -s 3)
+# The even spread: with RRSS the pilot is a share of -p (10000 without it), so a target
+# run equals a -p run only on given directions.
+F=(-wo 4 -wi 16 -s 3 --wi-spread)
 
 # json FILE EXPR: evaluates a Python expression over the JSON summary j.
 json() { python3 -c "import json, sys; j = json.load(open(sys.argv[1])); sys.exit(0 if ($2) else 1)" "$1"; }

@@ -121,7 +121,7 @@ PY
 python3 same.py ang.raw xyz.raw 1e-6 && ok || bad "theta/phi and x y z give different RAW: $(python3 same.py ang.raw xyz.raw 1e-6 2>&1)"
 # The -wi spread's own directions, written to a file, reproduce that run (again up to the
 # float rounding of the directions: the paths do not depend on them).
-"$BIN" -q -R -p 2000 -wo 4 -wi 16 -o spread.raw --lss spread.lss S.lsqt && \
+"$BIN" -q -R -p 2000 -wo 4 -wi 16 --wi-spread -o spread.raw --lss spread.lss S.lsqt && \
 awk 'NR > 3 && $1 == 0 && NR % 2 == 0 { print $2, $3, $4 }' spread.raw > spread.txt && \
 "$BIN" -q -R -p 2000 -wo 4 --wi-file spread.txt -o fromfile.raw --lss fromfile.lss S.lsqt && ok || bad "spread runs"
 [ "$(wc -l < spread.txt)" = 16 ] && python3 same.py fromfile.raw spread.raw 1e-6 && ok \

@@ -14,6 +14,7 @@ typedef struct lsqt_rrss_info {
     int short_slices;      /* slices whose walks gave too few candidates (filled from the spread) */
     int density_fallback;  /* slices whose BSDF integral was unusable (sampling density used) */
     double seconds;        /* candidates, pilot and selection */
+    int interrupted;       /* the pilot stopped early (*stop, time limit): st->paths tells how far */
 } lsqt_rrss_info;
 
 /* Chooses ST's directions (st->n_wi per slice; st is fresh: 0 paths) and runs the pilot:
@@ -21,11 +22,14 @@ typedef struct lsqt_rrss_info {
  *    (RNG purpose "candidates", paths in index order), mirrored to y >= 0;
  *  - pilot: pilot_paths paths estimate the BSDF at every candidate (one walk serves all);
  *  - selection: target density q = 0.9 f / Z + 0.1 / |D| (f the BSDF value, Z its integral
- *    over the domain D by an equal-area bin rule; the sampling density where Z is not
- *    usable), then the most redundant candidate is disabled until n_wi remain (ties by
- *    index): redundancy = e a q / Q over the candidates within r = sqrt(1/(pi q m)).
+ *    over the domain D, importance sampled with the candidates' own density, estimated
+ *    from their 8 nearest neighbours; that density itself where Z is not usable), then
+ *    the most redundant candidate is disabled until n_wi remain (ties by index):
+ *    redundancy = e a q / Q over the other candidates within r = sqrt(1/(pi q m)), e of
+ *    them enabled, a in all, Q the sum of their q (0 without neighbours).
  * On return ST holds the kept directions with their pilot tallies (st->paths =
- * pilot_paths), exactly what a run of pilot_paths paths with those directions gives.
+ * pilot_paths, fewer when interrupted), exactly what a run of that many paths with those
+ * directions gives.
  * Returns 0, or 1 with err filled. */
 int lsqt_rrss(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, int rx, uint64_t pilot_paths,
               const lsqt_sim_opts *o, lsqt_rrss_info *info, char *err, size_t errcap);
