@@ -11,8 +11,27 @@
 #include "lsqt/tally.h"
 #include "lsqt/util.h"
 
+#define NBR_MAX 256  /* neighbours kept per candidate for the redundancy discs */
 #define KNN 8         /* neighbours behind the candidates' density estimate */
 #define FLOOR 0.1     /* share of the uniform density in the target: no region is left bare */
+
+typedef struct {
+    double dot;
+    int j;
+} nbr;
+
+static double dot3f(const float *a, const float *b)
+{
+    return (double)a[0] * b[0] + (double)a[1] * b[1] + (double)a[2] * b[2];
+}
+
+/* Decreasing dot product; equal ones by index, so the order is the same everywhere. */
+static int nbr_cmp(const void *x, const void *y)
+{
+    const nbr *a = x, *b = y;
+    if (a->dot != b->dot) return a->dot < b->dot ? 1 : -1;
+    return (a->j > b->j) - (a->j < b->j);
+}
 
 /* The density of the m candidates (per steradian) at each of them: k of them within the
  * cap out to the k-th nearest other one, k / (m * 2 pi (1 - cos)). It resolves a narrow
@@ -59,6 +78,21 @@ int lsqt_rrss_select(const float *dirs, const double *f, int m, int n, int spher
         double fi = isfinite(f[i]) && f[i] > 0 ? f[i] : 0.0;
         q[i] = fallback ? pe[i] : (1 - FLOOR) * fi / z + FLOOR / domain;
     }
+    /* Each candidate's nearest others, by decreasing dot product (the first NBR_MAX; the
+     * rare disc that reaches past them is scanned in full). */
+    const int kn = m - 1 < NBR_MAX ? m - 1 : NBR_MAX;
+    nbr *list = malloc((size_t)m * (size_t)(kn > 0 ? kn : 1) * sizeof *list), *row = malloc((size_t)m * sizeof *row);
+    if (!list || !row) {
+        free(q), free(pe), free(list), free(row);
+        return -1;
+    }
+    for (int i = 0; i < m; i++) {
+        int c = 0;
+        for (int j = 0; j < m; j++)
+            if (j != i) row[c].dot = dot3f(dirs + 4 * i, dirs + 4 * j), row[c++].j = j;
+        qsort(row, (size_t)c, sizeof *row, nbr_cmp);
+        memcpy(list + (size_t)i * kn, row, (size_t)kn * sizeof *row);
+    }
     /* Disable the most redundant candidate until n remain (ties: the lowest index). */
     for (int i = 0; i < m; i++) keep[i] = 1;
     for (int enabled = m; enabled > n; enabled--) {
@@ -67,13 +101,14 @@ int lsqt_rrss_select(const float *dirs, const double *f, int m, int n, int spher
         for (int i = 0; i < m; i++) {
             if (!keep[i]) continue;
             double r = sqrt(1.0 / (LSQT_PI * q[i] * enabled)), c = r >= LSQT_PI ? -2.0 : cos(r);
-            const float *di = dirs + 4 * i;
             double e = 0, a = 0, qs = 0;
-            for (int j = 0; j < m; j++) {
-                const float *dj = dirs + 4 * j;
-                double dot = (double)di[0] * dj[0] + (double)di[1] * dj[1] + (double)di[2] * dj[2];
-                if (j == i || dot < c) continue;
-                a += 1, qs += q[j], e += keep[j];
+            const nbr *l = list + (size_t)i * kn;
+            int t = 0;
+            for (; t < kn && l[t].dot >= c; t++) a += 1, qs += q[l[t].j], e += keep[l[t].j];
+            if (t == kn && kn < m - 1) { /* the disc reaches past the list: all of them */
+                e = a = qs = 0;
+                for (int j = 0; j < m; j++)
+                    if (j != i && dot3f(dirs + 4 * i, dirs + 4 * j) >= c) a += 1, qs += q[j], e += keep[j];
             }
             /* the neighbours are the other candidates: one with none is not redundant */
             double red = a > 0 ? e * a * q[i] / qs : 0.0;
@@ -81,6 +116,7 @@ int lsqt_rrss_select(const float *dirs, const double *f, int m, int n, int spher
         }
         keep[worst] = 0;
     }
+    free(list), free(row);
     free(q), free(pe);
     return fallback;
 }
@@ -175,6 +211,7 @@ int lsqt_rrss(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, int rx, 
         goto done;
     }
     const size_t B = LSQT_BATCHES;
+    const double t_sel = lsqt_now();
     for (int sl = 0; sl < ns; sl++) {
         for (int c = 0; c < m; c++) f[c] = est[sl * rx + c / n].f[c % n].mean;
         int fb = lsqt_rrss_select(cand + (size_t)sl * m * 4, f, m, n, st->transmits, keep);
@@ -201,6 +238,8 @@ int lsqt_rrss(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, int rx, 
     }
     st->paths = ps.paths;
     st->flags |= ps.flags;
+    if (o->verbose)
+        fprintf(stderr, "RRSS: candidates and pilot %.3g s, selection %.3g s\n", t_sel - t1, lsqt_now() - t_sel);
     info->seconds = lsqt_now() - t1;
     rc = 0;
 done:
