@@ -76,7 +76,12 @@ void lsqt_cli_help(FILE *f)
           "  -d, --device D              OpenCL device: index, name substring, cpu or gpu\n"
           "      --list-devices          list OpenCL devices and exit\n"
           "      --double                compute in double precision (device needs fp64)\n"
-          "      --time-limit S          stop adding paths after S seconds\n"
+          , f);
+    fputs("      --time-limit S          stop adding paths after S seconds\n"
+          "      --checkpoint S          write the LSS every S seconds during a run (default 300,\n"
+          "                              0: never; not during the RRSS pilot). SIGINT, SIGTERM,\n"
+          "                              SIGHUP and SIGUSR1 finish the launch, write LSS and RAW\n"
+          "                              and exit 1; continuing gives the uninterrupted bytes\n"
           "      --target-error E        add paths until every slice's largest relative standard\n"
           "                              error of the BSDF values is at most E (e.g. 0.01); -p,\n"
           "                              if given, is then a cap (checked at path counts that\n"
@@ -99,7 +104,7 @@ void lsqt_cli_help(FILE *f)
 
 enum flag_id {
     F_PATHS, F_WO, F_WO_ANGLES, F_WI, F_WI_FILE, F_RX, F_RP, F_RESTART, F_SEED, F_THREADS, F_OUTPUT,
-    F_HEMI, F_SPREAD, F_DEVICE, F_LIST, F_DOUBLE, F_TIME, F_TARGET, F_LSS, F_JSON, F_QUIET, F_VERBOSE, F_HELP
+    F_HEMI, F_SPREAD, F_CHECKPOINT, F_DEVICE, F_LIST, F_DOUBLE, F_TIME, F_TARGET, F_LSS, F_JSON, F_QUIET, F_VERBOSE, F_HELP
 };
 
 static const struct flag {
@@ -118,6 +123,7 @@ static const struct flag {
     {NULL, "--json", F_JSON, 1},             {"-q", "--quiet", F_QUIET, 0},
     {"-v", "--verbose", F_VERBOSE, 0},       {"-h", "--help", F_HELP, 0},
     {NULL, "--target-error", F_TARGET, 1},  {NULL, "--wi-spread", F_SPREAD, 0},
+    {NULL, "--checkpoint", F_CHECKPOINT, 1},
 };
 
 static int parse_angles(const char *s, lsqt_cli *c)
@@ -161,6 +167,7 @@ static int apply(const struct flag *fl, const char *name, const char *v, lsqt_cl
     case F_RESTART: c->restart = 1; break;
     case F_HEMI: c->only_hemispherical = 1; break;
     case F_SPREAD: c->wi_spread = 1; c->sampling_given = 1; break;
+    case F_CHECKPOINT: if (lsqt_parse_double(v, &d) || !(d >= 0)) expect = "seconds >= 0 (0: no checkpoints)"; else c->checkpoint = d; break;
     case F_LIST: c->list_devices = 1; break;
     case F_DOUBLE: c->use_double = 1; break;
     case F_QUIET: c->quiet = 1; break;
@@ -183,6 +190,7 @@ int lsqt_cli_parse(int argc, char **argv, lsqt_cli *c, char *err, size_t errcap)
     c->wi_count = 80;
     c->rx = 4;
     c->rp = 0.8;
+    c->checkpoint = 300;
     char wi_name[16] = ""; /* -wi or --wi-count, as given */
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];

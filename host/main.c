@@ -20,15 +20,17 @@
 #include "lsqt/tally.h"
 #include "lsqt/util.h"
 
-static volatile sig_atomic_t g_stop = 0;
+static volatile sig_atomic_t g_stop = 0;  /* the signal that asked to stop, 0 if none */
 static volatile sig_atomic_t g_armed = 0; /* the input is read: Ctrl-C now means "finish" */
 static sigset_t g_sigint;
 
-/* Ctrl-C is taken by this thread alone (sigwait), never by a signal handler: SIGINT is
- * blocked in every other thread, PoCL's included, so LLVM's own handler (installed while
- * PoCL compiles a kernel) cannot run and delete the compiler's temporary files, which
- * failed the build. First Ctrl-C: finish the launch, write LSS and RAW, exit non-zero.
- * Second (or any while the input is still being read): stop at once. */
+/* Ctrl-C (SIGINT), and the signals a batch system sends at or before a job's time limit
+ * (SIGTERM, SIGHUP, SIGUSR1 with sbatch --signal), are taken by this thread alone
+ * (sigwait), never by a signal handler: they are blocked in every other thread, PoCL's
+ * included, so LLVM's own handler (installed while PoCL compiles a kernel) cannot run
+ * and delete the compiler's temporary files, which failed the build. First signal:
+ * finish the launch, write LSS and RAW, exit non-zero. Second (or any while the input is
+ * still being read): stop at once, exit 128 + the signal. */
 static pthread_mutex_t g_watch_lock = PTHREAD_MUTEX_INITIALIZER;
 static pthread_cond_t g_watch_cond = PTHREAD_COND_INITIALIZER;
 static int g_watch_started = 0;
@@ -42,31 +44,32 @@ static void *sigint_watch(void *arg)
     pthread_mutex_unlock(&g_watch_lock);
     for (int count = 0;;) {
         int sig = 0;
-        if (sigwait(&g_sigint, &sig) != 0 || sig != SIGINT) continue;
+        if (sigwait(&g_sigint, &sig) != 0 || !sigismember(&g_sigint, sig)) continue;
         if (++count == 1 && g_armed) {
-            g_stop = 1;
+            g_stop = sig;
             continue;
         }
         static const char msg[] = "\nlsqt-cl: interrupted: stopping now, nothing more written\n";
         if (write(STDERR_FILENO, msg, sizeof msg - 1) < 0) { /* nowhere left to say it */
         }
-        _exit(130);
+        _exit(128 + sig);
     }
     return NULL;
 }
 
 static void on_sigint(int sig) /* fallback when no thread can be started */
 {
-    (void)sig;
-    g_stop = 1;
-    signal(SIGINT, SIG_DFL);
+    g_stop = sig;
+    signal(sig, SIG_DFL);
 }
+
+static const int g_stop_signals[] = {SIGINT, SIGTERM, SIGHUP, SIGUSR1};
 
 /* Before any other thread exists, so that every thread inherits the blocked SIGINT. */
 static void sigint_setup(void)
 {
     sigemptyset(&g_sigint);
-    sigaddset(&g_sigint, SIGINT);
+    for (size_t i = 0; i < sizeof g_stop_signals / sizeof *g_stop_signals; i++) sigaddset(&g_sigint, g_stop_signals[i]);
     pthread_t t;
     if (pthread_sigmask(SIG_BLOCK, &g_sigint, NULL) == 0 && pthread_create(&t, NULL, sigint_watch, NULL) == 0) {
         pthread_detach(t);
@@ -79,7 +82,29 @@ static void sigint_setup(void)
         return;
     }
     pthread_sigmask(SIG_UNBLOCK, &g_sigint, NULL);
-    signal(SIGINT, on_sigint);
+    for (size_t i = 0; i < sizeof g_stop_signals / sizeof *g_stop_signals; i++) signal(g_stop_signals[i], on_sigint);
+}
+
+static const char *signal_name(int sig)
+{
+    return sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : sig == SIGHUP ? "SIGHUP" : sig == SIGUSR1 ? "SIGUSR1" : "a signal";
+}
+
+/* --checkpoint: the LSS, written atomically every so often during the run. */
+typedef struct checkpoint_ctx {
+    const char *lss;
+    int quiet;
+} checkpoint_ctx;
+
+static int write_checkpoint(const lsqt_state *st, void *arg)
+{
+    const checkpoint_ctx *k = arg;
+    char err[LSQT_PATH_CAP + 256];
+    if (lsqt_lss_write(k->lss, st, err, sizeof err)) {
+        fprintf(stderr, "lsqt-cl: warning: checkpoint not written: %s\n", err);
+        return 1;
+    }
+    return 0;
 }
 
 static int fail(int code, const char *fmt, const char *a, const char *b)
@@ -376,7 +401,10 @@ int main(int argc, char **argv)
     }
     if (c.verbose) fprintf(stderr, "device: %s [%s]\n", cx.dev.name, cx.dev.platform_name);
 
-    lsqt_sim_opts so = {isatty(STDERR_FILENO) && !c.quiet, c.time_limit, 0, &g_stop, NULL, c.verbose, c.target_error};
+    checkpoint_ctx ck = {lss_path, c.quiet};
+    const int can_checkpoint = lss_path && strcmp(lss_path, "-") != 0 && c.checkpoint > 0;
+    lsqt_sim_opts so = {isatty(STDERR_FILENO) && !c.quiet, c.time_limit, 0, &g_stop, NULL, c.verbose, c.target_error,
+                        can_checkpoint ? c.checkpoint : 0.0, can_checkpoint ? write_checkpoint : NULL, &ck};
     lsqt_sim_stats stats;
     memset(&stats, 0, sizeof stats);
     const lsqt_work before = lsqt_work_totals(&st);
@@ -429,7 +457,8 @@ int main(int argc, char **argv)
         if (est && !c.quiet) lsqt_report_summary(info, &st, est, &ri);
         lsqt_estimates_free(est, st.n_slices);
         if (stats.interrupted && g_stop) {
-            fprintf(stderr, "lsqt-cl: interrupted: %s the paths done so far\n", rc ? "tried to write" : "wrote");
+            fprintf(stderr, "lsqt-cl: interrupted (%s): %s the paths done so far\n", signal_name(g_stop),
+                    rc ? "tried to write" : "wrote");
             rc = 1;
         }
     }

@@ -201,6 +201,7 @@ int lsqt_rrss(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, int rx, 
     if (lsqt_session_set_directions(&s, &ps, err, errcap)) goto done;
     lsqt_sim_opts po = *o;
     po.target_error = 0.0;
+    po.checkpoint = NULL; /* a pilot's state is not the run's (it has rx x the slices) */
     lsqt_sim_stats stats;
     if (o->verbose) fprintf(stderr, "RRSS: %d candidates per slice, pilot of %llu paths\n", m, (unsigned long long)pilot_paths);
     if (lsqt_run_session(&s, &ps, pilot_paths, &po, &stats, err, errcap)) goto done;

@@ -96,6 +96,7 @@ int lsqt_run_session(lsqt_session *sp, lsqt_state *st, uint64_t add_paths, const
         check = first < LSQT_STOP_ERR_PATHS ? LSQT_STOP_ERR_PATHS : next_check(first, cur_err, goal);
     }
     const double t0 = lsqt_now();
+    double last_ck = t0;
     if (o->verbose)
         fprintf(stderr, "simulating %llu paths per slice x %d slices (work-group size %zu)%s\n",
                 (unsigned long long)(target - first), st->n_slices, sp->local_size,
@@ -123,6 +124,13 @@ int lsqt_run_session(lsqt_session *sp, lsqt_state *st, uint64_t add_paths, const
                 break;
             }
             check = next_check(pos, cur_err, goal);
+        }
+        if (o->checkpoint && o->checkpoint_every > 0 && lsqt_now() - last_ck >= o->checkpoint_every && pos < target) {
+            /* the state so far, exactly as a run of pos paths leaves it */
+            if (lsqt_session_read(sp, st, err, errcap)) goto done;
+            st->paths = pos;
+            o->checkpoint(st, o->checkpoint_ctx);
+            last_ck = lsqt_now();
         }
         if (o->progress) progress_draw(pos - first, target - first, lsqt_now() - t0, st->n_slices, cur_err, goal);
         if (o->stop && *o->stop) {

@@ -51,7 +51,7 @@ static inline lsqt_slice_est *fixture_run_prec(const char *text, int n_slices, c
         st->theta_o[s] = deg[s] * 3.14159265358979323846 / 180.0;
         lsqt_wi_spread(n_wi, st->transmits, st->wi + (size_t)s * (size_t)n_wi * 4);
     }
-    lsqt_sim_opts o = {0, 0.0, 0, NULL, NULL, 0, 0.0};
+    lsqt_sim_opts o = {0, 0.0, 0, NULL, NULL, 0, 0.0, 0.0, NULL, NULL};
     lsqt_sim_stats stats;
     char err[1024];
     if (lsqt_simulate(&fixture_cx, &a, st, paths, &o, &stats, err, sizeof err)) {

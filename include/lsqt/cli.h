@@ -33,6 +33,7 @@ typedef struct lsqt_cli {
     int use_double;
     double time_limit;        /* seconds, 0 = none */
     double target_error;      /* --target-error, 0 = none */
+    double checkpoint;        /* --checkpoint seconds, 0 = never (default 300) */
     int paths_given;          /* -p was given */
     const char *lss;          /* --lss */
     const char *json;         /* --json */

@@ -28,6 +28,9 @@ typedef struct lsqt_sim_opts {
                                      error of the point estimates is at most this (checked at
                                      path counts that depend only on the tallies, so the stop
                                      is reproducible); add_paths is then a cap */
+    double checkpoint_every;      /* > 0: call checkpoint with the state this often (seconds) */
+    int (*checkpoint)(const lsqt_state *st, void *ctx); /* e.g. writes the LSS; 0 = ok */
+    void *checkpoint_ctx;
 } lsqt_sim_opts;
 
 enum {

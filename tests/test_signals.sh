@@ -1,0 +1,69 @@
+#!/usr/bin/env bash
+# Surviving a batch system: SIGTERM, SIGHUP and SIGUSR1 (what SLURM sends at, or with
+# --signal before, a job's time limit) finish the launch, write LSS and RAW and exit 1,
+# like Ctrl-C; the LSS then holds N paths exactly as a run of -p N leaves them, so
+# continuing it gives the bytes of an uninterrupted run. --checkpoint S writes the LSS
+# every S seconds, so even a SIGKILL loses at most S seconds of work.
+# usage: test_signals.sh LSQT_CL EXAMPLES_DIR
+set -u
+# shellcheck source=cli_lib.sh
+source "$(dirname "${BASH_SOURCE[0]}")/cli_lib.sh"
+BIN=$1
+EX=$2
+T=$(mktemp -d)
+watchdogs=()
+trap 'kill "${watchdogs[@]}" 2>/dev/null; rm -rf "$T"' EXIT
+cd "$T"
+cp "$EX/slab.lsqt" S.lsqt
+F=(-wo 4 -wi 16 --wi-spread)
+
+# paths FILE.lss: the paths per slice an LSS holds
+paths() { "$BIN" info "$1" --json - 2>/dev/null | python3 -c 'import json, sys; print(json.load(sys.stdin)["paths"])'; }
+
+# start NAME ARGS...: a run of (almost) endless paths in the background, once its kernel
+# is built and a second has passed; its pid in $pid (lsqt-cl's own: a wrapper such as
+# timeout would not pass SIGUSR1 on, and a SIGKILL of it would leave lsqt-cl running). A
+# watchdog kills a run that outlives 120 s.
+start() {
+  local name=$1
+  shift
+  "$BIN" -v -R -p 1e12 "${F[@]}" "$@" --lss "$name.lss" -o "$name.raw" S.lsqt 2>"$name.err" >/dev/null &
+  pid=$!
+  (sleep 120; kill -KILL $pid 2>/dev/null) >/dev/null 2>&1 &
+  watchdogs+=($!)
+  for _ in $(seq 600); do grep -q "simulating" "$name.err" 2>/dev/null && break; sleep 0.1; done
+  sleep 1
+}
+
+for sig in TERM HUP USR1; do
+  start "s$sig" --checkpoint 0
+  kill -"$sig" $pid
+  wait $pid
+  rc=$?
+  [ "$rc" = 1 ] && grep -q "interrupted (SIG$sig)" "s$sig.err" && [ -s "s$sig.lss" ] && [ -s "s$sig.raw" ] && ok \
+    || bad "SIG$sig: exit $rc: $(tail -3 "s$sig.err")"
+done
+# The interrupted LSS is a run of its N paths, and continuing it is the uninterrupted run.
+N=$(paths sTERM.lss)
+[ "$N" -gt 0 ] 2>/dev/null && ok || bad "SIGTERM: LSS holds '$N' paths"
+"$BIN" -q -R -p "$N" "${F[@]}" --lss u.lss -o u.raw S.lsqt && cmp -s u.lss sTERM.lss && cmp -s u.raw sTERM.raw && ok \
+  || bad "SIGTERM at $N paths: the LSS or RAW differs from a run of -p $N"
+"$BIN" -q -p 5000 --lss sTERM.lss -o sTERM.raw S.lsqt && "$BIN" -q -R -p $((N + 5000)) "${F[@]}" --lss v.lss -o v.raw S.lsqt \
+  && cmp -s v.lss sTERM.lss && cmp -s v.raw sTERM.raw && ok || bad "continuing the SIGTERM LSS differs from one run"
+
+# Checkpoints: a SIGKILL (nothing can be written then) still leaves the last checkpoint,
+# a valid LSS of K paths equal to a run of -p K.
+start ck --checkpoint 0.3
+sleep 1
+kill -KILL $pid
+wait $pid 2>/dev/null
+K=$(paths ck.lss)
+[ "$K" -gt 0 ] 2>/dev/null && ok || bad "checkpoint: LSS holds '$K' paths: $(cat ck.err)"
+"$BIN" -q -R -p "$K" "${F[@]}" --lss w.lss -o w.raw S.lsqt && cmp -s w.lss ck.lss && ok \
+  || bad "the checkpoint at $K paths differs from a run of -p $K"
+ls ck.lss.* .ck.lss* 2>/dev/null | grep -q . && bad "a temporary file was left: $(ls -a)" || ok
+
+expect 2 "bad value '-1' for --checkpoint" -- "$BIN" --checkpoint -1 S.lsqt
+expect 2 "bad value 'x' for --checkpoint" -- "$BIN" --checkpoint x S.lsqt
+
+finish test_signals
