@@ -58,17 +58,27 @@ static void flag_names(uint32_t flags, char *buf, size_t cap, const char *quote)
     if (rest && n < cap) snprintf(buf + n, cap - n, "%s%sunknown 0x%x%s", n ? ", " : "", quote, rest, quote);
 }
 
-/* The path ranges the state holds, [begin, end) of the path indices of every slice:
- * today always [0, paths) (none before the first path); a shard will hold several. */
+/* The path ranges the state holds, [begin, end) of the path indices of every slice: one
+ * [0, paths) for a plain run, parts of it for a shard or a partial merge. */
 static void info_ranges(FILE *f, const lsqt_state *st, int json)
 {
     if (json) {
-        if (st->paths) fprintf(f, "[[0, %llu]]", (unsigned long long)st->paths);
-        else fprintf(f, "[]");
+        fprintf(f, "[");
+        for (int i = 0; i < st->n_ranges; i++)
+            fprintf(f, "%s[%llu, %llu]", i ? ", " : "", (unsigned long long)st->ranges[2 * i],
+                    (unsigned long long)st->ranges[2 * i + 1]);
+        fprintf(f, "]");
         return;
     }
-    if (st->paths) fprintf(f, "[0, %llu) on every slice", (unsigned long long)st->paths);
-    else fprintf(f, "none (no paths yet)");
+    if (!st->n_ranges) fprintf(f, "none (no paths yet)");
+    for (int i = 0; i < st->n_ranges; i++)
+        fprintf(f, "%s[%llu, %llu)", i ? ", " : "", (unsigned long long)st->ranges[2 * i],
+                (unsigned long long)st->ranges[2 * i + 1]);
+    if (st->n_ranges) fprintf(f, " on every slice");
+    const uint64_t h = lsqt_state_contiguous(st);
+    if (h == UINT64_MAX || h < st->span_end)
+        fprintf(f, "; part of a run of [0, %llu) (%s)", (unsigned long long)st->span_end,
+                h == UINT64_MAX ? "a shard or a partial merge" : "continuing completes it");
 }
 
 static void json_num(FILE *f, double v)

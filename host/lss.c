@@ -84,11 +84,16 @@ int lsqt_lss_write(const char *path, const lsqt_state *st, char *err, size_t err
     put_u32(&w, (uint32_t)st->n_slices);
     put_u32(&w, (uint32_t)st->n_wi);
     put_u64(&w, st->paths);
+    put_u64(&w, st->span_end);
+    put_u32(&w, st->stage);
+    put_u32(&w, (uint32_t)st->n_ranges);
     size_t tl = strlen(st->canonical);
     put_u32(&w, (uint32_t)tl);
     put(&w, st->canonical, tl);
+    for (int i = 0; i < 2 * st->n_ranges; i++) put_u64(&w, st->ranges[i]);
     for (int s = 0; s < st->n_slices; s++) {
         put_f64(&w, st->theta_o[s]);
+        put_u32(&w, st->slice_flags[s]);
         put_u64(&w, st->paths);
         for (size_t k = 0; k < nw; k++)
             for (int c = 0; c < 3; c++) put_f32(&w, st->wi[((size_t)s * nw + k) * 4 + (size_t)c]);
@@ -169,9 +174,10 @@ static float get_f32(rbuf *r)
     return f;
 }
 
-/* Bytes before the assembly text: magic, version, 6 layout words, seed, hash, 5 u32
- * (double, transmits, flags, n_slices, n_wi), paths, text length. */
-#define LSS_HEADER_BYTES (8 + 4 + 6 * 4 + 8 + 8 + 3 * 4 + 4 + 4 + 8 + 2 * 4 + 8 + 4)
+/* Bytes before the assembly text: magic, version, 6 layout words, seed, hash, 3 u32
+ * (double, transmits, flags), direction method, rx, pilot paths, n_slices, n_wi, paths,
+ * span end, stage, range count, text length. */
+#define LSS_HEADER_BYTES (8 + 4 + 6 * 4 + 8 + 8 + 3 * 4 + 4 + 4 + 8 + 2 * 4 + 8 + 8 + 4 + 4 + 4)
 
 int lsqt_lss_parse(const unsigned char *data, size_t len, lsqt_state *st, char *err, size_t errcap)
 {
@@ -211,14 +217,16 @@ int lsqt_lss_parse(const unsigned char *data, size_t len, lsqt_state *st, char *
     uint32_t dir_method = get_u32(&r), rx = get_u32(&r);
     uint64_t pilot_paths = get_u64(&r);
     uint32_t n_slices = get_u32(&r), n_wi = get_u32(&r);
-    uint64_t paths = get_u64(&r);
+    uint64_t paths = get_u64(&r), span_end = get_u64(&r);
+    uint32_t stage = get_u32(&r), n_ranges = get_u32(&r);
     uint32_t tl = get_u32(&r);
     /* The size the header announces, when its counts are in range (else unknown: 0). */
-    const int sane = n_slices >= 1 && n_slices <= 4096 && n_wi >= 1 && n_wi <= 65536 && tl <= (1u << 24);
-    const size_t per_slice = sane ? 16 + (size_t)n_wi * 12 + (size_t)LSQT_BATCHES * n_wi * 16 +
+    const int sane = n_slices >= 1 && n_slices <= 4096 * 8 && n_wi >= 1 && n_wi <= 65536 && tl <= (1u << 24) &&
+                     n_ranges <= (1u << 20);
+    const size_t per_slice = sane ? 20 + (size_t)n_wi * 12 + (size_t)LSQT_BATCHES * n_wi * 16 +
                                         LSQT_BATCHES * LSQT_T_COUNT * 16 + LSQT_BATCHES * LSQT_HIST_BINS * 16
                                   : 0;
-    const size_t want = sane ? LSS_HEADER_BYTES + (size_t)tl + per_slice * n_slices + 4 : 0;
+    const size_t want = sane ? LSS_HEADER_BYTES + (size_t)tl + (size_t)n_ranges * 16 + per_slice * n_slices + 4 : 0;
     uint32_t crc = (uint32_t)data[len - 4] | (uint32_t)data[len - 3] << 8 |
                    (uint32_t)data[len - 2] << 16 | (uint32_t)data[len - 1] << 24;
 #ifndef LSQT_LSS_FUZZING /* the fuzz target skips the CRC to reach the parser behind it */
@@ -242,7 +250,8 @@ int lsqt_lss_parse(const unsigned char *data, size_t len, lsqt_state *st, char *
             return -1;
         }
     if (r.bad || !sane || use_double > 1 || transmits > 1 || dir_method > LSQT_DIRS_FILE || rx > 8 ||
-        pilot_paths > paths) {
+        stage > LSQT_STAGE_PILOT || (stage == LSQT_STAGE_PILOT && (rx < 2 || n_slices % rx)) ||
+        (stage == LSQT_STAGE_RUN && pilot_paths > span_end)) {
         snprintf(err, errcap, "corrupt LSS header (slices %u, wi %u, text %u bytes, double %u, transmits %u)",
                  n_slices, n_wi, tl, use_double, transmits);
         return -1;
@@ -271,10 +280,34 @@ int lsqt_lss_parse(const unsigned char *data, size_t len, lsqt_state *st, char *
     st->dir_method = dir_method;
     st->rx = rx;
     st->pilot_paths = pilot_paths;
-    st->paths = paths;
+    st->span_end = span_end;
+    st->stage = stage;
+    uint64_t *ranges = malloc(((size_t)n_ranges + 1) * 2 * sizeof *ranges);
+    if (!ranges) {
+        lsqt_state_free(st);
+        snprintf(err, errcap, "out of memory");
+        return -1;
+    }
+    for (size_t i = 0; i < 2 * (size_t)n_ranges; i++) ranges[i] = get_u64(&r);
+    /* stored normalized: sorted, disjoint, not adjacent, not empty, inside the span */
+    int ranges_ok = 1;
+    for (size_t i = 0; i < n_ranges; i++)
+        if (ranges[2 * i] >= ranges[2 * i + 1] || (i && ranges[2 * i] <= ranges[2 * i - 1]) ||
+            ranges[2 * i + 1] > span_end)
+            ranges_ok = 0;
+    if (ranges_ok && lsqt_state_set_ranges(st, ranges, (int)n_ranges)) ranges_ok = 0;
+    free(ranges);
+    if (!ranges_ok || st->paths != paths) {
+        lsqt_state_free(st);
+        snprintf(err, errcap, "corrupt LSS file (path ranges: %u of them, not a sorted disjoint set holding %llu paths)",
+                 n_ranges, (unsigned long long)paths);
+        return -1;
+    }
     const size_t nw = n_wi;
     for (size_t s = 0; s < n_slices; s++) {
         st->theta_o[s] = get_f64(&r);
+        st->slice_flags[s] = get_u32(&r);
+        if (st->slice_flags[s] & ~(uint32_t)LSQT_SLICE_BELOW) r.bad = 1;
         if (get_u64(&r) != paths) r.bad = 1;
         for (size_t k = 0; k < nw; k++)
             for (size_t c = 0; c < 3; c++) st->wi[(s * nw + k) * 4 + c] = get_f32(&r);

@@ -169,53 +169,85 @@ done:
     return rc;
 }
 
-int lsqt_rrss(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, int rx, uint64_t pilot_paths,
-              const lsqt_sim_opts *o, lsqt_rrss_info *info, char *err, size_t errcap)
+int lsqt_rrss_pilot(lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st, int rx, uint64_t begin,
+                    uint64_t n_paths, const lsqt_sim_opts *o, lsqt_state *ps, lsqt_rrss_info *info, char *err,
+                    size_t errcap)
 {
     memset(info, 0, sizeof *info);
     const int n = st->n_wi, m = rx * n, ns = st->n_slices;
     info->candidates = m;
-    lsqt_state ps; /* the pilot: slice s's candidate block j is launch slice s * rx + j */
-    if (lsqt_state_init(&ps, st->canonical, st->hash, st->seed, ns * rx, n, st->transmits)) {
+    /* slice s's candidate block j is launch slice s * rx + j */
+    if (lsqt_state_init(ps, st->canonical, st->hash, st->seed, ns * rx, n, st->transmits)) {
         snprintf(err, errcap, "out of memory");
         return 1;
     }
-    ps.use_double = st->use_double;
-    for (int v = 0; v < ns * rx; v++) ps.theta_o[v] = st->theta_o[v / rx];
+    ps->use_double = st->use_double;
+    ps->dir_method = LSQT_DIRS_RRSS;
+    ps->rx = (uint32_t)rx;
+    ps->stage = LSQT_STAGE_PILOT;
+    for (int v = 0; v < ns * rx; v++) ps->theta_o[v] = st->theta_o[v / rx], ps->slice_flags[v] = st->slice_flags[v / rx];
     float *cand = calloc((size_t)ns * m * 4, sizeof *cand);
-    double *f = calloc((size_t)m, sizeof *f);
-    unsigned char *keep = calloc((size_t)m, 1);
-    lsqt_slice_est *est = NULL;
     lsqt_session s;
     memset(&s, 0, sizeof s);
     int rc = 1;
-    if (!cand || !f || !keep) {
+    if (!cand) {
         snprintf(err, errcap, "out of memory");
         goto done;
     }
-    if (lsqt_session_open_grouped(&s, cx, a, &ps, rx, o->extra_options, o->local_size, o->verbose, err, errcap))
+    if (lsqt_session_open_grouped(&s, cx, a, ps, rx, o->extra_options, o->local_size, o->verbose, err, errcap))
         goto done;
     const double t1 = lsqt_now(); /* the program build is not RRSS's time */
     if (candidates(&s, ns, m, st->transmits, cand, &info->short_slices, err, errcap)) goto done;
-    memcpy(ps.wi, cand, (size_t)ns * m * 4 * sizeof *cand); /* block j of slice s is candidates j n ... */
-    if (lsqt_session_set_directions(&s, &ps, err, errcap)) goto done;
+    memcpy(ps->wi, cand, (size_t)ns * m * 4 * sizeof *cand); /* block j of slice s is candidates j n ... */
+    if (lsqt_session_set_directions(&s, ps, err, errcap)) goto done;
     lsqt_sim_opts po = *o;
     po.target_error = 0.0;
     po.checkpoint = NULL; /* a pilot's state is not the run's (it has rx x the slices) */
     lsqt_sim_stats stats;
-    if (o->verbose) fprintf(stderr, "RRSS: %d candidates per slice, pilot of %llu paths\n", m, (unsigned long long)pilot_paths);
-    if (lsqt_run_session(&s, &ps, pilot_paths, &po, &stats, err, errcap)) goto done;
-    info->interrupted = stats.interrupted; /* the pilot is what was done: choose from it */
-    est = lsqt_estimates(&ps);
-    if (!est) {
+    if (o->verbose)
+        fprintf(stderr, "RRSS: %d candidates per slice, pilot paths [%llu, %llu)\n", m, (unsigned long long)begin,
+                (unsigned long long)(begin + n_paths));
+    if (lsqt_run_range(&s, ps, begin, n_paths, &po, &stats, err, errcap)) goto done;
+    info->interrupted = stats.interrupted;
+    info->seconds = lsqt_now() - t1;
+    rc = 0;
+done:
+    lsqt_session_close(&s);
+    if (rc) lsqt_state_free(ps);
+    free(cand);
+    return rc;
+}
+
+int lsqt_rrss_choose(const lsqt_state *ps, lsqt_state *st, lsqt_rrss_info *info, char *err, size_t errcap)
+{
+    const int rx = (int)ps->rx, n = ps->n_wi, m = rx * n, ns = ps->n_slices / rx;
+    info->candidates = m;
+    if (lsqt_state_init(st, ps->canonical, ps->hash, ps->seed, ns, n, ps->transmits)) {
+        snprintf(err, errcap, "out of memory");
+        return 1;
+    }
+    st->use_double = ps->use_double;
+    st->dir_method = LSQT_DIRS_RRSS;
+    st->rx = ps->rx;
+    st->flags = ps->flags;
+    st->span_end = ps->span_end;
+    for (int sl = 0; sl < ns; sl++) st->theta_o[sl] = ps->theta_o[sl * rx], st->slice_flags[sl] = ps->slice_flags[sl * rx];
+    double *f = calloc((size_t)m, sizeof *f);
+    unsigned char *keep = calloc((size_t)m, 1);
+    lsqt_slice_est *est = lsqt_estimates(ps);
+    int rc = 1;
+    if (!f || !keep || !est || lsqt_state_set_ranges(st, ps->ranges, ps->n_ranges)) {
         snprintf(err, errcap, "out of memory");
         goto done;
     }
+    st->pilot_paths = st->paths;
+    if (st->span_end < st->paths) st->span_end = st->paths;
     const size_t B = LSQT_BATCHES;
     const double t_sel = lsqt_now();
     for (int sl = 0; sl < ns; sl++) {
+        const float *cand = ps->wi + (size_t)sl * m * 4; /* the blocks of slice sl, in order */
         for (int c = 0; c < m; c++) f[c] = est[sl * rx + c / n].f[c % n].mean;
-        int fb = lsqt_rrss_select(cand + (size_t)sl * m * 4, f, m, n, st->transmits, keep);
+        int fb = lsqt_rrss_select(cand, f, m, n, st->transmits, keep);
         if (fb < 0) {
             snprintf(err, errcap, "out of memory");
             goto done;
@@ -226,29 +258,42 @@ int lsqt_rrss(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, int rx, 
         for (int c = 0; c < m; c++) {
             if (!keep[c]) continue;
             const int v = sl * rx + c / n, kk = c % n;
-            memcpy(st->wi + ((size_t)sl * n + (size_t)k) * 4, cand + ((size_t)sl * m + (size_t)c) * 4, 16);
+            memcpy(st->wi + ((size_t)sl * n + (size_t)k) * 4, cand + (size_t)c * 4, 16);
             for (size_t b = 0; b < B; b++)
-                st->nee[((size_t)sl * B + b) * (size_t)n + (size_t)k] = ps.nee[((size_t)v * B + b) * (size_t)n + (size_t)kk];
+                st->nee[((size_t)sl * B + b) * (size_t)n + (size_t)k] = ps->nee[((size_t)v * B + b) * (size_t)n + (size_t)kk];
             k++;
         }
         /* the paths are those of every block: their scalars and histogram are block 0's */
-        memcpy(st->scalars + (size_t)sl * B * LSQT_T_COUNT, ps.scalars + (size_t)sl * rx * B * LSQT_T_COUNT,
+        memcpy(st->scalars + (size_t)sl * B * LSQT_T_COUNT, ps->scalars + (size_t)sl * rx * B * LSQT_T_COUNT,
                B * LSQT_T_COUNT * sizeof *st->scalars);
-        memcpy(st->hist + (size_t)sl * B * LSQT_HIST_BINS, ps.hist + (size_t)sl * rx * B * LSQT_HIST_BINS,
+        memcpy(st->hist + (size_t)sl * B * LSQT_HIST_BINS, ps->hist + (size_t)sl * rx * B * LSQT_HIST_BINS,
                B * LSQT_HIST_BINS * sizeof *st->hist);
     }
-    st->paths = ps.paths;
-    st->flags |= ps.flags;
-    if (o->verbose)
-        fprintf(stderr, "RRSS: candidates and pilot %.3g s, selection %.3g s\n", t_sel - t1, lsqt_now() - t_sel);
-    info->seconds = lsqt_now() - t1;
+    info->select_seconds = lsqt_now() - t_sel;
     rc = 0;
 done:
-    lsqt_estimates_free(est, ns * rx);
-    lsqt_session_close(&s);
-    lsqt_state_free(&ps);
-    free(cand);
+    lsqt_estimates_free(est, ps->n_slices);
     free(f);
     free(keep);
+    if (rc) lsqt_state_free(st);
     return rc;
+}
+
+int lsqt_rrss(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, int rx, uint64_t pilot_paths,
+              const lsqt_sim_opts *o, lsqt_rrss_info *info, char *err, size_t errcap)
+{
+    lsqt_state ps, chosen;
+    if (lsqt_rrss_pilot(cx, a, st, rx, 0, pilot_paths, o, &ps, info, err, errcap)) return 1;
+    const lsqt_rrss_info pilot_info = *info;
+    int rc = lsqt_rrss_choose(&ps, &chosen, info, err, errcap);
+    lsqt_state_free(&ps);
+    if (rc) return 1;
+    info->short_slices = pilot_info.short_slices;
+    info->interrupted = pilot_info.interrupted;
+    if (o->verbose)
+        fprintf(stderr, "RRSS: candidates and pilot %.3g s, selection %.3g s\n", info->seconds, info->select_seconds);
+    info->seconds += info->select_seconds;
+    lsqt_state_free(st);
+    *st = chosen;
+    return 0;
 }

@@ -64,10 +64,16 @@ static void progress_draw(uint64_t done, uint64_t total, double elapsed, int n_s
 int lsqt_simulate(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint64_t add_paths,
                   const lsqt_sim_opts *o, lsqt_sim_stats *stats, char *err, size_t errcap)
 {
+    return lsqt_simulate_range(cx, a, st, lsqt_state_contiguous(st), add_paths, o, stats, err, errcap);
+}
+
+int lsqt_simulate_range(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint64_t begin, uint64_t add_paths,
+                        const lsqt_sim_opts *o, lsqt_sim_stats *stats, char *err, size_t errcap)
+{
     memset(stats, 0, sizeof *stats);
     lsqt_session s;
     if (lsqt_session_open(&s, cx, a, st, o->extra_options, o->local_size, o->verbose, err, errcap)) return 1;
-    int rc = lsqt_run_session(&s, st, add_paths, o, stats, err, errcap);
+    int rc = lsqt_run_range(&s, st, begin, add_paths, o, stats, err, errcap);
     lsqt_session_close(&s);
     return rc;
 }
@@ -75,11 +81,48 @@ int lsqt_simulate(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint
 int lsqt_run_session(lsqt_session *sp, lsqt_state *st, uint64_t add_paths, const lsqt_sim_opts *o,
                      lsqt_sim_stats *stats, char *err, size_t errcap)
 {
+    return lsqt_run_range(sp, st, lsqt_state_contiguous(st), add_paths, o, stats, err, errcap);
+}
+
+/* ST's tallies hold its base ranges and [first, pos) now. */
+static int hold(lsqt_state *st, const uint64_t *base, int n_base, uint64_t first, uint64_t pos, char *err,
+                size_t errcap)
+{
+    if (lsqt_state_set_ranges(st, base, n_base) || lsqt_state_add_range(st, first, pos)) {
+        snprintf(err, errcap, "out of memory (or paths [%llu, %llu) already held)", (unsigned long long)first,
+                 (unsigned long long)pos);
+        return 1;
+    }
+    if (st->span_end < pos) st->span_end = pos;
+    return 0;
+}
+
+int lsqt_run_range(lsqt_session *sp, lsqt_state *st, uint64_t begin, uint64_t add_paths, const lsqt_sim_opts *o,
+                   lsqt_sim_stats *stats, char *err, size_t errcap)
+{
     memset(stats, 0, sizeof *stats);
+    if (begin == UINT64_MAX) {
+        snprintf(err, errcap, "the state holds paths with gaps between them (a partial merge): it cannot be continued");
+        return 1;
+    }
+    /* the ranges held before, and whether [begin, ...) is free */
+    uint64_t *base = malloc(((size_t)st->n_ranges + 1) * 2 * sizeof *base);
+    if (!base) {
+        snprintf(err, errcap, "out of memory");
+        return 1;
+    }
+    const int n_base = st->n_ranges;
+    if (n_base) memcpy(base, st->ranges, (size_t)n_base * 2 * sizeof *base);
+    for (int i = 0; i < n_base; i++)
+        if (base[2 * i + 1] > begin) {
+            snprintf(err, errcap, "paths from %llu on are already held", (unsigned long long)begin);
+            free(base);
+            return 1;
+        }
 
     /* Launches cover whole chunks; their size adapts so each takes about 0.3 s, which
      * keeps the progress bar and Ctrl-C responsive without starving the device. */
-    const uint64_t first = st->paths;
+    const uint64_t first = begin;
     const uint64_t target = add_paths > UINT64_MAX - first ? UINT64_MAX : first + add_paths;
     const double goal = o->target_error;
     uint64_t pos = first, chunks_per_launch = 8, check = UINT64_MAX;
@@ -116,8 +159,7 @@ int lsqt_run_session(lsqt_session *sp, lsqt_state *st, uint64_t add_paths, const
         chunks_per_launch = (uint64_t)((double)chunks_per_launch * grow);
         if (chunks_per_launch < 1) chunks_per_launch = 1;
         if (pos == check) {
-            if (lsqt_session_read(sp, st, err, errcap)) goto done;
-            st->paths = pos;
+            if (lsqt_session_read(sp, st, err, errcap) || hold(st, base, n_base, first, pos, err, errcap)) goto done;
             cur_err = lsqt_max_rel_err(st);
             if (!isnan(cur_err) && cur_err <= goal) {
                 stats->stop_reason = LSQT_STOP_TARGET;
@@ -127,8 +169,7 @@ int lsqt_run_session(lsqt_session *sp, lsqt_state *st, uint64_t add_paths, const
         }
         if (o->checkpoint && o->checkpoint_every > 0 && lsqt_now() - last_ck >= o->checkpoint_every && pos < target) {
             /* the state so far, exactly as a run of pos paths leaves it */
-            if (lsqt_session_read(sp, st, err, errcap)) goto done;
-            st->paths = pos;
+            if (lsqt_session_read(sp, st, err, errcap) || hold(st, base, n_base, first, pos, err, errcap)) goto done;
             o->checkpoint(st, o->checkpoint_ctx);
             last_ck = lsqt_now();
         }
@@ -146,12 +187,12 @@ int lsqt_run_session(lsqt_session *sp, lsqt_state *st, uint64_t add_paths, const
     }
     if (o->progress) fprintf(stderr, "\n");
     if (o->verbose) fprintf(stderr, "%d launches in %.3g s\n", stats->launches, lsqt_now() - t0);
-    if (lsqt_session_read(sp, st, err, errcap)) goto done;
+    if (lsqt_session_read(sp, st, err, errcap) || hold(st, base, n_base, first, pos, err, errcap)) goto done;
     stats->paths_added = pos - first;
     stats->seconds = lsqt_now() - t0;
-    st->paths = pos;
     if (lsqt_tally_flags_error(st->flags, err, errcap)) goto done;
     rc = 0;
 done:
+    free(base);
     return rc;
 }

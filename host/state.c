@@ -34,7 +34,8 @@ int lsqt_state_init(lsqt_state *st, const char *canonical, uint64_t hash, uint64
     st->nee = calloc(lsqt_state_nee_count(st), sizeof *st->nee);
     st->scalars = calloc(lsqt_state_scalar_count(st), sizeof *st->scalars);
     st->hist = calloc(lsqt_state_hist_count(st), sizeof *st->hist);
-    if (!st->canonical || !st->theta_o || !st->wi || !st->nee || !st->scalars || !st->hist) {
+    st->slice_flags = calloc((size_t)n_slices, sizeof *st->slice_flags);
+    if (!st->canonical || !st->theta_o || !st->wi || !st->nee || !st->scalars || !st->hist || !st->slice_flags) {
         lsqt_state_free(st);
         return -1;
     }
@@ -50,6 +51,8 @@ void lsqt_state_free(lsqt_state *st)
     free(st->nee);
     free(st->scalars);
     free(st->hist);
+    free(st->ranges);
+    free(st->slice_flags);
     memset(st, 0, sizeof *st);
 }
 
@@ -67,4 +70,74 @@ lsqt_u128 lsqt_u128_add(lsqt_u128 a, lsqt_u128 b)
     lsqt_u128 r = {a.lo + b.lo, a.hi + b.hi};
     r.hi += r.lo < a.lo;
     return r;
+}
+
+void lsqt_state_batch_counts(const lsqt_state *st, uint64_t nb[LSQT_BATCHES])
+{
+    for (int b = 0; b < LSQT_BATCHES; b++) {
+        nb[b] = 0;
+        for (int i = 0; i < st->n_ranges; i++)
+            nb[b] += lsqt_batch_paths(st->ranges[2 * i + 1], b) - lsqt_batch_paths(st->ranges[2 * i], b);
+    }
+}
+
+static int range_cmp(const void *x, const void *y)
+{
+    const uint64_t *a = x, *b = y;
+    return (a[0] > b[0]) - (a[0] < b[0]);
+}
+
+int lsqt_state_set_ranges(lsqt_state *st, const uint64_t *r, int n)
+{
+    uint64_t *t = malloc((size_t)(n > 0 ? n : 1) * 2 * sizeof *t);
+    if (!t) return -1;
+    int m = 0;
+    for (int i = 0; i < n; i++)
+        if (r[2 * i] < r[2 * i + 1]) t[2 * m] = r[2 * i], t[2 * m + 1] = r[2 * i + 1], m++;
+    qsort(t, (size_t)m, 2 * sizeof *t, range_cmp);
+    int k = 0;
+    uint64_t total = 0;
+    for (int i = 0; i < m; i++) {
+        if (k > 0 && t[2 * i] < t[2 * k - 1]) {
+            free(t);
+            return 1;
+        }
+        if (k > 0 && t[2 * i] == t[2 * k - 1]) t[2 * k - 1] = t[2 * i + 1];
+        else t[2 * k] = t[2 * i], t[2 * k + 1] = t[2 * i + 1], k++;
+        total += t[2 * i + 1] - t[2 * i];
+    }
+    free(st->ranges);
+    st->ranges = t;
+    st->n_ranges = k;
+    st->paths = total;
+    return 0;
+}
+
+int lsqt_state_add_range(lsqt_state *st, uint64_t lo, uint64_t hi)
+{
+    uint64_t *t = malloc(((size_t)st->n_ranges + 1) * 2 * sizeof *t);
+    if (!t) return -1;
+    if (st->n_ranges) memcpy(t, st->ranges, (size_t)st->n_ranges * 2 * sizeof *t);
+    t[2 * st->n_ranges] = lo, t[2 * st->n_ranges + 1] = hi;
+    int rc = lsqt_state_set_ranges(st, t, st->n_ranges + 1);
+    free(t);
+    return rc;
+}
+
+uint64_t lsqt_state_contiguous(const lsqt_state *st)
+{
+    if (st->n_ranges == 0) return 0;
+    return st->n_ranges == 1 && st->ranges[0] == 0 ? st->ranges[1] : UINT64_MAX;
+}
+
+void lsqt_state_clear_tallies(lsqt_state *st)
+{
+    memset(st->nee, 0, lsqt_state_nee_count(st) * sizeof *st->nee);
+    memset(st->scalars, 0, lsqt_state_scalar_count(st) * sizeof *st->scalars);
+    memset(st->hist, 0, lsqt_state_hist_count(st) * sizeof *st->hist);
+    free(st->ranges);
+    st->ranges = NULL;
+    st->n_ranges = 0;
+    st->paths = 0;
+    st->flags = 0;
 }

@@ -8,7 +8,16 @@
 
 lsqt_est lsqt_batch_estimate(const lsqt_u128 *sums, size_t stride, uint64_t total_paths, double scale)
 {
+    uint64_t nb[LSQT_BATCHES];
+    for (int b = 0; b < LSQT_BATCHES; b++) nb[b] = lsqt_batch_paths(total_paths, b);
+    return lsqt_batch_estimate_n(sums, stride, nb, scale);
+}
+
+lsqt_est lsqt_batch_estimate_n(const lsqt_u128 *sums, size_t stride, const uint64_t nbatch[LSQT_BATCHES], double scale)
+{
     lsqt_est r = {0.0, NAN};
+    uint64_t total_paths = 0;
+    for (int b = 0; b < LSQT_BATCHES; b++) total_paths += nbatch[b];
     if (total_paths == 0) return r;
     double total = 0.0;
     for (int b = 0; b < LSQT_BATCHES; b++) total += lsqt_u128_to_double(sums[(size_t)b * stride]);
@@ -18,7 +27,7 @@ lsqt_est lsqt_batch_estimate(const lsqt_u128 *sums, size_t stride, uint64_t tota
     double ss = 0.0;
     int used = 0;
     for (int b = 0; b < LSQT_BATCHES; b++) {
-        uint64_t nb = lsqt_batch_paths(total_paths, b);
+        uint64_t nb = nbatch[b];
         if (nb == 0) continue;
         double dev = lsqt_u128_to_double(sums[(size_t)b * stride]) / scale - (double)nb * mean;
         ss += dev * dev;
@@ -56,14 +65,16 @@ lsqt_slice_est *lsqt_estimates(const lsqt_state *st)
     lsqt_slice_est *out = calloc((size_t)st->n_slices, sizeof *out);
     if (!out) return NULL;
     const size_t nw = (size_t)st->n_wi;
+    uint64_t nb[LSQT_BATCHES];
+    lsqt_state_batch_counts(st, nb);
     for (int s = 0; s < st->n_slices; s++) {
         lsqt_slice_est *e = &out[s];
         e->theta_o = st->theta_o[s];
         e->paths = st->paths;
         const lsqt_u128 *sc = st->scalars + (size_t)s * LSQT_BATCHES * LSQT_T_COUNT;
-        e->R = lsqt_batch_estimate(sc + LSQT_T_R, LSQT_T_COUNT, st->paths, LSQT_FIX_SCALE);
-        e->T = lsqt_batch_estimate(sc + LSQT_T_T, LSQT_T_COUNT, st->paths, LSQT_FIX_SCALE);
-        e->delta_T = lsqt_batch_estimate(sc + LSQT_T_DELTA_T, LSQT_T_COUNT, st->paths, LSQT_FIX_SCALE);
+        e->R = lsqt_batch_estimate_n(sc + LSQT_T_R, LSQT_T_COUNT, nb, LSQT_FIX_SCALE);
+        e->T = lsqt_batch_estimate_n(sc + LSQT_T_T, LSQT_T_COUNT, nb, LSQT_FIX_SCALE);
+        e->delta_T = lsqt_batch_estimate_n(sc + LSQT_T_DELTA_T, LSQT_T_COUNT, nb, LSQT_FIX_SCALE);
         for (int b = 0; b < LSQT_BATCHES; b++) {
             const lsqt_u128 *x = sc + (size_t)b * LSQT_T_COUNT;
             e->cut += x[LSQT_T_CUT].lo;
@@ -79,7 +90,7 @@ lsqt_slice_est *lsqt_estimates(const lsqt_state *st)
         }
         const lsqt_u128 *nee = st->nee + (size_t)s * LSQT_BATCHES * nw;
         for (size_t k = 0; k < nw; k++) {
-            lsqt_est c = lsqt_batch_estimate(nee + k, nw, st->paths, LSQT_FIX_SCALE);
+            lsqt_est c = lsqt_batch_estimate_n(nee + k, nw, nb, LSQT_FIX_SCALE);
             double cz = fabs((double)st->wi[((size_t)s * nw + k) * 4 + 2]);
             e->f[k].mean = c.mean / cz; /* RAW wants the BSDF without the cosine */
             e->f[k].err = c.err / cz;

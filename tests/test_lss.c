@@ -11,7 +11,9 @@ static void fill(lsqt_state *st)
 {
     lsqt_state_init(st, "Medium eta=1\nLayer z=0 LambertianBsdf fR=0.6 fT=0\nMedium eta=1\n", 0x1234abcdULL, 42, 3,
                     16, 1);
-    st->paths = 123456;
+    const uint64_t r[] = {0, 100000, 100256, 123712}; /* 123456 paths, a gap between */
+    lsqt_state_set_ranges(st, r, 2);
+    st->span_end = 200000;
     st->flags = 2;
     for (int s = 0; s < 3; s++) st->theta_o[s] = 0.1 * s;
     for (size_t i = 0; i < (size_t)3 * 16 * 4; i++) st->wi[i] = (i % 4 == 3) ? 0.0f : (float)i * 0.01f;
@@ -21,6 +23,7 @@ static void fill(lsqt_state *st)
     }
     for (size_t i = 0; i < lsqt_state_scalar_count(st); i++) st->scalars[i].lo = i * 77, st->scalars[i].hi = i;
     for (size_t i = 0; i < lsqt_state_hist_count(st); i++) st->hist[i].lo = i ^ 0xFFFF, st->hist[i].hi = ~i;
+    st->slice_flags[1] = LSQT_SLICE_BELOW;
 }
 
 int main(void)
@@ -40,6 +43,10 @@ int main(void)
     CHECK(strcmp(a.canonical, b.canonical) == 0, "canonical text differs");
     CHECK(a.hash == b.hash && a.seed == b.seed && a.paths == b.paths && a.flags == b.flags, "header differs");
     CHECK(a.n_slices == b.n_slices && a.n_wi == b.n_wi && a.transmits == b.transmits, "shape differs");
+    CHECK(b.n_ranges == 2 && memcmp(a.ranges, b.ranges, 4 * sizeof *a.ranges) == 0 && b.span_end == 200000 &&
+              b.paths == 123456,
+          "path ranges differ (%d ranges, span %llu)", b.n_ranges, (unsigned long long)b.span_end);
+    CHECK(memcmp(a.slice_flags, b.slice_flags, 3 * sizeof *a.slice_flags) == 0, "slice flags differ");
     CHECK(memcmp(a.theta_o, b.theta_o, 3 * sizeof(double)) == 0, "theta_o differs");
     CHECK(memcmp(a.wi, b.wi, (size_t)3 * 16 * 4 * sizeof(float)) == 0, "wi differs");
     CHECK(memcmp(a.nee, b.nee, lsqt_state_nee_count(&a) * sizeof *a.nee) == 0, "nee differs");
@@ -84,7 +91,7 @@ int main(void)
               strstr(err, "truncated at byte 1000 ("),
           "truncated: %s", err);
     CHECK(lsqt_lss_parse((const unsigned char *)f1, 50, &b, err, sizeof err) != 0 &&
-              strstr(err, "truncated at byte 50 (inside the 100-byte header)"),
+              strstr(err, "truncated at byte 50 (inside the 116-byte header)"),
           "truncated header: %s", err);
     f1[n1 / 2] ^= 0x10;
     CHECK(lsqt_lss_parse((const unsigned char *)f1, n1, &b, err, sizeof err) != 0 && strstr(err, "CRC mismatch"),

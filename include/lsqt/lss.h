@@ -2,8 +2,10 @@
  *   "LSQTLSS\0", u32 version, u32 chunk, batches, fix_bits, hist_nmu, hist_nphi, t_count,
  *   u64 seed, u64 assembly hash, u32 double, transmits, flags, u32 direction method
  *   (0 spread, 1 RRSS, 2 file), u32 RRSS rx, u64 RRSS pilot paths,
- *   u32 n_slices, n_wi, u64 paths, u32 text length, canonical assembly text,
- *   per slice: f64 theta_o, u64 paths, n_wi x f32 (x, y, z),
+ *   u32 n_slices, n_wi, u64 paths, u64 span end, u32 stage (0 run, 1 RRSS pilot shard),
+ *   u32 range count, u32 text length, canonical assembly text,
+ *   range count x (u64 lo, u64 hi): the path indices held, sorted and disjoint,
+ *   per slice: f64 theta_o, u32 slice flags (1: light from below), u64 paths, n_wi x f32 (x, y, z),
  *              [batch][n_wi] point-estimate sums, [batch][t_count] scalars,
  *              [batch][hist_bins] histogram, each tally a u128 as two u64 (low first) of 2^-fix_bits units,
  *   u32 CRC-32 of everything before it.
@@ -19,7 +21,7 @@
 extern "C" {
 #endif
 
-#define LSQT_LSS_VERSION 4u /* 4: direction method, RRSS rx and pilot paths; 3: work counters, histogram per
+#define LSQT_LSS_VERSION 5u /* 5: path ranges, span, stage, slice flags; 4: direction method, RRSS rx and pilot paths; 3: work counters, histogram per
                              batch; 2: 128-bit tallies of 2^-40 (1: 64-bit of 2^-30) */
 
 /* Written through lsqt_out (util.h: atomic for regular files). Returns 0 or -1. */

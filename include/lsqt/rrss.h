@@ -14,6 +14,7 @@ typedef struct lsqt_rrss_info {
     int short_slices;      /* slices whose walks gave too few candidates (filled from the spread) */
     int density_fallback;  /* slices whose BSDF integral was unusable (sampling density used) */
     double seconds;        /* candidates, pilot and selection */
+    double select_seconds; /* the selection alone */
     int interrupted;       /* the pilot stopped early (*stop, time limit): st->paths tells how far */
 } lsqt_rrss_info;
 
@@ -33,6 +34,18 @@ typedef struct lsqt_rrss_info {
  * Returns 0, or 1 with err filled. */
 int lsqt_rrss(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, int rx, uint64_t pilot_paths,
               const lsqt_sim_opts *o, lsqt_rrss_info *info, char *err, size_t errcap);
+
+/* lsqt_rrss in two parts, for a sharded pilot (LSQT_STAGE_PILOT states):
+ *  - lsqt_rrss_pilot makes PS (fresh; free it): ST's slices times rx candidate blocks, the
+ *    candidates (a pure function of seed and slice, so every shard has the same), and
+ *    paths [begin, begin + n_paths) of the pilot run on them;
+ *  - lsqt_rrss_choose makes ST (fresh; free it) from a pilot PS: the selection, the kept
+ *    directions with their pilot tallies, PS's ranges, pilot_paths = PS's paths.
+ * Each returns 0, or 1 with err filled. */
+int lsqt_rrss_pilot(lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st, int rx, uint64_t begin,
+                    uint64_t n_paths, const lsqt_sim_opts *o, lsqt_state *ps, lsqt_rrss_info *info, char *err,
+                    size_t errcap);
+int lsqt_rrss_choose(const lsqt_state *ps, lsqt_state *st, lsqt_rrss_info *info, char *err, size_t errcap);
 
 /* The selection alone (exposed for the tests): keeps n of the m candidates dirs (x, y, z,
  * pad per direction, unit, y >= 0) with BSDF values f (>= 0), over the upper hemisphere

@@ -53,9 +53,17 @@ typedef struct lsqt_sim_stats {
 int lsqt_simulate(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint64_t add_paths,
                   const lsqt_sim_opts *o, lsqt_sim_stats *stats, char *err, size_t errcap);
 
-/* The launch loop of lsqt_simulate on an open session (whose tallies are ST's). */
+/* The same for paths [begin, begin + add_paths) (a shard: ST may hold none of [0, begin)).
+ * ST's ranges get the paths done; its span_end grows to cover them. */
+int lsqt_simulate_range(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint64_t begin, uint64_t add_paths,
+                        const lsqt_sim_opts *o, lsqt_sim_stats *stats, char *err, size_t errcap);
+
+/* The launch loop of lsqt_simulate on an open session (whose tallies are ST's): from the
+ * end of ST's paths (which must be one range [0, h)), or from begin. */
 int lsqt_run_session(lsqt_session *s, lsqt_state *st, uint64_t add_paths, const lsqt_sim_opts *o,
                      lsqt_sim_stats *stats, char *err, size_t errcap);
+int lsqt_run_range(lsqt_session *s, lsqt_state *st, uint64_t begin, uint64_t add_paths, const lsqt_sim_opts *o,
+                   lsqt_sim_stats *stats, char *err, size_t errcap);
 
 /* The largest over the slices of the largest relative standard error of the point
  * estimates; NaN while a run may not stop on it (fewer than LSQT_STOP_ERR_PATHS paths). */

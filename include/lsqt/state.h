@@ -22,7 +22,13 @@ typedef struct lsqt_state {
     int n_slices, n_wi;
     double *theta_o;        /* n_slices, radians, wo = (sin, 0, cos) */
     float *wi;              /* n_slices * n_wi * 4 (x, y, z, 0), unit, y >= 0 */
-    uint64_t paths;         /* paths done per slice (every slice the same) */
+    uint64_t paths;         /* paths held per slice (every slice the same): the sum of ranges */
+    int n_ranges;           /* the path-index ranges held, [lo, hi) pairs, sorted, disjoint, */
+    uint64_t *ranges;       /* not adjacent (one [0, paths) for a plain run; shards hold parts) */
+    uint64_t span_end;      /* the run this state belongs to covers [0, span_end) (>= the ranges);
+                             * more than the ranges hold: it owes paths (a shard, a pilot) */
+    uint32_t stage;         /* LSQT_STAGE_*: a run's state, or a shard of an RRSS pilot */
+    uint32_t *slice_flags;  /* n_slices: LSQT_SLICE_* */
     lsqt_u128 *nee;         /* [slice][LSQT_BATCHES][n_wi] fixed point */
     lsqt_u128 *scalars;     /* [slice][LSQT_BATCHES][LSQT_T_COUNT] */
     lsqt_u128 *hist;        /* [slice][LSQT_BATCHES][LSQT_HIST_BINS] fixed point */
@@ -33,6 +39,11 @@ typedef struct lsqt_state {
 } lsqt_state;
 
 enum { LSQT_DIRS_SPREAD = 0, LSQT_DIRS_RRSS = 1, LSQT_DIRS_FILE = 2 };
+/* LSQT_STAGE_PILOT: the RRSS pilot of a sharded run (slices are candidate blocks: slice
+ * s * rx + j is slice s's j-th block of n_wi candidates; pilot_paths its length, span_end
+ * the first run's -p). Merging all of its shards chooses the directions. */
+enum { LSQT_STAGE_RUN = 0, LSQT_STAGE_PILOT = 1 };
+enum { LSQT_SLICE_BELOW = 1u }; /* light enters from the bottom medium */
 
 /* Allocates zeroed tallies for the given shape; copies canonical. Returns 0 or -1. */
 int lsqt_state_init(lsqt_state *st, const char *canonical, uint64_t hash, uint64_t seed,
@@ -46,6 +57,19 @@ size_t lsqt_state_hist_count(const lsqt_state *st);
 
 /* Paths of [0, total) that fall in batch b (chunk c belongs to batch c % LSQT_BATCHES). */
 uint64_t lsqt_batch_paths(uint64_t total, int b);
+/* Paths held in each batch (over all ranges). */
+void lsqt_state_batch_counts(const lsqt_state *st, uint64_t nb[LSQT_BATCHES]);
+
+/* Sets the held ranges (n pairs lo, hi; empty ones dropped), sorted and joined, and paths
+ * to their total. Returns 0, -1 out of memory, or 1 when two of them overlap (nothing
+ * changed then). */
+int lsqt_state_set_ranges(lsqt_state *st, const uint64_t *r, int n);
+/* Adds [lo, hi) to the held ranges; returns as lsqt_state_set_ranges. */
+int lsqt_state_add_range(lsqt_state *st, uint64_t lo, uint64_t hi);
+/* h when the state holds exactly [0, h) (0: nothing), UINT64_MAX when it has gaps. */
+uint64_t lsqt_state_contiguous(const lsqt_state *st);
+/* Zero tallies, no ranges, no flags: the same directions, ready for another part of a run. */
+void lsqt_state_clear_tallies(lsqt_state *st);
 
 /* A tally as a number: units (fixed point divides by LSQT_FIX_SCALE), and exact sums. */
 double lsqt_u128_to_double(lsqt_u128 v);

@@ -47,6 +47,9 @@ void lsqt_estimates_free(lsqt_slice_est *e, int n_slices);
 /* Ratio estimator over the LSQT_BATCHES batches: sums[b * stride] holds batch b's
  * fixed-point (or count when scale is 1) sum. */
 lsqt_est lsqt_batch_estimate(const lsqt_u128 *sums, size_t stride, uint64_t total_paths, double scale);
+/* The same with the paths of each batch given (a state of several ranges). */
+lsqt_est lsqt_batch_estimate_n(const lsqt_u128 *sums, size_t stride, const uint64_t nbatch[LSQT_BATCHES],
+                               double scale);
 
 /* 1 with err filled when the device flags mean the tallies cannot be trusted (a
  * contribution or a sum beyond the 128-bit range): the run must fail. */
