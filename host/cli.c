@@ -44,6 +44,7 @@ int lsqt_parse_u64(const char *s, uint64_t *out)
 void lsqt_cli_help(FILE *f)
 {
     fputs("usage: lsqt-cl [OPTIONS] FILE|-\n"
+          "       lsqt-cl merge OUT.lss IN.lss... [-o RAW] [-H] [--json PATH] [--partial] [-q]\n"
           "       lsqt-cl info FILE.lss [--json PATH]   (the same: lssinfo FILE.lss [--json PATH])\n"
           "Simulates the emergent BSDF of a layered assembly (LSQT file; - reads stdin) with\n"
           "OpenCL, writing FILE.raw for raw2sqt and FILE.lss (progressive state: running again\n"
@@ -87,10 +88,20 @@ void lsqt_cli_help(FILE *f)
           "                              if given, is then a cap (checked at path counts that\n"
           "                              depend only on the tallies: the stop is reproducible)\n"
           "      --lss PATH              LSS file (default FILE.lss; none for stdin)\n"
+          "      --shard K/N             run the K-th of N disjoint parts of this run's paths\n"
+          "                              (0 <= K < N), continuing the LSS (if any) but writing\n"
+          "                              only the part, to LSS.shard-K-of-N.lss (no RAW unless\n"
+          "                              -o). A fresh RRSS run's shards run only the pilot\n"
+          "      --refine                with --shard: only the paths the state owes (the rest\n"
+          "                              of the run after a merged RRSS pilot), else nothing\n"
+          "                              Steps: shards, lsqt-cl merge, shards --refine, merge\n"
+          "                              (tools/slurm/local-shards.sh, tools/slurm/submit.sh)\n"
           "      --json PATH             machine-readable summary\n"
           "  -q, --quiet                 print errors only\n"
           "  -v, --verbose               print more (device, kernel build options, launches)\n"
           "  -h, --help                  this text\n"
+          "lsqt-cl merge OUT.lss IN.lss... adds the tallies of parts of one run (shards) and\n"
+          "writes OUT.lss and its RAW; see lsqt-cl merge --help.\n"
           "lsqt-cl info prints what an LSS holds (format, assembly, hash, seed, precision, flags,\n"
           "path ranges, per-slice R, T, delta_T with errors) without OpenCL; --json writes it as\n"
           "JSON (- is stdout). See lsqt-cl info --help.\n"
@@ -104,7 +115,7 @@ void lsqt_cli_help(FILE *f)
 
 enum flag_id {
     F_PATHS, F_WO, F_WO_ANGLES, F_WI, F_WI_FILE, F_RX, F_RP, F_RESTART, F_SEED, F_THREADS, F_OUTPUT,
-    F_HEMI, F_SPREAD, F_CHECKPOINT, F_DEVICE, F_LIST, F_DOUBLE, F_TIME, F_TARGET, F_LSS, F_JSON, F_QUIET, F_VERBOSE, F_HELP
+    F_HEMI, F_SPREAD, F_CHECKPOINT, F_SHARD, F_REFINE, F_DEVICE, F_LIST, F_DOUBLE, F_TIME, F_TARGET, F_LSS, F_JSON, F_QUIET, F_VERBOSE, F_HELP
 };
 
 static const struct flag {
@@ -123,8 +134,23 @@ static const struct flag {
     {NULL, "--json", F_JSON, 1},             {"-q", "--quiet", F_QUIET, 0},
     {"-v", "--verbose", F_VERBOSE, 0},       {"-h", "--help", F_HELP, 0},
     {NULL, "--target-error", F_TARGET, 1},  {NULL, "--wi-spread", F_SPREAD, 0},
-    {NULL, "--checkpoint", F_CHECKPOINT, 1},
+    {NULL, "--checkpoint", F_CHECKPOINT, 1}, {NULL, "--shard", F_SHARD, 1},
+    {NULL, "--refine", F_REFINE, 0},
 };
+
+/* --shard K/N: 0 <= K < N <= 65536, decimal digits only. */
+static int parse_shard(const char *v, lsqt_cli *c)
+{
+    const char *slash = strchr(v, '/');
+    if (!slash || slash == v || !slash[1] || slash - v > 10) return -1;
+    char k[16];
+    memcpy(k, v, (size_t)(slash - v));
+    k[slash - v] = '\0';
+    uint64_t kk, nn;
+    if (lsqt_parse_u64(k, &kk) || lsqt_parse_u64(slash + 1, &nn) || nn < 1 || nn > 65536 || kk >= nn) return -1;
+    c->shard_k = (int)kk, c->shard_n = (int)nn;
+    return 0;
+}
 
 static int parse_angles(const char *s, lsqt_cli *c)
 {
@@ -168,6 +194,8 @@ static int apply(const struct flag *fl, const char *name, const char *v, lsqt_cl
     case F_HEMI: c->only_hemispherical = 1; break;
     case F_SPREAD: c->wi_spread = 1; c->sampling_given = 1; break;
     case F_CHECKPOINT: if (lsqt_parse_double(v, &d) || !(d >= 0)) expect = "seconds >= 0 (0: no checkpoints)"; else c->checkpoint = d; break;
+    case F_SHARD: if (parse_shard(v, c)) expect = "K/N with 0 <= K < N <= 65536 (e.g. 0/4; SLURM: $SLURM_ARRAY_TASK_ID/N)"; break;
+    case F_REFINE: c->refine = 1; break;
     case F_LIST: c->list_devices = 1; break;
     case F_DOUBLE: c->use_double = 1; break;
     case F_QUIET: c->quiet = 1; break;
@@ -236,6 +264,15 @@ int lsqt_cli_parse(int argc, char **argv, lsqt_cli *c, char *err, size_t errcap)
     }
     if (wi_name[0] && c->wi_file) {
         snprintf(err, errcap, "%s and --wi-file both set the incident directions: give one of them", wi_name);
+        return 2;
+    }
+    if (c->refine && !c->shard_n) {
+        snprintf(err, errcap, "--refine is for the refinement shards of a sharded run: give --shard K/N too");
+        return 2;
+    }
+    if (c->shard_n && c->target_error > 0) {
+        snprintf(err, errcap, "--target-error cannot stop a shard (the merged error is not known to it): "
+                              "give the shards -p, or run in one process");
         return 2;
     }
     if (c->wi_file && c->input && strcmp(c->wi_file, "-") == 0 && strcmp(c->input, "-") == 0) {

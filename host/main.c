@@ -13,6 +13,7 @@
 #include "lsqt/directions.h"
 #include "lsqt/info.h"
 #include "lsqt/lss.h"
+#include "lsqt/merge.h"
 #include "lsqt/raw.h"
 #include "lsqt/report.h"
 #include "lsqt/rrss.h"
@@ -144,17 +145,9 @@ static int new_state(lsqt_state *st, const lsqt_cli *c, const lsqt_assembly *a, 
 enum { OUT_RAW, OUT_RAW_T, OUT_LSS, OUT_JSON, OUT_COUNT };
 typedef struct outputs {
     const char *path[OUT_COUNT]; /* NULL: not written */
-    char raw[LSQT_PATH_CAP + 16], raw_t[LSQT_PATH_CAP + 16], lss[LSQT_PATH_CAP + 16];
+    const char *base;            /* the LSS continued (a shard writes its own, path[OUT_LSS]) */
+    char raw[LSQT_PATH_CAP + 16], raw_t[LSQT_PATH_CAP + 16], lss[LSQT_PATH_CAP + 16], shard[LSQT_PATH_CAP + 40];
 } outputs;
-
-/* -H names: OUT with its final ".raw" replaced by ".R.raw" / ".T.raw" (appended when OUT
- * does not end in ".raw"). */
-static void hemi_name(const char *out, const char *part, char *dst, size_t cap)
-{
-    size_t n = strlen(out);
-    if (n >= 4 && strcmp(out + n - 4, ".raw") == 0) n -= 4;
-    snprintf(dst, cap, "%.*s.%s.raw", (int)n, out, part);
-}
 
 /* Decides every output name and checks them against each other and the input. Returns 0
  * or 2 (err filled). */
@@ -173,10 +166,10 @@ static int plan_outputs(const lsqt_cli *c, int from_stdin, int transmits, output
                      what ? "a " : "stdout", what ? what : "");
             return 2;
         }
-        hemi_name(raw, "R", o->raw, sizeof o->raw);
+        lsqt_raw_hemi_name(raw, "R", o->raw, sizeof o->raw);
         o->path[OUT_RAW] = o->raw;
         if (transmits) {
-            hemi_name(raw, "T", o->raw_t, sizeof o->raw_t);
+            lsqt_raw_hemi_name(raw, "T", o->raw_t, sizeof o->raw_t);
             o->path[OUT_RAW_T] = o->raw_t;
         }
     } else {
@@ -189,6 +182,19 @@ static int plan_outputs(const lsqt_cli *c, int from_stdin, int transmits, output
         o->path[OUT_LSS] = o->lss;
     }
     o->path[OUT_JSON] = c->json;
+    o->base = o->path[OUT_LSS];
+    if (c->shard_n) {
+        /* a shard writes its part beside the state it continues; a RAW only when asked */
+        if (!o->base || strcmp(o->base, "-") == 0) {
+            snprintf(err, errcap, "--shard writes an LSS named from the run's LSS: give a file (--lss PATH)");
+            return 2;
+        }
+        size_t n = strlen(o->base);
+        if (n >= 4 && strcmp(o->base + n - 4, ".lss") == 0) n -= 4;
+        snprintf(o->shard, sizeof o->shard, "%.*s.shard-%d-of-%d.lss", (int)n, o->base, c->shard_k, c->shard_n);
+        o->path[OUT_LSS] = o->shard;
+        if (!c->output) o->path[OUT_RAW] = o->path[OUT_RAW_T] = NULL;
+    }
     /* No output may land on another one, on stdout twice, or on the input. */
     for (int i = 0; i < OUT_COUNT; i++) {
         if (!o->path[i]) continue;
@@ -243,6 +249,8 @@ int main(int argc, char **argv)
 {
     /* lsqt-cl info FILE.lss: reads an LSS, no OpenCL (host/info.c; lssinfo is the same). */
     if (argc >= 2 && strcmp(argv[1], "info") == 0) return lsqt_info_main("lsqt-cl info", argc - 1, argv + 1);
+    /* lsqt-cl merge OUT.lss IN.lss...: adds shards (host/merge.c), no OpenCL. */
+    if (argc >= 2 && strcmp(argv[1], "merge") == 0) return lsqt_merge_main("lsqt-cl merge", argc - 1, argv + 1);
     /* Signals first: a Ctrl-C during device setup or the kernel build must not be lost,
      * and a closed pipe is a write error to report (other outputs still get written). */
     sigint_setup();
@@ -330,7 +338,7 @@ int main(int argc, char **argv)
         lsqt_assembly_free(&a);
         return fail(rc, "%s%s", err, "");
     }
-    const char *lss_path = out.path[OUT_LSS];
+    const char *lss_path = out.base; /* the state continued */
     /* With an output on stdout, everything else we print goes to stderr. */
     int to_stdout = 0;
     for (int i = 0; i < OUT_COUNT; i++) to_stdout |= out.path[i] && strcmp(out.path[i], "-") == 0;
@@ -360,6 +368,14 @@ int main(int argc, char **argv)
             lsqt_state_free(&st);
             rc = fail(2, "'%s' was made for a different assembly; use -R to start over and replace it%s",
                       lss_path, "");
+        } else if (st.stage == LSQT_STAGE_PILOT) {
+            lsqt_state_free(&st);
+            rc = fail(2, "'%s' is one shard of an RRSS pilot: merge all of the pilot's shards first "
+                         "(lsqt-cl merge OUT.lss SHARDS...)%s", lss_path, "");
+        } else if (lsqt_state_contiguous(&st) == UINT64_MAX) {
+            lsqt_state_free(&st);
+            rc = fail(2, "'%s' holds paths with gaps between them (a partial merge): merge the missing shards "
+                         "into it first (see lsqt-cl info)%s", lss_path, "");
         } else if (!c.quiet) {
             fprintf(stderr, "continuing %s (%llu paths per slice so far)%s\n", lss_path,
                     (unsigned long long)st.paths,
@@ -401,45 +417,107 @@ int main(int argc, char **argv)
     }
     if (c.verbose) fprintf(stderr, "device: %s [%s]\n", cx.dev.name, cx.dev.platform_name);
 
-    checkpoint_ctx ck = {lss_path, c.quiet};
-    const int can_checkpoint = lss_path && strcmp(lss_path, "-") != 0 && c.checkpoint > 0;
+    checkpoint_ctx ck = {out.path[OUT_LSS], c.quiet}; /* a shard checkpoints its own file */
+    const int can_checkpoint = ck.lss && strcmp(ck.lss, "-") != 0 && c.checkpoint > 0;
     lsqt_sim_opts so = {isatty(STDERR_FILENO) && !c.quiet, c.time_limit, 0, &g_stop, NULL, c.verbose, c.target_error,
                         can_checkpoint ? c.checkpoint : 0.0, can_checkpoint ? write_checkpoint : NULL, &ck};
     lsqt_sim_stats stats;
     memset(&stats, 0, sizeof stats);
-    const lsqt_work before = lsqt_work_totals(&st);
+    lsqt_work before = lsqt_work_totals(&st);
+    if (c.shard_n) memset(&before, 0, sizeof before); /* a shard's file holds only its own work */
     /* With a target error, -p is a cap when given, else there is none. */
     uint64_t add = c.target_error > 0 && !c.paths_given ? UINT64_MAX : c.paths;
+    /* A state that owes paths (a merged RRSS pilot, a partial merge) completes its run. */
+    const uint64_t held = lsqt_state_contiguous(&st);
+    const int owes = held < st.span_end;
+    if (owes) {
+        add = st.span_end - held;
+        if (!c.quiet)
+            fprintf(stderr, "note: '%s' is part of a run of %llu paths per slice: this run does the %llu it owes%s\n",
+                    lss_path, (unsigned long long)st.span_end, (unsigned long long)add,
+                    c.paths_given ? " (-p is not used)" : "");
+    }
+    const int fresh_rrss = st.dir_method == LSQT_DIRS_RRSS && st.paths == 0 && !owes;
     /* A fresh RRSS state: the pilot is the first rp of this run's -p (its tallies stay). */
     uint64_t pilot = 0;
     lsqt_rrss_info rinfo;
     memset(&rinfo, 0, sizeof rinfo);
-    if (st.dir_method == LSQT_DIRS_RRSS && st.paths == 0) {
+    int pilot_shard = 0;
+    uint64_t part_lo = 0, part_hi = 0, run_lo = 0, run_hi = 0; /* a shard's part of this run's paths */
+    if (fresh_rrss) {
         pilot = (uint64_t)ceil(c.rp * (double)c.paths);
         if (pilot < 1) pilot = 1;
         if (pilot > c.paths) pilot = c.paths;
-        rc = lsqt_rrss(&cx, &a, &st, c.rx, pilot, &so, &rinfo, err, sizeof err);
-        if (!rc) {
-            pilot = st.paths; /* fewer when the pilot was interrupted */
-            st.rx = (uint32_t)c.rx, st.pilot_paths = pilot;
-            if (add != UINT64_MAX) add -= pilot;
-            if (rinfo.interrupted) add = 0;
-            if (!c.quiet && rinfo.short_slices)
-                fprintf(stderr, "note: RRSS: in %d slice%s the walks left too few directions to choose from "
-                                "(a BSDF that is zero almost everywhere); the even spread filled the rest\n",
-                        rinfo.short_slices, rinfo.short_slices > 1 ? "s" : "");
-            if (!c.quiet && rinfo.density_fallback)
-                fprintf(stderr, "note: RRSS: in %d slice%s the pilot's BSDF integral was not usable; directions "
-                                "follow the walks' exit density there\n",
-                        rinfo.density_fallback, rinfo.density_fallback > 1 ? "s" : "");
-        }
     }
-    if (!rc) rc = lsqt_simulate(&cx, &a, &st, add, &so, &stats, err, sizeof err);
-    stats.seconds += rinfo.seconds;
-    stats.paths_added += pilot;
-    if (rinfo.interrupted) stats.interrupted = 1, stats.stop_reason = g_stop ? LSQT_STOP_INTERRUPT : LSQT_STOP_TIME;
+    if (c.shard_n && !rc) {
+        if (c.refine && st.paths == 0 && !owes) {
+            rc = fail(2, "--refine: '%s' holds no merged run yet: run the shards without --refine first, "
+                         "then lsqt-cl merge%s", lss_path ? lss_path : "the LSS", "");
+        } else {
+            /* The run's range, then the K-th of N near-equal parts of it. */
+            run_lo = held;
+            run_hi = fresh_rrss ? pilot : owes ? st.span_end : c.refine ? held : held + add;
+            lsqt_shard_part(run_lo, run_hi, c.shard_k, c.shard_n, &part_lo, &part_hi);
+            if (fresh_rrss) {
+                /* the pilot's part, on every slice's candidates; the merge chooses */
+                lsqt_state ps;
+                rc = lsqt_rrss_pilot(&cx, &a, &st, c.rx, part_lo, part_hi - part_lo, &so, &ps, &rinfo, err,
+                                     sizeof err);
+                if (!rc) {
+                    ps.pilot_paths = pilot;
+                    ps.span_end = c.paths;
+                    lsqt_state_free(&st);
+                    st = ps;
+                    pilot_shard = 1;
+                    stats.paths_added = st.paths;
+                    stats.seconds = rinfo.seconds;
+                    if (rinfo.interrupted) stats.interrupted = 1, stats.stop_reason = g_stop ? LSQT_STOP_INTERRUPT : LSQT_STOP_TIME;
+                }
+            } else {
+                lsqt_state_clear_tallies(&st);
+                rc = lsqt_simulate_range(&cx, &a, &st, part_lo, part_hi - part_lo, &so, &stats, err, sizeof err);
+                st.span_end = run_hi;
+            }
+        }
+        if (rc == 2) {
+            lsqt_context_release(&cx);
+            lsqt_state_free(&st);
+            lsqt_assembly_free(&a);
+            return rc;
+        }
+    } else {
+        if (fresh_rrss) {
+            rc = lsqt_rrss(&cx, &a, &st, c.rx, pilot, &so, &rinfo, err, sizeof err);
+            if (!rc) {
+                pilot = st.paths; /* fewer when the pilot was interrupted */
+                st.rx = (uint32_t)c.rx, st.pilot_paths = pilot;
+                if (add != UINT64_MAX) add -= pilot;
+                if (rinfo.interrupted) add = 0;
+            }
+        }
+        if (!rc) rc = lsqt_simulate(&cx, &a, &st, add, &so, &stats, err, sizeof err);
+        stats.seconds += rinfo.seconds;
+        stats.paths_added += pilot;
+        if (rinfo.interrupted) stats.interrupted = 1, stats.stop_reason = g_stop ? LSQT_STOP_INTERRUPT : LSQT_STOP_TIME;
+    }
+    if (!rc && !c.quiet) lsqt_rrss_notes(stderr, &rinfo);
     if (rc) {
         fail(1, "%s%s", err, "");
+    } else if (pilot_shard) {
+        /* a pilot shard holds candidate blocks, not a BSDF yet: its LSS is all there is */
+        const char *ls = out.path[OUT_LSS];
+        if (lsqt_lss_write(ls, &st, err, sizeof err)) rc = fail(1, "%s%s", err, "");
+        else if (!c.quiet)
+            fprintf(info, "shard %d/%d of the RRSS pilot: paths [%llu, %llu) of [0, %llu) in %.3g s; wrote %s\n"
+                          "(merge all %d pilot shards, then run the shards with --refine)\n",
+                    c.shard_k, c.shard_n, (unsigned long long)part_lo, (unsigned long long)part_hi,
+                    (unsigned long long)pilot, stats.seconds, ls, c.shard_n);
+        if (!c.quiet && c.output) fprintf(stderr, "note: a pilot shard writes no RAW (-o is not used)\n");
+        if (stats.interrupted && g_stop) {
+            fprintf(stderr, "lsqt-cl: interrupted (%s): %s the paths done so far\n", signal_name(g_stop),
+                    rc ? "tried to write" : "wrote");
+            rc = 1;
+        }
     } else {
         lsqt_slice_est *est = lsqt_estimates(&st);
         char devname[600];
@@ -455,6 +533,10 @@ int main(int argc, char **argv)
         if (!est) rc = fail(1, "out of memory%s%s", "", "");
         else rc = write_outputs(&out, &c, &st, est, &ri, info);
         if (est && !c.quiet) lsqt_report_summary(info, &st, est, &ri);
+        if (!c.quiet && c.shard_n)
+            fprintf(info, "shard %d/%d: paths [%llu, %llu) of this run's [%llu, %llu)%s\n", c.shard_k, c.shard_n,
+                    (unsigned long long)part_lo, (unsigned long long)part_hi, (unsigned long long)run_lo,
+                    (unsigned long long)run_hi, part_lo == part_hi ? " (nothing to do: an empty part)" : "");
         lsqt_estimates_free(est, st.n_slices);
         if (stats.interrupted && g_stop) {
             fprintf(stderr, "lsqt-cl: interrupted (%s): %s the paths done so far\n", signal_name(g_stop),

@@ -2,6 +2,7 @@
 
 #include <math.h>
 #include <stdio.h>
+#include <string.h>
 
 #include "lsqt/util.h"
 
@@ -33,4 +34,11 @@ int lsqt_raw_write(const char *path, const lsqt_state *st, const lsqt_slice_est 
         }
     }
     return lsqt_out_commit(&af, err, errcap);
+}
+
+void lsqt_raw_hemi_name(const char *out, const char *part, char *dst, size_t cap)
+{
+    size_t n = strlen(out);
+    if (n >= 4 && strcmp(out + n - 4, ".raw") == 0) n -= 4;
+    snprintf(dst, cap, "%.*s.%s.raw", (int)n, out, part);
 }

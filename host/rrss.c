@@ -297,3 +297,15 @@ int lsqt_rrss(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, int rx, 
     *st = chosen;
     return 0;
 }
+
+void lsqt_rrss_notes(FILE *f, const lsqt_rrss_info *info)
+{
+    if (info->short_slices)
+        fprintf(f, "note: RRSS: in %d slice%s the walks left too few directions to choose from "
+                   "(a BSDF that is zero almost everywhere); the even spread filled the rest\n",
+                info->short_slices, info->short_slices > 1 ? "s" : "");
+    if (info->density_fallback)
+        fprintf(f, "note: RRSS: in %d slice%s the pilot's BSDF integral was not usable; directions "
+                   "follow the walks' exit density there\n",
+                info->density_fallback, info->density_fallback > 1 ? "s" : "");
+}

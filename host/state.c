@@ -141,3 +141,11 @@ void lsqt_state_clear_tallies(lsqt_state *st)
     st->paths = 0;
     st->flags = 0;
 }
+
+void lsqt_shard_part(uint64_t begin, uint64_t end, int k, int n, uint64_t *lo, uint64_t *hi)
+{
+    const uint64_t len = end > begin ? end - begin : 0, q = len / (uint64_t)n, r = len % (uint64_t)n;
+    const uint64_t kk = (uint64_t)k;
+    *lo = begin + kk * q + (kk < r ? kk : r);
+    *hi = *lo + q + (kk < r ? 1u : 0u);
+}

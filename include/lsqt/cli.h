@@ -40,6 +40,8 @@ typedef struct lsqt_cli {
     int quiet, verbose;
     int help;
     int sampling_given;       /* a flag that fixes the sampling (-wo, -wi, -s, ...) was given */
+    int shard_k, shard_n;     /* --shard K/N (shard_n 0: not sharded) */
+    int refine;               /* --refine: a shard does only what its state owes */
 } lsqt_cli;
 
 /* Returns 0, or 2 with err naming the flag and what it expects. */

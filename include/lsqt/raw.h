@@ -21,6 +21,10 @@ enum lsqt_raw_mode {
 int lsqt_raw_write(const char *path, const lsqt_state *st, const lsqt_slice_est *est, int mode,
                    int *skipped, char *err, size_t errcap);
 
+/* -H names: OUT with its final ".raw" replaced by ".R.raw" / ".T.raw" (part "R", "T";
+ * appended when OUT does not end in ".raw"). */
+void lsqt_raw_hemi_name(const char *out, const char *part, char *dst, size_t cap);
+
 #ifdef __cplusplus
 }
 #endif

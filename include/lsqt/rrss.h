@@ -3,6 +3,8 @@
 #ifndef LSQT_RRSS_H
 #define LSQT_RRSS_H
 
+#include <stdio.h>
+
 #include "lsqt/simulate.h"
 
 #ifdef __cplusplus
@@ -46,6 +48,9 @@ int lsqt_rrss_pilot(lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *
                     uint64_t n_paths, const lsqt_sim_opts *o, lsqt_state *ps, lsqt_rrss_info *info, char *err,
                     size_t errcap);
 int lsqt_rrss_choose(const lsqt_state *ps, lsqt_state *st, lsqt_rrss_info *info, char *err, size_t errcap);
+
+/* The notes a user needs about INFO (fallbacks), one line each. */
+void lsqt_rrss_notes(FILE *f, const lsqt_rrss_info *info);
 
 /* The selection alone (exposed for the tests): keeps n of the m candidates dirs (x, y, z,
  * pad per direction, unit, y >= 0) with BSDF values f (>= 0), over the upper hemisphere

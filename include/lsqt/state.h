@@ -68,6 +68,9 @@ int lsqt_state_set_ranges(lsqt_state *st, const uint64_t *r, int n);
 int lsqt_state_add_range(lsqt_state *st, uint64_t lo, uint64_t hi);
 /* h when the state holds exactly [0, h) (0: nothing), UINT64_MAX when it has gaps. */
 uint64_t lsqt_state_contiguous(const lsqt_state *st);
+/* The K-th of N near-equal parts [lo, hi) of [begin, end) (the first (end-begin) % N
+ * parts one path longer); the parts of all K tile the range. */
+void lsqt_shard_part(uint64_t begin, uint64_t end, int k, int n, uint64_t *lo, uint64_t *hi);
 /* Zero tallies, no ranges, no flags: the same directions, ready for another part of a run. */
 void lsqt_state_clear_tallies(lsqt_state *st);
 

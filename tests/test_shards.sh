@@ -1,0 +1,105 @@
+#!/usr/bin/env bash
+# Shards and merge (SPEC §8): the parts of a run, merged, are the run in one process byte
+# for byte (tallies are integers, each path's random numbers depend only on its index);
+# overlapping, missing, foreign or unmerged parts are refused; --partial keeps what there
+# is and a continued partial state completes the run; RRSS progressive runs: the pilot
+# is a share of the first run's -p only, so `-p 10000; -p 20000` = `-p 10000` three times.
+# usage: test_shards.sh LSQT_CL EXAMPLES_DIR
+set -u
+# shellcheck source=cli_lib.sh
+source "$(dirname "${BASH_SOURCE[0]}")/cli_lib.sh"
+BIN=$1
+EX=$2
+SH="$(cd "$(dirname "${BASH_SOURCE[0]}")/../tools/slurm" && pwd)/local-shards.sh"
+T=$(mktemp -d)
+trap 'rm -rf "$T"' EXIT
+cd "$T"
+export LSQT_CL=$BIN
+
+# same A B: both files exist and are byte-identical
+same() {
+  if [ -f "$1" ] && [ -f "$2" ] && cmp -s "$1" "$2"; then ok; else bad "$1 and $2 differ (or one is missing)"; fi
+}
+# fresh NAME: a copy of the slab example as NAME.lsqt, with no state
+fresh() { rm -f "$1".lsqt*; cp "$EX/slab.lsqt" "$1.lsqt"; }
+one() { "$BIN" -q "$@" >/dev/null; }
+
+# 1. RRSS (default directions), 4 shards, -rp 0.3: the two-stage flow equals one process.
+F=(-p 20000 -wo 4 -wi 24 -s 7 -rp 0.3)
+fresh a; fresh b
+bash "$SH" 4 a.lsqt "${F[@]}" -q >/dev/null 2>shards.err || bad "local-shards.sh failed: $(cat shards.err)"
+one "${F[@]}" b.lsqt
+same a.lsqt.lss b.lsqt.lss
+same a.lsqt.raw b.lsqt.raw
+ls a.lsqt.shard-* >/dev/null 2>&1 && bad "shard files left behind after the merge" || ok
+"$BIN" info a.lsqt.lss | grep -q "directions: RRSS (4 candidates per direction, pilot of 6000 paths)" && ok ||
+  bad "merged LSS lacks the RRSS pilot: $("$BIN" info a.lsqt.lss | head -12)"
+
+# 2. Even spread with -H, 3 shards (one stage: the refine shards have nothing to do), then
+#    a sharded continuation equals a continuation in one process.
+F=(-p 7000 -wo 4 -wi 16 --wi-spread -H -s 3)
+fresh c; fresh d
+bash "$SH" 3 c.lsqt "${F[@]}" -q >/dev/null 2>&1 || bad "local-shards.sh (spread) failed"
+one "${F[@]}" d.lsqt
+same c.lsqt.lss d.lsqt.lss
+same c.lsqt.R.raw d.lsqt.R.raw
+same c.lsqt.T.raw d.lsqt.T.raw
+bash "$SH" 2 c.lsqt -p 3000 -H -q >/dev/null 2>&1 || bad "sharded continuation failed"
+one -p 3000 -H d.lsqt
+same c.lsqt.lss d.lsqt.lss
+same c.lsqt.R.raw d.lsqt.R.raw
+
+# 3. RRSS progressive identity: the pilot is rp of the first run's -p only.
+fresh e; fresh g
+one -p 10000 -wo 4 -wi 24 e.lsqt && one -p 20000 e.lsqt
+one -p 10000 -wo 4 -wi 24 g.lsqt && one -p 10000 g.lsqt && one -p 10000 g.lsqt
+same e.lsqt.lss g.lsqt.lss
+same e.lsqt.raw g.lsqt.raw
+
+# 4. Refusals. Shards of a spread run (one stage) as material.
+F=(-p 4000 -wo 4 -wi 16 --wi-spread -s 5)
+fresh m; fresh full
+for k in 0 1 2 3; do one "${F[@]}" --shard $k/4 m.lsqt; done
+one "${F[@]}" --shard 0/2 m.lsqt
+one "${F[@]}" full.lsqt
+cp m.lsqt.shard-0-of-4.lss copy0.lss
+expect 2 "overlapping parts" -- "$BIN" merge x.lss m.lsqt.shard-0-of-4.lss copy0.lss
+expect 2 "both hold paths [0, 1000)" -- "$BIN" merge x.lss m.lsqt.shard-0-of-4.lss m.lsqt.shard-0-of-2.lss
+expect 2 "given twice" -- "$BIN" merge x.lss m.lsqt.shard-1-of-4.lss m.lsqt.shard-1-of-4.lss
+[ -e x.lss ] && bad "a refused merge wrote x.lss" || ok
+expect 2 "leave out paths [3000, 4000) of the run [0, 4000): missing shards" -- \
+  "$BIN" merge x.lss m.lsqt.shard-0-of-4.lss m.lsqt.shard-1-of-4.lss m.lsqt.shard-2-of-4.lss
+one -s 6 -p 4000 -wo 4 -wi 16 --wi-spread --shard 3/4 --lss other.lss m.lsqt
+expect 2 "differ in their seed" -- "$BIN" merge x.lss m.lsqt.shard-0-of-4.lss other.shard-3-of-4.lss
+expect 2 "not an LSS file" -- "$BIN" merge x.lss m.lsqt.shard-0-of-4.lss m.lsqt
+expect 2 "" -- "$BIN" merge x.lss
+# --partial: the state says what it holds; continuing it runs the missing tail, and then
+# it is the whole run. A gap in the middle cannot be continued.
+expect 0 "(the run owes 1000 more)" -- "$BIN" merge --partial p.lss m.lsqt.shard-0-of-4.lss m.lsqt.shard-1-of-4.lss m.lsqt.shard-2-of-4.lss
+"$BIN" info p.lss | grep -qF "ranges: [0, 3000) on every slice; part of a run of [0, 4000)" && ok ||
+  bad "info of a partial merge: $("$BIN" info p.lss | grep ranges)"
+cp m.lsqt p.lsqt
+one --lss p.lss -o p.raw p.lsqt
+cmp -s p.lss full.lsqt.lss && ok || bad "a continued partial merge is not the whole run"
+cmp -s p.raw full.lsqt.raw && ok || bad "a continued partial merge's RAW is not the whole run's"
+"$BIN" merge -q --partial gap.lss m.lsqt.shard-0-of-4.lss m.lsqt.shard-3-of-4.lss
+expect 2 "gaps between them" -- "$BIN" -p 100 --lss gap.lss -o gap.raw m.lsqt
+# the four, merged, are the run
+expect 0 "merged 4 files" -- "$BIN" merge all.lss m.lsqt.shard-{0,1,2,3}-of-4.lss
+same all.lss full.lsqt.lss
+same all.raw full.lsqt.raw
+
+# 5. RRSS pilot shards: unmerged, incomplete or mixed with run parts, they are refused.
+fresh r
+for k in 0 1 2; do one -p 3000 -wo 4 -wi 16 -s 5 --shard $k/3 r.lsqt; done
+expect 2 "one shard of an RRSS pilot" -- "$BIN" -p 100 --lss r.lsqt.shard-0-of-3.lss r.lsqt
+expect 2 "an RRSS pilot must be whole" -- "$BIN" merge --partial x.lss r.lsqt.shard-0-of-3.lss r.lsqt.shard-1-of-3.lss
+expect 2 "differ in their stage" -- "$BIN" merge x.lss r.lsqt.shard-0-of-3.lss m.lsqt.shard-1-of-4.lss
+expect 2 "holds no merged run yet" -- "$BIN" -p 3000 -wo 4 -wi 16 --shard 0/3 --refine --lss none.lss r.lsqt
+
+# 6. Bad flags.
+for v in 4/4 1 a/b 0/0 -1/2 1/70000; do expect 2 "bad value '$v' for --shard" -- "$BIN" --shard "$v" r.lsqt; done
+expect 2 "give --shard K/N too" -- "$BIN" --refine r.lsqt
+expect 2 "cannot stop a shard" -- "$BIN" --shard 0/2 --target-error 0.1 r.lsqt
+expect 2 "give a file" -- "$BIN" --shard 0/2 --lss - r.lsqt
+finish test_shards

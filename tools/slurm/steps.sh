@@ -1,0 +1,50 @@
+#!/usr/bin/env bash
+# The steps of a sharded lsqt-cl run, one per call; the SLURM recipe (submit.sh) and
+# local-shards.sh run exactly these, so both give the same bytes:
+#   steps.sh shard  K N FILE [flags]  lsqt-cl FLAGS --shard K/N FILE   (FILE.shard-K-of-N.lss)
+#   steps.sh merge    N FILE [flags]  lsqt-cl merge FILE.lss [FILE.lss] FILE.shard-*-of-N.lss
+#   steps.sh refine K N FILE [flags]  lsqt-cl FLAGS --shard K/N --refine FILE
+#   steps.sh merge    N FILE [flags]  (again)
+# Why two stages: a fresh RRSS run's shards run only the pilot (each its part of it, on
+# the same candidates); merging the whole pilot chooses the directions once, whatever the
+# split; the refine shards then run the rest. Without RRSS (or when continuing a run) the
+# first stage does all the paths and the refine shards have nothing to do.
+# The LSS is FILE.lss, or --lss PATH among the flags. LSQT_CL names the binary.
+set -euo pipefail
+LSQT_CL=${LSQT_CL:-lsqt-cl}
+step=${1:?usage: steps.sh shard|refine K N FILE [flags] | steps.sh merge N FILE [flags]}
+shift
+if [ "$step" = merge ]; then
+  n=$1 file=$2
+  shift 2
+else
+  k=$1 n=$2 file=$3
+  shift 3
+fi
+# The run's LSS, and the flags merge takes (the RAW's name and form, JSON, quiet).
+lss="$file.lss"
+merge_flags=()
+args=("$@")
+for ((i = 0; i < ${#args[@]}; i++)); do
+  a=${args[i]}
+  case "$a" in
+    --lss) lss=${args[i + 1]}; i=$((i + 1)) ;;
+    --lss=*) lss=${a#--lss=} ;;
+    -o|--output|--json) merge_flags+=("$a" "${args[i + 1]}"); i=$((i + 1)) ;;
+    -o=*|--output=*|--json=*|-H|--only-hemispherical|-q|--quiet) merge_flags+=("$a") ;;
+  esac
+done
+base=${lss%.lss}
+case "$step" in
+  shard) exec "$LSQT_CL" "$@" --shard "$k/$n" "$file" ;;
+  refine) exec "$LSQT_CL" "$@" --shard "$k/$n" --refine "$file" ;;
+  merge)
+    parts=()
+    for ((j = 0; j < n; j++)); do parts+=("$base.shard-$j-of-$n.lss"); done
+    inputs=()
+    [ -f "$lss" ] && inputs+=("$lss")
+    "$LSQT_CL" merge "$lss" "${inputs[@]}" "${parts[@]}" "${merge_flags[@]}"
+    rm -f "${parts[@]}" # merged into the LSS: keeping them would invite a double count
+    ;;
+  *) echo "steps.sh: unknown step '$step'" >&2; exit 2 ;;
+esac
