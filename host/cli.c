@@ -80,9 +80,10 @@ void lsqt_cli_help(FILE *f)
           , f);
     fputs("      --time-limit S          stop adding paths after S seconds\n"
           "      --checkpoint S          write the LSS every S seconds during a run (default 300,\n"
-          "                              0: never; not during the RRSS pilot). SIGINT, SIGTERM,\n"
-          "                              SIGHUP and SIGUSR1 finish the launch, write LSS and RAW\n"
-          "                              and exit 1; continuing gives the uninterrupted bytes\n"
+          "                              0: never; in the RRSS pilot it holds the pilot). SIGINT,\n"
+          "                              SIGTERM, SIGHUP and SIGUSR1 finish the launch, write LSS\n"
+          "                              and RAW and exit 1; continuing gives the uninterrupted\n"
+          "                              bytes (from the pilot too: it finishes the pilot first)\n"
           "      --target-error E        add paths until every slice's largest relative standard\n"
           "                              error of the BSDF values is at most E (e.g. 0.01); -p,\n"
           "                              if given, is then a cap (checked at path counts that\n"

@@ -139,6 +139,11 @@ static void print_text(FILE *f, const char *path, const lsqt_state *st, const ls
         fprintf(f, "directions: RRSS (%u candidates per direction, pilot of %llu paths)\n", st->rx,
                 (unsigned long long)st->pilot_paths);
     else fprintf(f, "directions: %s\n", st->dir_method == LSQT_DIRS_FILE ? "from a file (--wi-file)" : "even spread");
+    if (st->stage == LSQT_STAGE_PILOT)
+        fprintf(f, "stage: RRSS pilot (%d slices x %u candidate blocks of %d; %llu of its %llu paths; the run: %llu)\n",
+                st->n_slices / (int)st->rx, st->rx, st->n_wi, (unsigned long long)st->paths,
+                (unsigned long long)st->pilot_paths, (unsigned long long)st->span_end);
+    else fprintf(f, "stage: run\n");
     fprintf(f, "paths: %llu per slice\n", (unsigned long long)st->paths);
     if (st->flags) fprintf(f, "flags: 0x%x (%s)\n", st->flags, flags);
     else fprintf(f, "flags: none\n");
@@ -189,6 +194,8 @@ static int write_json(const char *out, const char *path, const lsqt_state *st, c
             st->dir_method == LSQT_DIRS_RRSS ? "rrss" : st->dir_method == LSQT_DIRS_FILE ? "file" : "spread", st->rx,
             (unsigned long long)st->pilot_paths, st->flags, flags);
     info_ranges(f, st, 1);
+    fprintf(f, ", \"span_end\": %llu, \"stage\": \"%s\"", (unsigned long long)st->span_end,
+            st->stage == LSQT_STAGE_PILOT ? "rrss-pilot" : "run");
     fprintf(f, ",\n \"assembly\": ");
     json_str(f, st->canonical);
     fprintf(f, ",\n \"slices\": [");

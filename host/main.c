@@ -213,8 +213,9 @@ static int plan_outputs(const lsqt_cli *c, int from_stdin, int transmits, output
 }
 
 /* Writes every output; a failed one does not stop the others. Returns 0 or 1. */
-static int write_outputs(const outputs *o, const lsqt_cli *c, const lsqt_state *st, const lsqt_slice_est *est,
-                         const lsqt_run_info *ri, FILE *info)
+/* The LSS is lss_st (an interrupted RRSS pilot's own state), the rest from st. */
+static int write_outputs(const outputs *o, const lsqt_cli *c, const lsqt_state *st, const lsqt_state *lss_st,
+                         const lsqt_slice_est *est, const lsqt_run_info *ri, FILE *info)
 {
     char err[LSQT_PATH_CAP + 512];
     int failed = 0, wrote = 0, skipped = 0, sk = 0;
@@ -223,7 +224,7 @@ static int write_outputs(const outputs *o, const lsqt_cli *c, const lsqt_state *
     for (int i = 0; i < OUT_COUNT; i++) {
         const char *p = o->path[i];
         if (!p) continue;
-        int rc = i == OUT_LSS    ? lsqt_lss_write(p, st, err, sizeof err)
+        int rc = i == OUT_LSS    ? lsqt_lss_write(p, lss_st, err, sizeof err)
                  : i == OUT_JSON ? lsqt_report_json(p, st, est, ri, err, sizeof err)
                  : i == OUT_RAW_T
                      ? lsqt_raw_write(p, st, est, LSQT_RAW_TRANSMIT, &sk, err, sizeof err)
@@ -368,7 +369,7 @@ int main(int argc, char **argv)
             lsqt_state_free(&st);
             rc = fail(2, "'%s' was made for a different assembly; use -R to start over and replace it%s",
                       lss_path, "");
-        } else if (st.stage == LSQT_STAGE_PILOT) {
+        } else if (st.stage == LSQT_STAGE_PILOT && lsqt_state_contiguous(&st) == UINT64_MAX) {
             lsqt_state_free(&st);
             rc = fail(2, "'%s' is one shard of an RRSS pilot: merge all of the pilot's shards first "
                          "(lsqt-cl merge OUT.lss SHARDS...)%s", lss_path, "");
@@ -423,13 +424,20 @@ int main(int argc, char **argv)
                         can_checkpoint ? c.checkpoint : 0.0, can_checkpoint ? write_checkpoint : NULL, &ck};
     lsqt_sim_stats stats;
     memset(&stats, 0, sizeof stats);
+    const int pilot_base = st.stage == LSQT_STAGE_PILOT; /* a checkpoint or an interrupted pilot */
     lsqt_work before = lsqt_work_totals(&st);
+    if (pilot_base) {
+        /* its candidate blocks replay the same paths: one block's work is the pilot's */
+        before.paths /= st.rx, before.layer_events /= st.rx, before.medium_events /= st.rx;
+        before.nee_evaluations /= st.rx;
+    }
     if (c.shard_n) memset(&before, 0, sizeof before); /* a shard's file holds only its own work */
+    const uint64_t paths_before = st.paths;
     /* With a target error, -p is a cap when given, else there is none. */
     uint64_t add = c.target_error > 0 && !c.paths_given ? UINT64_MAX : c.paths;
     /* A state that owes paths (a merged RRSS pilot, a partial merge) completes its run. */
     const uint64_t held = lsqt_state_contiguous(&st);
-    const int owes = held < st.span_end;
+    const int owes = held < st.span_end && !pilot_base;
     if (owes) {
         add = st.span_end - held;
         if (!c.quiet)
@@ -437,7 +445,7 @@ int main(int argc, char **argv)
                     lss_path, (unsigned long long)st.span_end, (unsigned long long)add,
                     c.paths_given ? " (-p is not used)" : "");
     }
-    const int fresh_rrss = st.dir_method == LSQT_DIRS_RRSS && st.paths == 0 && !owes;
+    const int fresh_rrss = st.dir_method == LSQT_DIRS_RRSS && st.paths == 0 && !owes && !pilot_base;
     /* A fresh RRSS state: the pilot is the first rp of this run's -p (its tallies stay). */
     uint64_t pilot = 0;
     lsqt_rrss_info rinfo;
@@ -449,10 +457,15 @@ int main(int argc, char **argv)
         if (pilot < 1) pilot = 1;
         if (pilot > c.paths) pilot = c.paths;
     }
+    lsqt_state ps; /* an RRSS pilot, while there is one */
+    int have_ps = 0;
     if (c.shard_n && !rc) {
         if (c.refine && st.paths == 0 && !owes) {
             rc = fail(2, "--refine: '%s' holds no merged run yet: run the shards without --refine first, "
                          "then lsqt-cl merge%s", lss_path ? lss_path : "the LSS", "");
+        } else if (pilot_base) {
+            rc = fail(2, "'%s' holds (part of) an RRSS pilot: merge all of the pilot's shards first "
+                         "(lsqt-cl merge OUT.lss SHARDS...)%s", lss_path, "");
         } else {
             /* The run's range, then the K-th of N near-equal parts of it. */
             run_lo = held;
@@ -460,12 +473,9 @@ int main(int argc, char **argv)
             lsqt_shard_part(run_lo, run_hi, c.shard_k, c.shard_n, &part_lo, &part_hi);
             if (fresh_rrss) {
                 /* the pilot's part, on every slice's candidates; the merge chooses */
-                lsqt_state ps;
-                rc = lsqt_rrss_pilot(&cx, &a, &st, c.rx, part_lo, part_hi - part_lo, &so, &ps, &rinfo, err,
-                                     sizeof err);
+                rc = lsqt_rrss_pilot(&cx, &a, &st, c.rx, pilot, c.paths, part_lo, part_hi - part_lo, &so, &ps, &rinfo,
+                                     err, sizeof err);
                 if (!rc) {
-                    ps.pilot_paths = pilot;
-                    ps.span_end = c.paths;
                     lsqt_state_free(&st);
                     st = ps;
                     pilot_shard = 1;
@@ -486,19 +496,48 @@ int main(int argc, char **argv)
             return rc;
         }
     } else {
+        /* RRSS: the pilot (fresh, or the rest of a saved one), the choice, the rest of the
+         * run. Checkpoints during the pilot save the pilot state, which continues exactly. */
         if (fresh_rrss) {
-            rc = lsqt_rrss(&cx, &a, &st, c.rx, pilot, &so, &rinfo, err, sizeof err);
+            rc = lsqt_rrss_pilot(&cx, &a, &st, c.rx, pilot, add == UINT64_MAX ? pilot : c.paths, 0, pilot, &so, &ps,
+                                 &rinfo, err, sizeof err);
+            have_ps = !rc;
+        } else if (pilot_base) {
+            ps = st;
+            memset(&st, 0, sizeof st);
+            have_ps = 1;
+            if (!c.quiet)
+                fprintf(stderr, "note: '%s' holds %llu of the %llu paths of an RRSS pilot: this run finishes it, "
+                                "then the run (%llu paths per slice)\n",
+                        lss_path, (unsigned long long)ps.paths, (unsigned long long)ps.pilot_paths,
+                        (unsigned long long)ps.span_end);
+            rc = lsqt_rrss_pilot_continue(&cx, &a, &ps, &so, &rinfo, err, sizeof err);
+        }
+        if (have_ps && !rc) {
+            /* an interrupted pilot: its LSS is the pilot (continuing finishes it); the RAW
+             * and summary show a provisional choice from what it has */
+            lsqt_state chosen;
+            lsqt_rrss_info ci;
+            memset(&ci, 0, sizeof ci);
+            rc = lsqt_rrss_choose(&ps, &chosen, &ci, err, sizeof err);
             if (!rc) {
-                pilot = st.paths; /* fewer when the pilot was interrupted */
-                st.rx = (uint32_t)c.rx, st.pilot_paths = pilot;
-                if (add != UINT64_MAX) add -= pilot;
+                rinfo.density_fallback = ci.density_fallback;
+                rinfo.seconds += ci.select_seconds;
+                lsqt_state_free(&st);
+                st = chosen;
                 if (rinfo.interrupted) add = 0;
+                else if (pilot_base) add = st.span_end - st.paths;
+                else if (add != UINT64_MAX) add -= st.paths;
             }
         }
-        if (!rc) rc = lsqt_simulate(&cx, &a, &st, add, &so, &stats, err, sizeof err);
+        if (!rc && !rinfo.interrupted) rc = lsqt_simulate(&cx, &a, &st, add, &so, &stats, err, sizeof err);
         stats.seconds += rinfo.seconds;
-        stats.paths_added += pilot;
+        stats.paths_added = st.paths - paths_before;
         if (rinfo.interrupted) stats.interrupted = 1, stats.stop_reason = g_stop ? LSQT_STOP_INTERRUPT : LSQT_STOP_TIME;
+        if (have_ps && !rinfo.interrupted) {
+            lsqt_state_free(&ps);
+            have_ps = 0;
+        }
     }
     if (!rc && !c.quiet) lsqt_rrss_notes(stderr, &rinfo);
     if (rc) {
@@ -531,7 +570,7 @@ int main(int argc, char **argv)
                                           "the time limit (--time-limit)", "an interrupt"};
         if (c.target_error > 0 || c.time_limit > 0) ri.stopped_by = why[stats.stop_reason];
         if (!est) rc = fail(1, "out of memory%s%s", "", "");
-        else rc = write_outputs(&out, &c, &st, est, &ri, info);
+        else rc = write_outputs(&out, &c, &st, have_ps ? &ps : &st, est, &ri, info);
         if (est && !c.quiet) lsqt_report_summary(info, &st, est, &ri);
         if (!c.quiet && c.shard_n)
             fprintf(info, "shard %d/%d: paths [%llu, %llu) of this run's [%llu, %llu)%s\n", c.shard_k, c.shard_n,
@@ -544,6 +583,7 @@ int main(int argc, char **argv)
             rc = 1;
         }
     }
+    if (have_ps) lsqt_state_free(&ps);
     lsqt_context_release(&cx);
     lsqt_state_free(&st);
     lsqt_assembly_free(&a);

@@ -169,9 +169,25 @@ done:
     return rc;
 }
 
-int lsqt_rrss_pilot(lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st, int rx, uint64_t begin,
-                    uint64_t n_paths, const lsqt_sim_opts *o, lsqt_state *ps, lsqt_rrss_info *info, char *err,
-                    size_t errcap)
+/* Paths [begin, begin + n_paths) of the pilot PS through SESSION (open on PS). */
+static int pilot_run(lsqt_session *sess, lsqt_state *ps, uint64_t begin, uint64_t n_paths, const lsqt_sim_opts *o,
+                     lsqt_rrss_info *info, char *err, size_t errcap)
+{
+    lsqt_sim_opts po = *o;
+    po.target_error = 0.0; /* the pilot's length is fixed: the directions depend on it */
+    lsqt_sim_stats stats;
+    if (o->verbose)
+        fprintf(stderr, "RRSS: %d candidates per slice, pilot paths [%llu, %llu) of [0, %llu)\n",
+                (int)ps->rx * ps->n_wi, (unsigned long long)begin, (unsigned long long)(begin + n_paths),
+                (unsigned long long)ps->pilot_paths);
+    if (lsqt_run_range(sess, ps, begin, n_paths, &po, &stats, err, errcap)) return 1;
+    info->interrupted = stats.interrupted;
+    return 0;
+}
+
+int lsqt_rrss_pilot(lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st, int rx, uint64_t pilot_total,
+                    uint64_t run_paths, uint64_t begin, uint64_t n_paths, const lsqt_sim_opts *o, lsqt_state *ps,
+                    lsqt_rrss_info *info, char *err, size_t errcap)
 {
     memset(info, 0, sizeof *info);
     const int n = st->n_wi, m = rx * n, ns = st->n_slices;
@@ -185,6 +201,8 @@ int lsqt_rrss_pilot(lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *
     ps->dir_method = LSQT_DIRS_RRSS;
     ps->rx = (uint32_t)rx;
     ps->stage = LSQT_STAGE_PILOT;
+    ps->pilot_paths = pilot_total;
+    ps->span_end = run_paths > pilot_total ? run_paths : pilot_total;
     for (int v = 0; v < ns * rx; v++) ps->theta_o[v] = st->theta_o[v / rx], ps->slice_flags[v] = st->slice_flags[v / rx];
     float *cand = calloc((size_t)ns * m * 4, sizeof *cand);
     lsqt_session s;
@@ -200,21 +218,34 @@ int lsqt_rrss_pilot(lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *
     if (candidates(&s, ns, m, st->transmits, cand, &info->short_slices, err, errcap)) goto done;
     memcpy(ps->wi, cand, (size_t)ns * m * 4 * sizeof *cand); /* block j of slice s is candidates j n ... */
     if (lsqt_session_set_directions(&s, ps, err, errcap)) goto done;
-    lsqt_sim_opts po = *o;
-    po.target_error = 0.0;
-    po.checkpoint = NULL; /* a pilot's state is not the run's (it has rx x the slices) */
-    lsqt_sim_stats stats;
-    if (o->verbose)
-        fprintf(stderr, "RRSS: %d candidates per slice, pilot paths [%llu, %llu)\n", m, (unsigned long long)begin,
-                (unsigned long long)(begin + n_paths));
-    if (lsqt_run_range(&s, ps, begin, n_paths, &po, &stats, err, errcap)) goto done;
-    info->interrupted = stats.interrupted;
+    if (pilot_run(&s, ps, begin, n_paths, o, info, err, errcap)) goto done;
     info->seconds = lsqt_now() - t1;
     rc = 0;
 done:
     lsqt_session_close(&s);
     if (rc) lsqt_state_free(ps);
     free(cand);
+    return rc;
+}
+
+int lsqt_rrss_pilot_continue(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *ps, const lsqt_sim_opts *o,
+                             lsqt_rrss_info *info, char *err, size_t errcap)
+{
+    memset(info, 0, sizeof *info);
+    info->candidates = (int)ps->rx * ps->n_wi;
+    const uint64_t held = lsqt_state_contiguous(ps);
+    if (held == UINT64_MAX || held > ps->pilot_paths) {
+        snprintf(err, errcap, "the RRSS pilot state does not hold one range [0, h) of its %llu paths: merge its shards",
+                 (unsigned long long)ps->pilot_paths);
+        return 1;
+    }
+    lsqt_session s;
+    if (lsqt_session_open_grouped(&s, cx, a, ps, (int)ps->rx, o->extra_options, o->local_size, o->verbose, err, errcap))
+        return 1;
+    const double t1 = lsqt_now();
+    int rc = pilot_run(&s, ps, held, ps->pilot_paths - held, o, info, err, errcap);
+    info->seconds = lsqt_now() - t1;
+    lsqt_session_close(&s);
     return rc;
 }
 
@@ -283,7 +314,9 @@ int lsqt_rrss(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, int rx, 
               const lsqt_sim_opts *o, lsqt_rrss_info *info, char *err, size_t errcap)
 {
     lsqt_state ps, chosen;
-    if (lsqt_rrss_pilot(cx, a, st, rx, 0, pilot_paths, o, &ps, info, err, errcap)) return 1;
+    lsqt_sim_opts po = *o;
+    po.checkpoint = NULL; /* the pilot state is not ST */
+    if (lsqt_rrss_pilot(cx, a, st, rx, pilot_paths, pilot_paths, 0, pilot_paths, &po, &ps, info, err, errcap)) return 1;
     const lsqt_rrss_info pilot_info = *info;
     int rc = lsqt_rrss_choose(&ps, &chosen, info, err, errcap);
     lsqt_state_free(&ps);

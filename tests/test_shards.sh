@@ -71,6 +71,11 @@ expect 2 "leave out paths [3000, 4000) of the run [0, 4000): missing shards" -- 
   "$BIN" merge x.lss m.lsqt.shard-0-of-4.lss m.lsqt.shard-1-of-4.lss m.lsqt.shard-2-of-4.lss
 one -s 6 -p 4000 -wo 4 -wi 16 --wi-spread --shard 3/4 --lss other.lss m.lsqt
 expect 2 "differ in their seed" -- "$BIN" merge x.lss m.lsqt.shard-0-of-4.lss other.shard-3-of-4.lss
+for t in 10 20 30 40 50 60 70 80; do echo "$t 0"; echo "$t 90"; done >wa.txt
+for t in 12 22 32 42 52 62 72 82; do echo "$t 0"; echo "$t 90"; done >wb.txt
+one -p 2000 -wo 4 --wi-file wa.txt --shard 0/2 --lss wa.lss m.lsqt
+one -p 2000 -wo 4 --wi-file wb.txt --shard 1/2 --lss wb.lss m.lsqt
+expect 2 "differ in their incident directions" -- "$BIN" merge x.lss wa.shard-0-of-2.lss wb.shard-1-of-2.lss
 expect 2 "not an LSS file" -- "$BIN" merge x.lss m.lsqt.shard-0-of-4.lss m.lsqt
 expect 2 "" -- "$BIN" merge x.lss
 # --partial: the state says what it holds; continuing it runs the missing tail, and then
@@ -92,7 +97,8 @@ same all.raw full.lsqt.raw
 # 5. RRSS pilot shards: unmerged, incomplete or mixed with run parts, they are refused.
 fresh r
 for k in 0 1 2; do one -p 3000 -wo 4 -wi 16 -s 5 --shard $k/3 r.lsqt; done
-expect 2 "one shard of an RRSS pilot" -- "$BIN" -p 100 --lss r.lsqt.shard-0-of-3.lss r.lsqt
+expect 2 "one shard of an RRSS pilot" -- "$BIN" -p 100 --lss r.lsqt.shard-1-of-3.lss r.lsqt
+expect 2 "holds (part of) an RRSS pilot" -- "$BIN" --shard 1/2 --lss r.lsqt.shard-0-of-3.lss r.lsqt
 expect 2 "an RRSS pilot must be whole" -- "$BIN" merge --partial x.lss r.lsqt.shard-0-of-3.lss r.lsqt.shard-1-of-3.lss
 expect 2 "differ in their stage" -- "$BIN" merge x.lss r.lsqt.shard-0-of-3.lss m.lsqt.shard-1-of-4.lss
 expect 2 "holds no merged run yet" -- "$BIN" -p 3000 -wo 4 -wi 16 --shard 0/3 --refine --lss none.lss r.lsqt

@@ -51,6 +51,24 @@ N=$(paths sTERM.lss)
 "$BIN" -q -p 5000 --lss sTERM.lss -o sTERM.raw S.lsqt && "$BIN" -q -R -p $((N + 5000)) "${F[@]}" --lss v.lss -o v.raw S.lsqt \
   && cmp -s v.lss sTERM.lss && cmp -s v.raw sTERM.raw && ok || bad "continuing the SIGTERM LSS differs from one run"
 
+# SIGTERM during the RRSS pilot (default directions; rp 0.8, so most of a run): the LSS
+# is the pilot so far, and continuing finishes the pilot, chooses and runs the rest: the
+# bytes of the uninterrupted run.
+"$BIN" -v -R -p 1e6 -wo 4 -wi 16 --lss p.lss -o p.raw S.lsqt 2>p.err >/dev/null &
+pid=$!
+(sleep 120; kill -KILL $pid 2>/dev/null) >/dev/null 2>&1 &
+watchdogs+=($!)
+for _ in $(seq 600); do grep -q "RRSS: .* pilot paths" p.err 2>/dev/null && break; sleep 0.1; done
+sleep 1
+kill -TERM $pid
+wait $pid
+rc=$?
+"$BIN" info p.lss > p.info 2>&1
+[ "$rc" = 1 ] && grep -q "^stage: RRSS pilot" p.info && [ -s p.raw ] && ok ||
+  bad "SIGTERM in the RRSS pilot: exit $rc, $(grep -E 'stage|paths:' p.info), $(tail -2 p.err)"
+"$BIN" -q -p 1e6 --lss p.lss -o p.raw S.lsqt && "$BIN" -q -R -p 1e6 -wo 4 -wi 16 --lss q.lss -o q.raw S.lsqt &&
+  cmp -s p.lss q.lss && cmp -s p.raw q.raw && ok || bad "continuing an interrupted RRSS pilot differs from one run"
+
 # Checkpoints: a SIGKILL (nothing can be written then) still leaves the last checkpoint,
 # a valid LSS of K paths equal to a run of -p K.
 start ck --checkpoint 0.3
@@ -61,6 +79,10 @@ K=$(paths ck.lss)
 [ "$K" -gt 0 ] 2>/dev/null && ok || bad "checkpoint: LSS holds '$K' paths: $(cat ck.err)"
 "$BIN" -q -R -p "$K" "${F[@]}" --lss w.lss -o w.raw S.lsqt && cmp -s w.lss ck.lss && ok \
   || bad "the checkpoint at $K paths differs from a run of -p $K"
+# (a SIGKILL during a checkpoint's write may leave its temporary file; a run that ends
+# normally, with many checkpoints, leaves none)
+rm -f ck.lss.* .ck.lss*
+"$BIN" -q -R -p 300000 "${F[@]}" --checkpoint 0.05 --lss ck.lss -o ck.raw S.lsqt || bad "a checkpointed run failed"
 ls ck.lss.* .ck.lss* 2>/dev/null | grep -q . && bad "a temporary file was left: $(ls -a)" || ok
 
 expect 2 "bad value '-1' for --checkpoint" -- "$BIN" --checkpoint -1 S.lsqt

@@ -124,9 +124,47 @@ static void test_host(void)
           "an overflow must fail the run: '%s'", err);
 }
 
+/* Path ranges (shards, partial merges): each batch's path count over several ranges, and
+ * the range set's rules, against counting path indices one by one (chunk p / CHUNK is in
+ * batch chunk % BATCHES). */
+static void test_ranges(void)
+{
+    lsqt_state st;
+    CHECK(lsqt_state_init(&st, "x", 1, 2, 1, 16, 0) == 0, "state");
+    const uint64_t r[] = {9000, 9001, 0, 1000, 5000, 7000, 1000, 1300, 7100, 7100};
+    CHECK(lsqt_state_set_ranges(&st, r, 5) == 0, "set ranges");
+    CHECK(st.n_ranges == 3 && st.ranges[0] == 0 && st.ranges[1] == 1300 && st.ranges[2] == 5000 &&
+              st.ranges[5] == 9001 && st.paths == 1300 + 2000 + 1,
+          "ranges not sorted, joined and summed: %d ranges, %llu paths", st.n_ranges, (unsigned long long)st.paths);
+    uint64_t nb[LSQT_BATCHES], want[LSQT_BATCHES] = {0};
+    lsqt_state_batch_counts(&st, nb);
+    for (int i = 0; i < st.n_ranges; i++)
+        for (uint64_t p = st.ranges[2 * i]; p < st.ranges[2 * i + 1]; p++) want[(p / LSQT_CHUNK) % LSQT_BATCHES]++;
+    int bad = 0;
+    for (int b = 0; b < LSQT_BATCHES; b++) bad += nb[b] != want[b];
+    CHECK(bad == 0, "%d batches hold the wrong path count over the ranges", bad);
+    CHECK(lsqt_state_contiguous(&st) == UINT64_MAX, "a state with gaps taken for one range");
+    CHECK(lsqt_state_add_range(&st, 6000, 6100) == 1 && st.paths == 3301, "an overlapping range accepted");
+    CHECK(lsqt_state_add_range(&st, 1300, 5000) == 0 && lsqt_state_add_range(&st, 7000, 9000) == 0 &&
+              lsqt_state_contiguous(&st) == 9001,
+          "filling the gaps does not give [0, 9001)");
+    /* the parts of a shard split tile the range and differ by at most one path */
+    uint64_t at = 123, lo, hi, lo0, hi0;
+    lsqt_shard_part(123, 1000, 0, 7, &lo0, &hi0);
+    for (int k = 0; k < 7; k++) {
+        lsqt_shard_part(123, 1000, k, 7, &lo, &hi);
+        CHECK(lo == at && hi - lo + 1 >= hi0 - lo0 && hi - lo <= hi0 - lo0, "shard %d/7 is [%llu, %llu)", k,
+              (unsigned long long)lo, (unsigned long long)hi);
+        at = hi;
+    }
+    CHECK(at == 1000, "the shards end at %llu, not 1000", (unsigned long long)at);
+    lsqt_state_free(&st);
+}
+
 int main(void)
 {
     test_host();
+    test_ranges();
     fixture_open();
     /* the reference itself: 1.5 units rounds to 2, 2^84 units is one high bit */
     CHECK(ref_units(ldexpf(1.5f, -40)).lo == 2 && ref_units(17592186044416.0f).hi == (1ull << 20), "ref_units");

@@ -37,16 +37,21 @@ typedef struct lsqt_rrss_info {
 int lsqt_rrss(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, int rx, uint64_t pilot_paths,
               const lsqt_sim_opts *o, lsqt_rrss_info *info, char *err, size_t errcap);
 
-/* lsqt_rrss in two parts, for a sharded pilot (LSQT_STAGE_PILOT states):
+/* lsqt_rrss in parts, for a sharded or resumed pilot (LSQT_STAGE_PILOT states):
  *  - lsqt_rrss_pilot makes PS (fresh; free it): ST's slices times rx candidate blocks, the
  *    candidates (a pure function of seed and slice, so every shard has the same), and
- *    paths [begin, begin + n_paths) of the pilot run on them;
+ *    paths [begin, begin + n_paths) of the pilot of pilot_total paths run on them (PS's
+ *    span_end: run_paths, the run's -p; o->checkpoint, if set, gets PS);
+ *  - lsqt_rrss_pilot_continue runs the rest of the pilot PS holds from 0 (a checkpoint or
+ *    an interrupted pilot);
  *  - lsqt_rrss_choose makes ST (fresh; free it) from a pilot PS: the selection, the kept
  *    directions with their pilot tallies, PS's ranges, pilot_paths = PS's paths.
  * Each returns 0, or 1 with err filled. */
-int lsqt_rrss_pilot(lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st, int rx, uint64_t begin,
-                    uint64_t n_paths, const lsqt_sim_opts *o, lsqt_state *ps, lsqt_rrss_info *info, char *err,
-                    size_t errcap);
+int lsqt_rrss_pilot(lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st, int rx, uint64_t pilot_total,
+                    uint64_t run_paths, uint64_t begin, uint64_t n_paths, const lsqt_sim_opts *o, lsqt_state *ps,
+                    lsqt_rrss_info *info, char *err, size_t errcap);
+int lsqt_rrss_pilot_continue(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *ps, const lsqt_sim_opts *o,
+                             lsqt_rrss_info *info, char *err, size_t errcap);
 int lsqt_rrss_choose(const lsqt_state *ps, lsqt_state *st, lsqt_rrss_info *info, char *err, size_t errcap);
 
 /* The notes a user needs about INFO (fallbacks), one line each. */
