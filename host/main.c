@@ -471,10 +471,44 @@ int main(int argc, char **argv)
             run_lo = held;
             run_hi = fresh_rrss ? pilot : owes ? st.span_end : c.refine ? held : held + add;
             lsqt_shard_part(run_lo, run_hi, c.shard_k, c.shard_n, &part_lo, &part_hi);
-            if (fresh_rrss) {
+            /* A shard run again (after a time limit or a signal) continues its own file when
+             * that holds the start of this very part. */
+            lsqt_state prev;
+            uint64_t resume = part_lo;
+            int resumed = 0;
+            const char *sp = out.path[OUT_LSS], *kind = NULL;
+            if (!c.restart && lsqt_path_type(sp, &kind) == LSQT_PATH_REGULAR &&
+                lsqt_lss_read(sp, &prev, err, sizeof err) == 0) {
+                const uint64_t x = prev.n_ranges == 0                              ? part_lo
+                                   : prev.n_ranges == 1 && prev.ranges[0] == part_lo ? prev.ranges[1]
+                                                                                     : UINT64_MAX;
+                const int match =
+                    fresh_rrss ? prev.stage == LSQT_STAGE_PILOT && prev.hash == st.hash &&
+                                     strcmp(prev.canonical, st.canonical) == 0 && prev.seed == st.seed &&
+                                     prev.use_double == st.use_double && prev.rx == (uint32_t)c.rx &&
+                                     prev.pilot_paths == pilot && prev.span_end == (c.paths > pilot ? c.paths : pilot) &&
+                                     prev.n_slices == st.n_slices * c.rx && prev.n_wi == st.n_wi
+                               : !lsqt_state_differs(&prev, &st) && prev.span_end == run_hi;
+                if (match && x <= part_hi) {
+                    resumed = 1, resume = x;
+                    if (!c.quiet)
+                        fprintf(stderr, "continuing %s: paths [%llu, %llu) of this part are done\n", sp,
+                                (unsigned long long)part_lo, (unsigned long long)x);
+                } else {
+                    if (!c.quiet) fprintf(stderr, "note: replacing %s (not a part of this run)\n", sp);
+                    lsqt_state_free(&prev);
+                }
+            }
+            if (fresh_rrss && resumed) {
+                ps = prev;
+                rc = lsqt_rrss_pilot_continue(&cx, &a, &ps, resume, part_hi - resume, &so, &rinfo, err, sizeof err);
+                if (rc) lsqt_state_free(&ps);
+            } else if (fresh_rrss) {
                 /* the pilot's part, on every slice's candidates; the merge chooses */
                 rc = lsqt_rrss_pilot(&cx, &a, &st, c.rx, pilot, c.paths, part_lo, part_hi - part_lo, &so, &ps, &rinfo,
                                      err, sizeof err);
+            }
+            if (fresh_rrss) {
                 if (!rc) {
                     lsqt_state_free(&st);
                     st = ps;
@@ -484,8 +518,13 @@ int main(int argc, char **argv)
                     if (rinfo.interrupted) stats.interrupted = 1, stats.stop_reason = g_stop ? LSQT_STOP_INTERRUPT : LSQT_STOP_TIME;
                 }
             } else {
-                lsqt_state_clear_tallies(&st);
-                rc = lsqt_simulate_range(&cx, &a, &st, part_lo, part_hi - part_lo, &so, &stats, err, sizeof err);
+                if (resumed) {
+                    lsqt_state_free(&st);
+                    st = prev;
+                } else {
+                    lsqt_state_clear_tallies(&st);
+                }
+                rc = lsqt_simulate_range(&cx, &a, &st, resume, part_hi - resume, &so, &stats, err, sizeof err);
                 st.span_end = run_hi;
             }
         }
@@ -511,7 +550,12 @@ int main(int argc, char **argv)
                                 "then the run (%llu paths per slice)\n",
                         lss_path, (unsigned long long)ps.paths, (unsigned long long)ps.pilot_paths,
                         (unsigned long long)ps.span_end);
-            rc = lsqt_rrss_pilot_continue(&cx, &a, &ps, &so, &rinfo, err, sizeof err);
+            if (held == UINT64_MAX || held > ps.pilot_paths) {
+                snprintf(err, sizeof err, "'%s' does not hold one range [0, h) of its RRSS pilot", lss_path);
+                rc = 1;
+            } else {
+                rc = lsqt_rrss_pilot_continue(&cx, &a, &ps, held, ps.pilot_paths - held, &so, &rinfo, err, sizeof err);
+            }
         }
         if (have_ps && !rc) {
             /* an interrupted pilot: its LSS is the pilot (continuing finishes it); the RAW

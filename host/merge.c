@@ -36,25 +36,6 @@ static void merge_help(FILE *f, const char *prog)
             prog);
 }
 
-/* What must be equal for two states to be parts of one run; NULL when they are. */
-static const char *differs(const lsqt_state *a, const lsqt_state *b)
-{
-    if (a->hash != b->hash || strcmp(a->canonical, b->canonical) != 0) return "assembly";
-    if (a->seed != b->seed) return "seed";
-    if (a->use_double != b->use_double) return "precision";
-    if (a->stage != b->stage) return "stage (an RRSS pilot shard and a run's state)";
-    if (a->n_slices != b->n_slices || a->n_wi != b->n_wi || a->transmits != b->transmits)
-        return "shape (slices, directions)";
-    if (a->dir_method != b->dir_method || a->rx != b->rx || a->pilot_paths != b->pilot_paths)
-        return "direction method or RRSS pilot";
-    if (memcmp(a->theta_o, b->theta_o, (size_t)a->n_slices * sizeof *a->theta_o) != 0) return "outgoing angles";
-    if (memcmp(a->slice_flags, b->slice_flags, (size_t)a->n_slices * sizeof *a->slice_flags) != 0)
-        return "slice kinds (from above, from below)";
-    if (memcmp(a->wi, b->wi, (size_t)a->n_slices * (size_t)a->n_wi * 4 * sizeof *a->wi) != 0)
-        return "incident directions";
-    return NULL;
-}
-
 static void add_all(lsqt_u128 *dst, const lsqt_u128 *src, size_t n)
 {
     for (size_t i = 0; i < n; i++) dst[i] = lsqt_u128_add(dst[i], src[i]);
@@ -157,7 +138,7 @@ int lsqt_merge_main(const char *prog, int argc, char **argv)
             break;
         }
         n_read++;
-        const char *what = i ? differs(&st[0], &st[i]) : NULL;
+        const char *what = i ? lsqt_state_differs(&st[0], &st[i]) : NULL;
         if (what) {
             snprintf(err, sizeof err, "'%s' and '%s' differ in their %s: they are not parts of one run", in[0],
                      in[i], what);

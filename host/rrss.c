@@ -228,22 +228,16 @@ done:
     return rc;
 }
 
-int lsqt_rrss_pilot_continue(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *ps, const lsqt_sim_opts *o,
-                             lsqt_rrss_info *info, char *err, size_t errcap)
+int lsqt_rrss_pilot_continue(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *ps, uint64_t begin,
+                             uint64_t n_paths, const lsqt_sim_opts *o, lsqt_rrss_info *info, char *err, size_t errcap)
 {
     memset(info, 0, sizeof *info);
     info->candidates = (int)ps->rx * ps->n_wi;
-    const uint64_t held = lsqt_state_contiguous(ps);
-    if (held == UINT64_MAX || held > ps->pilot_paths) {
-        snprintf(err, errcap, "the RRSS pilot state does not hold one range [0, h) of its %llu paths: merge its shards",
-                 (unsigned long long)ps->pilot_paths);
-        return 1;
-    }
     lsqt_session s;
     if (lsqt_session_open_grouped(&s, cx, a, ps, (int)ps->rx, o->extra_options, o->local_size, o->verbose, err, errcap))
         return 1;
     const double t1 = lsqt_now();
-    int rc = pilot_run(&s, ps, held, ps->pilot_paths - held, o, info, err, errcap);
+    int rc = pilot_run(&s, ps, begin, n_paths, o, info, err, errcap);
     info->seconds = lsqt_now() - t1;
     lsqt_session_close(&s);
     return rc;

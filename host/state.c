@@ -149,3 +149,23 @@ void lsqt_shard_part(uint64_t begin, uint64_t end, int k, int n, uint64_t *lo, u
     *lo = begin + kk * q + (kk < r ? kk : r);
     *hi = *lo + q + (kk < r ? 1u : 0u);
 }
+
+/* What must be equal for two states to be parts of one run; NULL when they are. */
+const char *lsqt_state_differs(const lsqt_state *a, const lsqt_state *b)
+{
+    if (a->hash != b->hash || strcmp(a->canonical, b->canonical) != 0) return "assembly";
+    if (a->seed != b->seed) return "seed";
+    if (a->use_double != b->use_double) return "precision";
+    if (a->stage != b->stage) return "stage (an RRSS pilot shard and a run's state)";
+    if (a->n_slices != b->n_slices || a->n_wi != b->n_wi || a->transmits != b->transmits)
+        return "shape (slices, directions)";
+    if (a->dir_method != b->dir_method || a->rx != b->rx || a->pilot_paths != b->pilot_paths)
+        return "direction method or RRSS pilot";
+    if (memcmp(a->theta_o, b->theta_o, (size_t)a->n_slices * sizeof *a->theta_o) != 0) return "outgoing angles";
+    if (memcmp(a->slice_flags, b->slice_flags, (size_t)a->n_slices * sizeof *a->slice_flags) != 0)
+        return "slice kinds (from above, from below)";
+    if (memcmp(a->wi, b->wi, (size_t)a->n_slices * (size_t)a->n_wi * 4 * sizeof *a->wi) != 0)
+        return "incident directions";
+    return NULL;
+}
+

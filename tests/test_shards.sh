@@ -94,6 +94,27 @@ expect 0 "merged 4 files" -- "$BIN" merge all.lss m.lsqt.shard-{0,1,2,3}-of-4.ls
 same all.lss full.lsqt.lss
 same all.raw full.lsqt.raw
 
+# 4b. A shard stopped early (a job's time limit) and run again continues its own file;
+#     the same for a pilot shard. The merged result is still the one-process run.
+for mode in spread rrss; do
+  fresh t; fresh u
+  X=(-p 300000 -wo 4 -wi 16 -s 8)
+  [ $mode = spread ] && X=(-p 2000000 -wo 4 -wi 16 -s 8 --wi-spread)
+  "$BIN" -q "${X[@]}" --shard 1/2 --time-limit 0.2 t.lsqt >/dev/null 2>&1
+  n1=$("$BIN" info t.lsqt.shard-1-of-2.lss --json - 2>/dev/null | python3 -c 'import json,sys; print(json.load(sys.stdin)["paths"])')
+  expect 0 "continuing t.lsqt.shard-1-of-2.lss" -- "$BIN" "${X[@]}" --shard 1/2 t.lsqt
+  one "${X[@]}" --shard 0/2 t.lsqt
+  "$BIN" merge -q t.lsqt.lss t.lsqt.shard-{0,1}-of-2.lss
+  if [ $mode = rrss ]; then
+    for k in 0 1; do one "${X[@]}" --shard $k/2 --refine t.lsqt; done
+    "$BIN" merge -q t.lsqt.lss t.lsqt.lss t.lsqt.shard-{0,1}-of-2.lss
+  fi
+  one "${X[@]}" u.lsqt
+  [ "$n1" -gt 0 ] && [ "$n1" -lt $(( ${X[1]} / 2 )) ] 2>/dev/null && ok || bad "$mode: the time-limited shard held $n1 paths"
+  same t.lsqt.lss u.lsqt.lss
+  same t.lsqt.raw u.lsqt.raw
+done
+
 # 5. RRSS pilot shards: unmerged, incomplete or mixed with run parts, they are refused.
 fresh r
 for k in 0 1 2; do one -p 3000 -wo 4 -wi 16 -s 5 --shard $k/3 r.lsqt; done

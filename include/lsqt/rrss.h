@@ -42,16 +42,16 @@ int lsqt_rrss(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, int rx, 
  *    candidates (a pure function of seed and slice, so every shard has the same), and
  *    paths [begin, begin + n_paths) of the pilot of pilot_total paths run on them (PS's
  *    span_end: run_paths, the run's -p; o->checkpoint, if set, gets PS);
- *  - lsqt_rrss_pilot_continue runs the rest of the pilot PS holds from 0 (a checkpoint or
- *    an interrupted pilot);
+ *  - lsqt_rrss_pilot_continue runs paths [begin, begin + n_paths) more of the pilot PS
+ *    (a checkpoint, an interrupted pilot or pilot shard);
  *  - lsqt_rrss_choose makes ST (fresh; free it) from a pilot PS: the selection, the kept
  *    directions with their pilot tallies, PS's ranges, pilot_paths = PS's paths.
  * Each returns 0, or 1 with err filled. */
 int lsqt_rrss_pilot(lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st, int rx, uint64_t pilot_total,
                     uint64_t run_paths, uint64_t begin, uint64_t n_paths, const lsqt_sim_opts *o, lsqt_state *ps,
                     lsqt_rrss_info *info, char *err, size_t errcap);
-int lsqt_rrss_pilot_continue(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *ps, const lsqt_sim_opts *o,
-                             lsqt_rrss_info *info, char *err, size_t errcap);
+int lsqt_rrss_pilot_continue(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *ps, uint64_t begin,
+                             uint64_t n_paths, const lsqt_sim_opts *o, lsqt_rrss_info *info, char *err, size_t errcap);
 int lsqt_rrss_choose(const lsqt_state *ps, lsqt_state *st, lsqt_rrss_info *info, char *err, size_t errcap);
 
 /* The notes a user needs about INFO (fallbacks), one line each. */

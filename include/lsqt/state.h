@@ -71,6 +71,10 @@ uint64_t lsqt_state_contiguous(const lsqt_state *st);
 /* The K-th of N near-equal parts [lo, hi) of [begin, end) (the first (end-begin) % N
  * parts one path longer); the parts of all K tile the range. */
 void lsqt_shard_part(uint64_t begin, uint64_t end, int k, int n, uint64_t *lo, uint64_t *hi);
+/* What differs between A and B that parts of one run must share (assembly, seed,
+ * precision, stage, shape, direction method, angles, slice kinds, directions), as a
+ * phrase; NULL when nothing does. */
+const char *lsqt_state_differs(const lsqt_state *a, const lsqt_state *b);
 /* Zero tallies, no ranges, no flags: the same directions, ready for another part of a run. */
 void lsqt_state_clear_tallies(lsqt_state *st);
 
