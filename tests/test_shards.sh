@@ -93,6 +93,12 @@ expect 2 "gaps between them" -- "$BIN" -p 100 --lss gap.lss -o gap.raw m.lsqt
 expect 0 "merged 4 files" -- "$BIN" merge all.lss m.lsqt.shard-{0,1,2,3}-of-4.lss
 same all.lss full.lsqt.lss
 same all.raw full.lsqt.raw
+# lssmerge is the same program (beside lsqt-cl), with -H and -o
+expect 0 "merged 4 files" -- "$(dirname "$BIN")/lssmerge" all2.lss m.lsqt.shard-{0,1,2,3}-of-4.lss -H -o all2.raw
+one "${F[@]}" -H -o fullH.raw --lss fullH.lss full.lsqt
+same all2.R.raw fullH.R.raw
+same all2.T.raw fullH.T.raw
+expect 2 "unknown option '--bogus'" -- "$BIN" merge --bogus x.lss all.lss
 
 # 4b. A shard stopped early (a job's time limit) and run again continues its own file;
 #     the same for a pilot shard. The merged result is still the one-process run.
