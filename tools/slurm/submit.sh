@@ -90,8 +90,9 @@ trap 'forward USR1' USR1
 trap 'forward USR2' USR2
 trap 'echo "step: SIGTERM (time limit or scancel)" >&2' TERM
 trap '' HUP
-echo "step: ${pre[*]} ${task[*]} ${post[*]} (job $tag on $(hostname), $(date))"
-setsid "${pre[@]}" "${task[@]}" "${post[@]}" &
+cmd=("${pre[@]}" "${task[@]}" "${post[@]}")
+echo "step: ${cmd[*]} (job $tag on $(hostname), $(date))"
+setsid "${cmd[@]}" &
 child=$!
 while :; do
   rc=0
