@@ -12,7 +12,8 @@ BIN=$1
 EX=$2
 T=$(mktemp -d)
 watchdogs=()
-trap 'kill "${watchdogs[@]}" 2>/dev/null; rm -rf "$T"' EXIT
+# (a watchdog's sleep is its child: kill it too, or it lingers for its 120 s)
+trap 'for w in "${watchdogs[@]}"; do pkill -P "$w" 2>/dev/null; kill "$w" 2>/dev/null; done; rm -rf "$T"' EXIT
 cd "$T"
 cp "$EX/slab.lsqt" S.lsqt
 F=(-wo 4 -wi 16 --wi-spread)
