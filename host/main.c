@@ -458,7 +458,7 @@ int main(int argc, char **argv)
         if (pilot > c.paths) pilot = c.paths;
     }
     lsqt_state ps; /* an RRSS pilot, while there is one */
-    int have_ps = 0;
+    int have_ps = 0, finish_pilot = 1;
     if (c.shard_n && !rc) {
         if (c.refine && st.paths == 0 && !owes) {
             rc = fail(2, "--refine: '%s' holds no merged run yet: run the shards without --refine first, "
@@ -545,12 +545,19 @@ int main(int argc, char **argv)
             ps = st;
             memset(&st, 0, sizeof st);
             have_ps = 1;
+            /* the same run (no -p, or its -p): finish the pilot and the run, the bytes of the
+             * uninterrupted run; another -p: choose from the pilot so far, then add -p */
+            finish_pilot = !c.paths_given || c.paths == ps.span_end;
             if (!c.quiet)
-                fprintf(stderr, "note: '%s' holds %llu of the %llu paths of an RRSS pilot: this run finishes it, "
-                                "then the run (%llu paths per slice)\n",
+                fprintf(stderr, finish_pilot ? "note: '%s' holds %llu of the %llu paths of an RRSS pilot: this run "
+                                               "finishes it, then the run (%llu paths per slice)\n"
+                                             : "note: '%s' holds %llu of the %llu paths of an RRSS pilot: the "
+                                               "directions are chosen from them, then -p %llu more paths\n",
                         lss_path, (unsigned long long)ps.paths, (unsigned long long)ps.pilot_paths,
-                        (unsigned long long)ps.span_end);
-            if (held == UINT64_MAX || held > ps.pilot_paths) {
+                        (unsigned long long)(finish_pilot ? ps.span_end : c.paths));
+            if (!finish_pilot) {
+                /* nothing more to run in the pilot */
+            } else if (held == UINT64_MAX || held > ps.pilot_paths) {
                 snprintf(err, sizeof err, "'%s' does not hold one range [0, h) of its RRSS pilot", lss_path);
                 rc = 1;
             } else {
@@ -570,6 +577,7 @@ int main(int argc, char **argv)
                 lsqt_state_free(&st);
                 st = chosen;
                 if (rinfo.interrupted) add = 0;
+                else if (pilot_base && !finish_pilot) st.span_end = st.paths; /* the rest is abandoned */
                 else if (pilot_base) add = st.span_end - st.paths;
                 else if (add != UINT64_MAX) add -= st.paths;
             }

@@ -254,7 +254,14 @@ wait $pid
 rc=$?
 [ "$rc" = 1 ] && [ -s int.lss ] && [ -s int.raw ] && grep -q "interrupted" int.err && ok \
   || bad "Ctrl-C: exit $rc, files: $(ls int.* 2>&1), stderr: $(cat int.err)"
-expect 0 "continuing int.lss" -- "$BIN" -p 1000 --lss int.lss -o int2.raw "$EX/slab.lsqt"
+# Interrupted in the RRSS pilot (-p 1e12): the LSS is the pilot so far; another -p chooses
+# the directions from it and adds -p paths (the same -p would finish the pilot: test_signals).
+pj() { "$BIN" info "$1" --json - 2>/dev/null | python3 -c "import json, sys; j = json.load(sys.stdin); print(j[\"$2\"])"; }
+n0=$(pj int.lss paths)
+[ "$(pj int.lss stage)" = rrss-pilot ] && ok || bad "Ctrl-C in the RRSS pilot: the LSS is not the pilot"
+expect 0 "the directions are chosen from them, then -p 1000 more" -- "$BIN" -p 1000 --lss int.lss -o int2.raw "$EX/slab.lsqt"
+[ "$(pj int.lss paths)" = $((n0 + 1000)) ] && [ "$(pj int.lss stage)" = run ] && ok ||
+  bad "continuing with another -p: $(pj int.lss paths) paths, not $n0 + 1000"
 # While the input is still being read (a stdin that never ends: a FIFO this shell holds
 # open), Ctrl-C stops at once.
 mkfifo in.fifo
