@@ -68,6 +68,11 @@ void lsqt_cli_help(FILE *f)
           "  -rp, --rrss-path-frac F     share of the first run's -p spent on the RRSS pilot, (0,1]\n"
           "                              (default 0.8; its tallies are kept)\n"
           "      --wi-spread             an even spread of incident directions instead of RRSS\n"
+          "      --from-below            when the stack transmits, also the slices of light entering\n"
+          "                              from the bottom medium (the full two-sided BSDF), written\n"
+          "                              to OUT.below.raw (the stack turned upside down: negate z of\n"
+          "                              wo and wi for its own frame) and flagged in the LSS; OUT\n"
+          "                              stays as without it\n"
           "  -R, --restart               ignore an existing LSS and start over\n"
           "  -s, --seed N                random seed, an integer in 0 to 2^64-1 (default 0)\n"
           "  -t, --thread-count N        threads of a CPU (PoCL) device (default: all)\n"
@@ -116,7 +121,7 @@ void lsqt_cli_help(FILE *f)
 
 enum flag_id {
     F_PATHS, F_WO, F_WO_ANGLES, F_WI, F_WI_FILE, F_RX, F_RP, F_RESTART, F_SEED, F_THREADS, F_OUTPUT,
-    F_HEMI, F_SPREAD, F_CHECKPOINT, F_SHARD, F_REFINE, F_DEVICE, F_LIST, F_DOUBLE, F_TIME, F_TARGET, F_LSS, F_JSON, F_QUIET, F_VERBOSE, F_HELP
+    F_HEMI, F_SPREAD, F_BELOW, F_CHECKPOINT, F_SHARD, F_REFINE, F_DEVICE, F_LIST, F_DOUBLE, F_TIME, F_TARGET, F_LSS, F_JSON, F_QUIET, F_VERBOSE, F_HELP
 };
 
 static const struct flag {
@@ -136,7 +141,7 @@ static const struct flag {
     {"-v", "--verbose", F_VERBOSE, 0},       {"-h", "--help", F_HELP, 0},
     {NULL, "--target-error", F_TARGET, 1},  {NULL, "--wi-spread", F_SPREAD, 0},
     {NULL, "--checkpoint", F_CHECKPOINT, 1}, {NULL, "--shard", F_SHARD, 1},
-    {NULL, "--refine", F_REFINE, 0},
+    {NULL, "--refine", F_REFINE, 0}, {NULL, "--from-below", F_BELOW, 0},
 };
 
 /* --shard K/N: 0 <= K < N <= 65536, decimal digits only. */
@@ -194,6 +199,7 @@ static int apply(const struct flag *fl, const char *name, const char *v, lsqt_cl
     case F_RESTART: c->restart = 1; break;
     case F_HEMI: c->only_hemispherical = 1; break;
     case F_SPREAD: c->wi_spread = 1; c->sampling_given = 1; break;
+    case F_BELOW: c->from_below = 1; c->sampling_given = 1; break;
     case F_CHECKPOINT: if (lsqt_parse_double(v, &d) || !(d >= 0)) expect = "seconds >= 0 (0: no checkpoints)"; else c->checkpoint = d; break;
     case F_SHARD: if (parse_shard(v, c)) expect = "K/N with 0 <= K < N <= 65536 (e.g. 0/4; SLURM: $SLURM_ARRAY_TASK_ID/N)"; break;
     case F_REFINE: c->refine = 1; break;

@@ -134,7 +134,12 @@ static void print_text(FILE *f, const char *path, const lsqt_state *st, const ls
     fprintf(f, "precision: %s\n", st->use_double ? "double" : "float");
     fprintf(f, "transmits: %s\n", st->transmits ? "yes (incident directions over the sphere)"
                                                 : "no (incident directions over the upper hemisphere)");
-    fprintf(f, "slices: %d, wi per slice: %d\n", st->n_slices, st->n_wi);
+    int n_below = 0;
+    for (int s = 0; s < st->n_slices; s++) n_below += (st->slice_flags[s] & LSQT_SLICE_BELOW) != 0;
+    if (n_below)
+        fprintf(f, "slices: %d (%d from above, %d from below: the stack upside down, theta_o from -z), wi per "
+                   "slice: %d\n", st->n_slices, st->n_slices - n_below, n_below, st->n_wi);
+    else fprintf(f, "slices: %d, wi per slice: %d\n", st->n_slices, st->n_wi);
     if (st->dir_method == LSQT_DIRS_RRSS)
         fprintf(f, "directions: RRSS (%u candidates per direction, pilot of %llu paths)\n", st->rx,
                 (unsigned long long)st->pilot_paths);
@@ -159,7 +164,8 @@ static void print_text(FILE *f, const char *path, const lsqt_state *st, const ls
     for (int s = 0; s < st->n_slices; s++) {
         const lsqt_slice_est *e = &est[s];
         char b[32];
-        fprintf(f, "slice %d: theta_o %.6g deg (%s rad), %llu paths\n", s, e->theta_o * 180.0 / LSQT_PI,
+        fprintf(f, "slice %d%s: theta_o %.6g deg (%s rad), %llu paths\n", s,
+                st->slice_flags[s] & LSQT_SLICE_BELOW ? " (from below)" : "", e->theta_o * 180.0 / LSQT_PI,
                 exact(e->theta_o, b), (unsigned long long)e->paths);
         char u[32];
         fprintf(f, "  R       %s +- %s\n", exact(e->R.mean, b), err_str(e->R.err, u));
@@ -221,7 +227,8 @@ static int write_json(const char *out, const char *path, const lsqt_state *st, c
         json_num(f, e->layer_events);
         fprintf(f, ", \"medium_events_per_path\": ");
         json_num(f, e->medium_events);
-        fprintf(f, ", \"nee_evaluations\": %.17g}", e->nee_evaluations);
+        fprintf(f, ", \"nee_evaluations\": %.17g, \"from_below\": %s}", e->nee_evaluations,
+                st->slice_flags[s] & LSQT_SLICE_BELOW ? "true" : "false");
     }
     fprintf(f, "\n ]}\n");
     return lsqt_out_commit(&af, err, errcap);

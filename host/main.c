@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include "lsqt/assembly.h"
+#include "lsqt/below.h"
 #include "lsqt/cli.h"
 #include "lsqt/device.h"
 #include "lsqt/directions.h"
@@ -137,27 +138,53 @@ static int new_state(lsqt_state *st, const lsqt_cli *c, const lsqt_assembly *a, 
         if (wi_file) memcpy(dst, wi_file, (size_t)st->n_wi * 4 * sizeof *dst);
         else lsqt_wi_spread(st->n_wi, st->transmits, dst);
     }
+    /* --from-below: the same slices again, of light entering from below (below.h) */
+    if (c->from_below && st->transmits && lsqt_state_add_below(st)) {
+        lsqt_state_free(st);
+        return -1;
+    }
     return 0;
 }
 
 /* The files a run writes. RAW is one file, or with -H two (R and T; no T when nothing is
- * transmitted). */
-enum { OUT_RAW, OUT_RAW_T, OUT_LSS, OUT_JSON, OUT_COUNT };
+ * transmitted); a two-sided state adds the same for the side from below (below.h). */
+enum { OUT_RAW, OUT_RAW_T, OUT_RAW_B, OUT_RAW_BT, OUT_LSS, OUT_JSON, OUT_COUNT };
 typedef struct outputs {
     const char *path[OUT_COUNT]; /* NULL: not written */
     const char *base;            /* the LSS continued (a shard writes its own, path[OUT_LSS]) */
     char raw[LSQT_PATH_CAP + 16], raw_t[LSQT_PATH_CAP + 16], lss[LSQT_PATH_CAP + 16], shard[LSQT_PATH_CAP + 40];
+    char raw_b[LSQT_PATH_CAP + 32], raw_bt[LSQT_PATH_CAP + 32];
 } outputs;
 
-/* Decides every output name and checks them against each other and the input. Returns 0
- * or 2 (err filled). */
-static int plan_outputs(const lsqt_cli *c, int from_stdin, int transmits, outputs *o, char *err, size_t errcap)
+/* Decides every output name and checks them against each other and the input (below: the
+ * state has slices from below). Returns 0 or 2 (err filled). */
+static int plan_outputs(const lsqt_cli *c, int from_stdin, int transmits, int below, outputs *o, char *err,
+                        size_t errcap)
 {
     memset(o, 0, sizeof *o);
     char raw[LSQT_PATH_CAP + 16];
     if (c->output) snprintf(raw, sizeof raw, "%s", c->output);
     else if (from_stdin) snprintf(raw, sizeof raw, "Layered.raw");
     else snprintf(raw, sizeof raw, "%s.raw", c->input);
+    if (below) {
+        const char *what = NULL;
+        int t = strcmp(raw, "-") == 0 ? LSQT_PATH_SPECIAL : lsqt_path_type(raw, &what);
+        if (t == LSQT_PATH_SPECIAL || t == LSQT_PATH_DIRECTORY) {
+            snprintf(err, errcap, "the slices from below go to a second RAW named from the RAW name, and '%s' is "
+                     "%s%s: give -o a file name", raw, what ? "a " : "stdout", what ? what : "");
+            return 2;
+        }
+        char rb[LSQT_PATH_CAP + 32];
+        lsqt_below_raw_name(raw, rb, sizeof rb);
+        if (c->only_hemispherical) {
+            lsqt_raw_hemi_name(rb, "R", o->raw_b, sizeof o->raw_b);
+            lsqt_raw_hemi_name(rb, "T", o->raw_bt, sizeof o->raw_bt);
+            o->path[OUT_RAW_BT] = o->raw_bt;
+        } else {
+            snprintf(o->raw_b, sizeof o->raw_b, "%s", rb);
+        }
+        o->path[OUT_RAW_B] = o->raw_b;
+    }
     if (c->only_hemispherical) {
         const char *what = NULL;
         int t = strcmp(raw, "-") == 0 ? LSQT_PATH_SPECIAL : lsqt_path_type(raw, &what);
@@ -193,7 +220,7 @@ static int plan_outputs(const lsqt_cli *c, int from_stdin, int transmits, output
         if (n >= 4 && strcmp(o->base + n - 4, ".lss") == 0) n -= 4;
         snprintf(o->shard, sizeof o->shard, "%.*s.shard-%d-of-%d.lss", (int)n, o->base, c->shard_k, c->shard_n);
         o->path[OUT_LSS] = o->shard;
-        if (!c->output) o->path[OUT_RAW] = o->path[OUT_RAW_T] = NULL;
+        if (!c->output) o->path[OUT_RAW] = o->path[OUT_RAW_T] = o->path[OUT_RAW_B] = o->path[OUT_RAW_BT] = NULL;
     }
     /* No output may land on another one, on stdout twice, or on the input. */
     for (int i = 0; i < OUT_COUNT; i++) {
@@ -221,14 +248,25 @@ static int write_outputs(const outputs *o, const lsqt_cli *c, const lsqt_state *
     int failed = 0, wrote = 0, skipped = 0, sk = 0;
     char done[OUT_COUNT * (LSQT_PATH_CAP + 2)];
     done[0] = '\0';
-    for (int i = 0; i < OUT_COUNT; i++) {
+    /* RAW files hold one side each: the main one exactly what it is without --from-below */
+    lsqt_state sides[2];
+    lsqt_slice_est *side_est[2] = {NULL, NULL};
+    const int two = lsqt_state_below_count(st) > 0;
+    memset(sides, 0, sizeof sides);
+    int split_failed = two && (lsqt_state_split_sides(st, &sides[0], &sides[1]) ||
+                               !(side_est[0] = lsqt_estimates(&sides[0])) || !(side_est[1] = lsqt_estimates(&sides[1])));
+    if (split_failed) fail(1, "out of memory%s%s", "", ""), failed++;
+    for (int i = 0; i < OUT_COUNT && !split_failed; i++) {
         const char *p = o->path[i];
         if (!p) continue;
+        const int b = i == OUT_RAW_B || i == OUT_RAW_BT;
+        const lsqt_state *rs = two ? &sides[b] : st;
+        const lsqt_slice_est *re = two ? side_est[b] : est;
         int rc = i == OUT_LSS    ? lsqt_lss_write(p, lss_st, err, sizeof err)
                  : i == OUT_JSON ? lsqt_report_json(p, st, est, ri, err, sizeof err)
-                 : i == OUT_RAW_T
-                     ? lsqt_raw_write(p, st, est, LSQT_RAW_TRANSMIT, &sk, err, sizeof err)
-                     : lsqt_raw_write(p, st, est, c->only_hemispherical ? LSQT_RAW_REFLECT : LSQT_RAW_ALL,
+                 : i == OUT_RAW_T || i == OUT_RAW_BT
+                     ? lsqt_raw_write(p, rs, re, LSQT_RAW_TRANSMIT, &sk, err, sizeof err)
+                     : lsqt_raw_write(p, rs, re, c->only_hemispherical ? LSQT_RAW_REFLECT : LSQT_RAW_ALL,
                                       &skipped, err, sizeof err);
         if (rc) {
             fail(1, "%s%s", err, "");
@@ -243,7 +281,57 @@ static int write_outputs(const outputs *o, const lsqt_cli *c, const lsqt_state *
     if (!c->quiet && c->only_hemispherical && !o->path[OUT_RAW_T])
         fprintf(info, "note: the stack transmits nothing, so -H wrote no T file\n");
     if (failed) fprintf(stderr, "lsqt-cl: %d output%s could not be written (see above)\n", failed, failed > 1 ? "s" : "");
+    for (int b = 0; b < 2; b++) {
+        lsqt_estimates_free(side_est[b], sides[b].n_slices);
+        lsqt_state_free(&sides[b]);
+    }
     return failed ? 1 : 0;
+}
+
+/* --from-below: the sides follow the state (a continued LSS decides); a two-sided state
+ * adds the RAW files of the side from below. Returns 0, or an exit status (printed). */
+static int plan_sides(const lsqt_cli *c, int from_stdin, const lsqt_assembly *a, lsqt_state *st, int continued,
+                      outputs *out, char *err, size_t errcap)
+{
+    const int below = lsqt_state_below_count(st) > 0;
+    if (!c->quiet && c->from_below && !lsqt_assembly_transmits(a))
+        fprintf(stderr, "note: --from-below: the stack transmits nothing, so no light from below reaches it; "
+                        "only the slices from above are simulated\n");
+    else if (!c->quiet && continued && below != c->from_below)
+        fprintf(stderr, "note: the LSS has %sslices from below: %s\n", below ? "" : "no ",
+                below ? "both sides are continued" : "--from-below is ignored (use -R to start over with them)");
+    int rc = below ? plan_outputs(c, from_stdin, st->transmits, 1, out, err, errcap) : 0;
+    if (!rc && below && c->shard_n) {
+        snprintf(err, errcap, "--shard: a state with slices from below (--from-below) cannot be sharded yet; run it "
+                              "in one process");
+        rc = 2;
+    }
+    if (rc) {
+        lsqt_state_free(st);
+        fail(rc, "%s%s", err, "");
+    }
+    return rc;
+}
+
+/* --from-below (below.h): a two-sided state runs each side with its own assembly, RRSS
+ * per side for a fresh state (an interrupted pilot chooses from what it did), then both
+ * sides on the same paths. Shards are refused before (plan_sides). */
+static int run_sides(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, const lsqt_cli *c, int fresh_rrss,
+                     uint64_t pilot, uint64_t add, const lsqt_sim_opts *so, lsqt_sim_stats *stats,
+                     lsqt_rrss_info *rinfo, char *err, size_t errcap)
+{
+    const uint64_t before = st->paths;
+    int rc = 0;
+    if (fresh_rrss) {
+        rc = lsqt_rrss_sides(cx, a, st, c->rx, pilot, so, rinfo, err, errcap);
+        if (!rc && rinfo->interrupted) add = 0;
+        else if (!rc && add != UINT64_MAX) add -= st->paths;
+    }
+    if (!rc && add) rc = lsqt_simulate_sides(cx, a, st, add, so, stats, err, errcap);
+    stats->seconds += rinfo->seconds;
+    stats->paths_added = st->paths - before;
+    if (rinfo->interrupted) stats->interrupted = 1, stats->stop_reason = g_stop ? LSQT_STOP_INTERRUPT : LSQT_STOP_TIME;
+    return rc;
 }
 
 int main(int argc, char **argv)
@@ -333,7 +421,7 @@ int main(int argc, char **argv)
         }
     }
     outputs out;
-    int rc = plan_outputs(&c, from_stdin, lsqt_assembly_transmits(&a), &out, err, sizeof err);
+    int rc = plan_outputs(&c, from_stdin, lsqt_assembly_transmits(&a), 0, &out, err, sizeof err);
     if (rc) {
         free(wi_dirs);
         lsqt_assembly_free(&a);
@@ -393,6 +481,7 @@ int main(int argc, char **argv)
     }
     free(wi_dirs);
     free(canonical);
+    if (!rc) rc = plan_sides(&c, from_stdin, &a, &st, lss_type == LSQT_PATH_REGULAR, &out, err, sizeof err);
     if (rc) {
         lsqt_assembly_free(&a);
         return rc;
@@ -459,7 +548,9 @@ int main(int argc, char **argv)
     }
     lsqt_state ps; /* an RRSS pilot, while there is one */
     int have_ps = 0, finish_pilot = 1;
-    if (c.shard_n && !rc) {
+    if (lsqt_state_below_count(&st) && !rc) {
+        rc = run_sides(&cx, &a, &st, &c, fresh_rrss, pilot, add, &so, &stats, &rinfo, err, sizeof err);
+    } else if (c.shard_n && !rc) {
         if (c.refine && st.paths == 0 && !owes) {
             rc = fail(2, "--refine: '%s' holds no merged run yet: run the shards without --refine first, "
                          "then lsqt-cl merge%s", lss_path ? lss_path : "the LSS", "");

@@ -21,13 +21,16 @@ void lsqt_report_summary(FILE *f, const lsqt_state *st, const lsqt_slice_est *es
     fprintf(f, "%5s %9s  %-21s %-21s %-10s %s\n", "slice", "theta_o", "R +- 1 s.e.", "T +- 1 s.e.",
             "delta_T", "max rel err");
     unsigned long long cut = 0;
-    int nonfinite = 0, no_err = 0;
+    int nonfinite = 0, no_err = 0, n_below = 0;
     for (int s = 0; s < st->n_slices; s++) {
         const lsqt_slice_est *e = &est[s];
         char er[32], et[32], em[32];
-        fprintf(f, "%5d %8.3fd  %.6f +- %-9s %.6f +- %-9s %-10.4g %s\n", s, e->theta_o * 180.0 / LSQT_PI,
+        const int below = (st->slice_flags[s] & LSQT_SLICE_BELOW) != 0;
+        n_below += below;
+        fprintf(f, "%5d %8.3fd  %.6f +- %-9s %.6f +- %-9s %-10.4g %s%s\n", s, e->theta_o * 180.0 / LSQT_PI,
                 e->R.mean, err_text(e->R.err, er, sizeof er), e->T.mean, err_text(e->T.err, et, sizeof et),
-                e->delta_T.mean, isnan(e->max_rel_err) ? "n/a" : (snprintf(em, sizeof em, "%.3g", e->max_rel_err), em));
+                e->delta_T.mean, isnan(e->max_rel_err) ? "n/a" : (snprintf(em, sizeof em, "%.3g", e->max_rel_err), em),
+                below ? "  from below" : "");
         if (isnan(e->max_rel_err)) no_err = 1;
         cut += e->cut;
         nonfinite += e->n_nonfinite;
@@ -37,6 +40,9 @@ void lsqt_report_summary(FILE *f, const lsqt_state *st, const lsqt_slice_est *es
             fprintf(f, "note: unscattered light (delta_T) is a forward delta; it is in T and LSS, not in RAW\n");
             break;
         }
+    if (n_below)
+        fprintf(f, "note: slices 'from below' are of light entering from the bottom medium, seen with the stack "
+                   "upside down (theta_o from -z; R is what goes back down); their RAW is OUT.below.raw\n");
     if (no_err)
         fprintf(f, "note: errors need paths in 2 of the %d batches (more than %d paths per slice): n/a\n",
                 LSQT_BATCHES, LSQT_CHUNK);
@@ -110,7 +116,8 @@ int lsqt_report_json(const char *path, const lsqt_state *st, const lsqt_slice_es
         json_num(f, e->delta_T.err);
         fprintf(f, ", \"max_rel_err\": ");
         json_num(f, e->max_rel_err);
-        fprintf(f, ", \"cut_paths\": %llu}", (unsigned long long)e->cut);
+        fprintf(f, ", \"cut_paths\": %llu, \"from_below\": %s}", (unsigned long long)e->cut,
+                st->slice_flags[s] & LSQT_SLICE_BELOW ? "true" : "false");
     }
     fprintf(f, "\n ]}\n");
     return lsqt_out_commit(&af, err, errcap);

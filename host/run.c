@@ -28,7 +28,7 @@ double lsqt_max_rel_err(const lsqt_state *st)
 /* The next path count at which to check the error: where 1/sqrt(N) predicts the target
  * (5 % beyond), at least 1.1 and at most 4 times the current count, on a CHECK_STEP
  * multiple. A function of the tallies only, so runs stop at the same count anywhere. */
-static uint64_t next_check(uint64_t paths, double err, double target)
+uint64_t lsqt_next_check(uint64_t paths, double err, double target)
 {
     double want = (double)paths * 4.0;
     if (isfinite(err) && err > 0) want = (double)paths * (err / target) * (err / target) * 1.05;
@@ -136,7 +136,7 @@ int lsqt_run_range(lsqt_session *sp, lsqt_state *st, uint64_t begin, uint64_t ad
             rc = 0;
             goto done;
         }
-        check = first < LSQT_STOP_ERR_PATHS ? LSQT_STOP_ERR_PATHS : next_check(first, cur_err, goal);
+        check = first < LSQT_STOP_ERR_PATHS ? LSQT_STOP_ERR_PATHS : lsqt_next_check(first, cur_err, goal);
     }
     const double t0 = lsqt_now();
     double last_ck = t0;
@@ -165,7 +165,7 @@ int lsqt_run_range(lsqt_session *sp, lsqt_state *st, uint64_t begin, uint64_t ad
                 stats->stop_reason = LSQT_STOP_TARGET;
                 break;
             }
-            check = next_check(pos, cur_err, goal);
+            check = lsqt_next_check(pos, cur_err, goal);
         }
         if (o->checkpoint && o->checkpoint_every > 0 && lsqt_now() - last_ck >= o->checkpoint_every && pos < target) {
             /* the state so far, exactly as a run of pos paths leaves it */

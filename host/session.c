@@ -84,6 +84,7 @@ static int upload(lsqt_session *s, const lsqt_assembly *a, const lsqt_state *st,
     scene.slice_group = s->slice_group;
     scene.seed_lo = (lsqt_u32)st->seed;
     scene.seed_hi = (lsqt_u32)(st->seed >> 32);
+    scene.rng_side = st->n_slices > 0 && (st->slice_flags[0] & LSQT_SLICE_BELOW) ? LSQT_RNG_BELOW : 0u;
     for (int sl = 0; sl < st->n_slices; sl++) {
         wo[4 * sl] = sin(st->theta_o[sl]);
         wo[4 * sl + 2] = cos(st->theta_o[sl]);
@@ -155,6 +156,13 @@ int lsqt_session_open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_asse
     s->n_nee = lsqt_state_nee_count(st);
     s->n_scalars = lsqt_state_scalar_count(st);
     s->n_hist = lsqt_state_hist_count(st);
+    /* One assembly serves one side: the slices from below run the mirrored one (below.h). */
+    for (int sl = 1; sl < st->n_slices; sl++)
+        if ((st->slice_flags[sl] ^ st->slice_flags[0]) & LSQT_SLICE_BELOW) {
+            snprintf(err, errcap, "the state has slices from above and from below: run each side with its own "
+                                  "assembly (lsqt_simulate_sides)");
+            return 1;
+        }
     int line = 0;
     const char *model = lsqt_unsupported_model(a, &line);
     if (model) {

@@ -36,6 +36,7 @@ typedef struct {
 
 #define RNG_PURPOSE_WALK 0u
 #define RNG_PURPOSE_CANDIDATES 1u /* RRSS: the analog walks whose exits are candidate directions */
+/* LSQT_RNG_BELOW (device_layout.h) is OR'ed into either for the slices from below. */
 
 inline rng_t rng_init(uint seed_lo, uint seed_hi, uint slice, ulong path, uint purpose)
 {

@@ -287,7 +287,7 @@ __kernel void lsqt_exits(__constant lsqt_dev_scene *scene, __global const lsqt_d
                   path_sum, nee_priv, work, acc, flags, 0, out + 4 * ((size_t)slice * n + i)};
     if (i >= n) return;
     real3 wo = make_real3(wo_dirs[4 * v], wo_dirs[4 * v + 1], wo_dirs[4 * v + 2]);
-    rng_t rng = rng_init(scene->seed_lo, scene->seed_hi, slice, path_begin + i, RNG_PURPOSE_CANDIDATES);
+    rng_t rng = rng_init(scene->seed_lo, scene->seed_hi, slice, path_begin + i, RNG_PURPOSE_CANDIDATES | scene->rng_side);
     vstore4((real4)(R(0.0)), 0, c.exit_dir);
     run_path(&c, wo, &rng, 0);
 }
@@ -324,7 +324,7 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
     const uint rng_slice = slice / (uint)max(scene->slice_group, 1);
     real3 wo = make_real3(wo_dirs[4 * slice], wo_dirs[4 * slice + 1], wo_dirs[4 * slice + 2]);
     for (ulong p = begin + (ulong)lid; p < end; p += (ulong)lsz) {
-        rng_t rng = rng_init(scene->seed_lo, scene->seed_hi, rng_slice, p, RNG_PURPOSE_WALK);
+        rng_t rng = rng_init(scene->seed_lo, scene->seed_hi, rng_slice, p, RNG_PURPOSE_WALK | scene->rng_side);
         run_path(&c, wo, &rng, hist + 2 * ((ulong)slice * LSQT_BATCHES + (ulong)batch) * LSQT_HIST_BINS);
         nee_flush(&c);
     }

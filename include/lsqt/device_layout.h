@@ -108,7 +108,13 @@ typedef struct lsqt_dev_scene {
     lsqt_u32 seed_lo, seed_hi;
     lsqt_i32 slice_group;     /* launch slices per simulated slice (the RRSS pilot runs each
                                  slice's candidates as that many slices of the same paths) */
-    lsqt_i32 pad1;
+    lsqt_u32 rng_side;        /* OR'ed into every RNG purpose: 0, or LSQT_RNG_BELOW for a state
+                                 of light entering from below, so its paths are not those of
+                                 the slices from above */
 } lsqt_dev_scene;
+
+/* The RNG purpose bit of the paths from below (kernels/philox.cl: counter word 2 holds
+ * purpose << 16). */
+#define LSQT_RNG_BELOW 2u
 
 #endif

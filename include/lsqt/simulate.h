@@ -69,6 +69,10 @@ int lsqt_run_range(lsqt_session *s, lsqt_state *st, uint64_t begin, uint64_t add
  * estimates; NaN while a run may not stop on it (fewer than LSQT_STOP_ERR_PATHS paths). */
 double lsqt_max_rel_err(const lsqt_state *st);
 
+/* With --target-error: the path count at which to check the error next, after PATHS with
+ * error ERR (NaN: unknown); a function of the tallies only, so a stop is reproducible. */
+uint64_t lsqt_next_check(uint64_t paths, double err, double target);
+
 #ifdef __cplusplus
 }
 #endif
