@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "lsqt/lss.h"
+#include "lsqt/report.h"
 #include "lsqt/tally.h"
 #include "lsqt/util.h"
 
@@ -81,11 +82,7 @@ static void info_ranges(FILE *f, const lsqt_state *st, int json)
                 h == UINT64_MAX ? "a shard or a partial merge" : "continuing completes it");
 }
 
-static void json_num(FILE *f, double v)
-{
-    if (isfinite(v)) fprintf(f, "%.17g", v);
-    else fprintf(f, "null");
-}
+#define json_num lsqt_json_num
 
 static void json_str(FILE *f, const char *s)
 {
@@ -206,29 +203,8 @@ static int write_json(const char *out, const char *path, const lsqt_state *st, c
     json_str(f, st->canonical);
     fprintf(f, ",\n \"slices\": [");
     for (int s = 0; s < st->n_slices; s++) {
-        const lsqt_slice_est *e = &est[s];
-        fprintf(f, "%s\n  {\"theta_o\": %.17g, \"paths\": %llu, \"R\": ", s ? "," : "", e->theta_o,
-                (unsigned long long)e->paths);
-        json_num(f, e->R.mean);
-        fprintf(f, ", \"R_err\": ");
-        json_num(f, e->R.err);
-        fprintf(f, ", \"T\": ");
-        json_num(f, e->T.mean);
-        fprintf(f, ", \"T_err\": ");
-        json_num(f, e->T.err);
-        fprintf(f, ", \"delta_T\": ");
-        json_num(f, e->delta_T.mean);
-        fprintf(f, ", \"delta_T_err\": ");
-        json_num(f, e->delta_T.err);
-        fprintf(f, ", \"max_rel_err\": ");
-        json_num(f, e->max_rel_err);
-        fprintf(f, ", \"n_nonfinite\": %d, \"cut_paths\": %llu, \"layer_events_per_path\": ", e->n_nonfinite,
-                (unsigned long long)e->cut);
-        json_num(f, e->layer_events);
-        fprintf(f, ", \"medium_events_per_path\": ");
-        json_num(f, e->medium_events);
-        fprintf(f, ", \"nee_evaluations\": %.17g, \"from_below\": %s}", e->nee_evaluations,
-                st->slice_flags[s] & LSQT_SLICE_BELOW ? "true" : "false");
+        fprintf(f, "%s\n  ", s ? "," : "");
+        lsqt_json_slice(f, st, &est[s], s, 1);
     }
     fprintf(f, "\n ]}\n");
     return lsqt_out_commit(&af, err, errcap);

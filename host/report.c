@@ -59,10 +59,39 @@ void lsqt_report_summary(FILE *f, const lsqt_state *st, const lsqt_slice_est *es
     if (st->flags & LSQT_FLAG_NONFINITE) fprintf(f, "warning: non-finite path contributions were dropped\n");
 }
 
-static void json_num(FILE *f, double v)
+void lsqt_json_num(FILE *f, double v)
 {
     if (isfinite(v)) fprintf(f, "%.17g", v);
     else fprintf(f, "null");
+}
+#define json_num lsqt_json_num
+
+void lsqt_json_slice(FILE *f, const lsqt_state *st, const lsqt_slice_est *e, int s, int detail)
+{
+    fprintf(f, "{\"theta_o\": %.17g, \"paths\": %llu, \"R\": ", e->theta_o, (unsigned long long)e->paths);
+    json_num(f, e->R.mean);
+    fprintf(f, ", \"R_err\": ");
+    json_num(f, e->R.err);
+    fprintf(f, ", \"T\": ");
+    json_num(f, e->T.mean);
+    fprintf(f, ", \"T_err\": ");
+    json_num(f, e->T.err);
+    fprintf(f, ", \"delta_T\": ");
+    json_num(f, e->delta_T.mean);
+    fprintf(f, ", \"delta_T_err\": ");
+    json_num(f, e->delta_T.err);
+    fprintf(f, ", \"max_rel_err\": ");
+    json_num(f, e->max_rel_err);
+    if (detail) fprintf(f, ", \"n_nonfinite\": %d", e->n_nonfinite);
+    fprintf(f, ", \"cut_paths\": %llu", (unsigned long long)e->cut);
+    if (detail) {
+        fprintf(f, ", \"layer_events_per_path\": ");
+        json_num(f, e->layer_events);
+        fprintf(f, ", \"medium_events_per_path\": ");
+        json_num(f, e->medium_events);
+        fprintf(f, ", \"nee_evaluations\": %.17g", e->nee_evaluations);
+    }
+    fprintf(f, ", \"from_below\": %s}", st->slice_flags[s] & LSQT_SLICE_BELOW ? "true" : "false");
 }
 
 int lsqt_report_json(const char *path, const lsqt_state *st, const lsqt_slice_est *est,
@@ -100,24 +129,8 @@ int lsqt_report_json(const char *path, const lsqt_state *st, const lsqt_slice_es
     json_num(f, w->nee_evaluations / sec);
     fprintf(f, ",\n \"slices\": [");
     for (int s = 0; s < st->n_slices; s++) {
-        const lsqt_slice_est *e = &est[s];
-        fprintf(f, "%s\n  {\"theta_o\": %.17g, \"paths\": %llu, \"R\": ", s ? "," : "", e->theta_o,
-                (unsigned long long)e->paths);
-        json_num(f, e->R.mean);
-        fprintf(f, ", \"R_err\": ");
-        json_num(f, e->R.err);
-        fprintf(f, ", \"T\": ");
-        json_num(f, e->T.mean);
-        fprintf(f, ", \"T_err\": ");
-        json_num(f, e->T.err);
-        fprintf(f, ", \"delta_T\": ");
-        json_num(f, e->delta_T.mean);
-        fprintf(f, ", \"delta_T_err\": ");
-        json_num(f, e->delta_T.err);
-        fprintf(f, ", \"max_rel_err\": ");
-        json_num(f, e->max_rel_err);
-        fprintf(f, ", \"cut_paths\": %llu, \"from_below\": %s}", (unsigned long long)e->cut,
-                st->slice_flags[s] & LSQT_SLICE_BELOW ? "true" : "false");
+        fprintf(f, "%s\n  ", s ? "," : "");
+        lsqt_json_slice(f, st, &est[s], s, 0);
     }
     fprintf(f, "\n ]}\n");
     return lsqt_out_commit(&af, err, errcap);

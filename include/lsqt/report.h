@@ -27,6 +27,11 @@ void lsqt_report_summary(FILE *f, const lsqt_state *st, const lsqt_slice_est *es
 int lsqt_report_json(const char *path, const lsqt_state *st, const lsqt_slice_est *est,
                      const lsqt_run_info *ri, char *err, size_t errcap);
 
+/* JSON pieces shared by the run's and lsqt-cl info's JSON: a number (null when not
+ * finite), and slice s's object (detail: non-finite count and work counters too). */
+void lsqt_json_num(FILE *f, double v);
+void lsqt_json_slice(FILE *f, const lsqt_state *st, const lsqt_slice_est *e, int s, int detail);
+
 #ifdef __cplusplus
 }
 #endif
