@@ -19,6 +19,7 @@
 #include "lsqt/report.h"
 #include "lsqt/rrss.h"
 #include "lsqt/simulate.h"
+#include "lsqt/stages.h"
 #include "lsqt/tally.h"
 #include "lsqt/util.h"
 
@@ -313,27 +314,6 @@ static int plan_sides(const lsqt_cli *c, int from_stdin, const lsqt_assembly *a,
     return rc;
 }
 
-/* --from-below (below.h): a two-sided state runs each side with its own assembly, RRSS
- * per side for a fresh state (an interrupted pilot chooses from what it did), then both
- * sides on the same paths. Shards are refused before (plan_sides). */
-static int run_sides(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, const lsqt_cli *c, int fresh_rrss,
-                     uint64_t pilot, uint64_t add, const lsqt_sim_opts *so, lsqt_sim_stats *stats,
-                     lsqt_rrss_info *rinfo, char *err, size_t errcap)
-{
-    const uint64_t before = st->paths;
-    int rc = 0;
-    if (fresh_rrss) {
-        rc = lsqt_rrss_sides(cx, a, st, c->rx, pilot, so, rinfo, err, errcap);
-        if (!rc && rinfo->interrupted) add = 0;
-        else if (!rc && add != UINT64_MAX) add -= st->paths;
-    }
-    if (!rc && add) rc = lsqt_simulate_sides(cx, a, st, add, so, stats, err, errcap);
-    stats->seconds += rinfo->seconds;
-    stats->paths_added = st->paths - before;
-    if (rinfo->interrupted) stats->interrupted = 1, stats->stop_reason = g_stop ? LSQT_STOP_INTERRUPT : LSQT_STOP_TIME;
-    return rc;
-}
-
 int main(int argc, char **argv)
 {
     /* lsqt-cl info FILE.lss: reads an LSS, no OpenCL (host/info.c; lssinfo is the same). */
@@ -511,189 +491,21 @@ int main(int argc, char **argv)
     const int can_checkpoint = ck.lss && strcmp(ck.lss, "-") != 0 && c.checkpoint > 0;
     lsqt_sim_opts so = {isatty(STDERR_FILENO) && !c.quiet, c.time_limit, 0, &g_stop, NULL, c.verbose, c.target_error,
                         can_checkpoint ? c.checkpoint : 0.0, can_checkpoint ? write_checkpoint : NULL, &ck};
-    lsqt_sim_stats stats;
-    memset(&stats, 0, sizeof stats);
-    const int pilot_base = st.stage == LSQT_STAGE_PILOT; /* a checkpoint or an interrupted pilot */
-    lsqt_work before = lsqt_work_totals(&st);
-    if (pilot_base) {
-        /* its candidate blocks replay the same paths: one block's work is the pilot's */
-        before.paths /= st.rx, before.layer_events /= st.rx, before.medium_events /= st.rx;
-        before.nee_evaluations /= st.rx;
-    }
-    if (c.shard_n) memset(&before, 0, sizeof before); /* a shard's file holds only its own work */
-    const uint64_t paths_before = st.paths;
-    /* With a target error, -p is a cap when given, else there is none. */
-    uint64_t add = c.target_error > 0 && !c.paths_given ? UINT64_MAX : c.paths;
-    /* A state that owes paths (a merged RRSS pilot, a partial merge) completes its run. */
-    const uint64_t held = lsqt_state_contiguous(&st);
-    const int owes = held < st.span_end && !pilot_base;
-    if (owes) {
-        add = st.span_end - held;
-        if (!c.quiet)
-            fprintf(stderr, "note: '%s' is part of a run of %llu paths per slice: this run does the %llu it owes%s\n",
-                    lss_path, (unsigned long long)st.span_end, (unsigned long long)add,
-                    c.paths_given ? " (-p is not used)" : "");
-    }
-    const int fresh_rrss = st.dir_method == LSQT_DIRS_RRSS && st.paths == 0 && !owes && !pilot_base;
-    /* A fresh RRSS state: the pilot is the first rp of this run's -p (its tallies stay). */
-    uint64_t pilot = 0;
-    lsqt_rrss_info rinfo;
-    memset(&rinfo, 0, sizeof rinfo);
-    int pilot_shard = 0;
-    uint64_t part_lo = 0, part_hi = 0, run_lo = 0, run_hi = 0; /* a shard's part of this run's paths */
-    if (fresh_rrss) {
-        pilot = (uint64_t)ceil(c.rp * (double)c.paths);
-        if (pilot < 1) pilot = 1;
-        if (pilot > c.paths) pilot = c.paths;
-    }
-    lsqt_state ps; /* an RRSS pilot, while there is one */
-    int have_ps = 0, finish_pilot = 1;
-    if (lsqt_state_below_count(&st) && !rc) {
-        rc = run_sides(&cx, &a, &st, &c, fresh_rrss, pilot, add, &so, &stats, &rinfo, err, sizeof err);
-    } else if (c.shard_n && !rc) {
-        if (c.refine && st.paths == 0 && !owes) {
-            rc = fail(2, "--refine: '%s' holds no merged run yet: run the shards without --refine first, "
-                         "then lsqt-cl merge%s", lss_path ? lss_path : "the LSS", "");
-        } else if (pilot_base) {
-            rc = fail(2, "'%s' holds (part of) an RRSS pilot: merge all of the pilot's shards first "
-                         "(lsqt-cl merge OUT.lss SHARDS...)%s", lss_path, "");
-        } else {
-            /* The run's range, then the K-th of N near-equal parts of it. */
-            run_lo = held;
-            run_hi = fresh_rrss ? pilot : owes ? st.span_end : c.refine ? held : held + add;
-            lsqt_shard_part(run_lo, run_hi, c.shard_k, c.shard_n, &part_lo, &part_hi);
-            /* A shard run again (after a time limit or a signal) continues its own file when
-             * that holds the start of this very part. */
-            lsqt_state prev;
-            uint64_t resume = part_lo;
-            int resumed = 0;
-            const char *sp = out.path[OUT_LSS], *kind = NULL;
-            if (!c.restart && lsqt_path_type(sp, &kind) == LSQT_PATH_REGULAR &&
-                lsqt_lss_read(sp, &prev, err, sizeof err) == 0) {
-                const uint64_t x = prev.n_ranges == 0                              ? part_lo
-                                   : prev.n_ranges == 1 && prev.ranges[0] == part_lo ? prev.ranges[1]
-                                                                                     : UINT64_MAX;
-                const int match =
-                    fresh_rrss ? prev.stage == LSQT_STAGE_PILOT && prev.hash == st.hash &&
-                                     strcmp(prev.canonical, st.canonical) == 0 && prev.seed == st.seed &&
-                                     prev.use_double == st.use_double && prev.rx == (uint32_t)c.rx &&
-                                     prev.pilot_paths == pilot && prev.span_end == (c.paths > pilot ? c.paths : pilot) &&
-                                     prev.n_slices == st.n_slices * c.rx && prev.n_wi == st.n_wi
-                               : !lsqt_state_differs(&prev, &st) && prev.span_end == run_hi;
-                if (match && x <= part_hi) {
-                    resumed = 1, resume = x;
-                    if (!c.quiet)
-                        fprintf(stderr, "continuing %s: paths [%llu, %llu) of this part are done\n", sp,
-                                (unsigned long long)part_lo, (unsigned long long)x);
-                } else {
-                    if (!c.quiet) fprintf(stderr, "note: replacing %s (not a part of this run)\n", sp);
-                    lsqt_state_free(&prev);
-                }
-            }
-            if (fresh_rrss && resumed) {
-                ps = prev;
-                rc = lsqt_rrss_pilot_continue(&cx, &a, &ps, resume, part_hi - resume, &so, &rinfo, err, sizeof err);
-                if (rc) lsqt_state_free(&ps);
-            } else if (fresh_rrss) {
-                /* the pilot's part, on every slice's candidates; the merge chooses */
-                rc = lsqt_rrss_pilot(&cx, &a, &st, c.rx, pilot, c.paths, part_lo, part_hi - part_lo, &so, &ps, &rinfo,
-                                     err, sizeof err);
-            }
-            if (fresh_rrss) {
-                if (!rc) {
-                    lsqt_state_free(&st);
-                    st = ps;
-                    pilot_shard = 1;
-                    stats.paths_added = st.paths;
-                    stats.seconds = rinfo.seconds;
-                    if (rinfo.interrupted) stats.interrupted = 1, stats.stop_reason = g_stop ? LSQT_STOP_INTERRUPT : LSQT_STOP_TIME;
-                }
-            } else {
-                if (resumed) {
-                    lsqt_state_free(&st);
-                    st = prev;
-                } else {
-                    lsqt_state_clear_tallies(&st);
-                }
-                rc = lsqt_simulate_range(&cx, &a, &st, resume, part_hi - resume, &so, &stats, err, sizeof err);
-                st.span_end = run_hi;
-            }
-        }
-        if (rc == 2) {
-            lsqt_context_release(&cx);
-            lsqt_state_free(&st);
-            lsqt_assembly_free(&a);
-            return rc;
-        }
-    } else {
-        /* RRSS: the pilot (fresh, or the rest of a saved one), the choice, the rest of the
-         * run. Checkpoints during the pilot save the pilot state, which continues exactly. */
-        if (fresh_rrss) {
-            rc = lsqt_rrss_pilot(&cx, &a, &st, c.rx, pilot, add == UINT64_MAX ? pilot : c.paths, 0, pilot, &so, &ps,
-                                 &rinfo, err, sizeof err);
-            have_ps = !rc;
-        } else if (pilot_base) {
-            ps = st;
-            memset(&st, 0, sizeof st);
-            have_ps = 1;
-            /* the same run (no -p, or its -p): finish the pilot and the run, the bytes of the
-             * uninterrupted run; another -p: choose from the pilot so far, then add -p */
-            finish_pilot = !c.paths_given || c.paths == ps.span_end;
-            if (!c.quiet)
-                fprintf(stderr, finish_pilot ? "note: '%s' holds %llu of the %llu paths of an RRSS pilot: this run "
-                                               "finishes it, then the run (%llu paths per slice)\n"
-                                             : "note: '%s' holds %llu of the %llu paths of an RRSS pilot: the "
-                                               "directions are chosen from them, then -p %llu more paths\n",
-                        lss_path, (unsigned long long)ps.paths, (unsigned long long)ps.pilot_paths,
-                        (unsigned long long)(finish_pilot ? ps.span_end : c.paths));
-            if (!finish_pilot) {
-                /* nothing more to run in the pilot */
-            } else if (held == UINT64_MAX || held > ps.pilot_paths) {
-                snprintf(err, sizeof err, "'%s' does not hold one range [0, h) of its RRSS pilot", lss_path);
-                rc = 1;
-            } else {
-                rc = lsqt_rrss_pilot_continue(&cx, &a, &ps, held, ps.pilot_paths - held, &so, &rinfo, err, sizeof err);
-            }
-        }
-        if (have_ps && !rc) {
-            /* an interrupted pilot: its LSS is the pilot (continuing finishes it); the RAW
-             * and summary show a provisional choice from what it has */
-            lsqt_state chosen;
-            lsqt_rrss_info ci;
-            memset(&ci, 0, sizeof ci);
-            rc = lsqt_rrss_choose(&ps, &chosen, &ci, err, sizeof err);
-            if (!rc) {
-                rinfo.density_fallback = ci.density_fallback;
-                rinfo.seconds += ci.select_seconds;
-                lsqt_state_free(&st);
-                st = chosen;
-                if (rinfo.interrupted) add = 0;
-                else if (pilot_base && !finish_pilot) st.span_end = st.paths; /* the rest is abandoned */
-                else if (pilot_base) add = st.span_end - st.paths;
-                else if (add != UINT64_MAX) add -= st.paths;
-            }
-        }
-        if (!rc && !rinfo.interrupted) rc = lsqt_simulate(&cx, &a, &st, add, &so, &stats, err, sizeof err);
-        stats.seconds += rinfo.seconds;
-        stats.paths_added = st.paths - paths_before;
-        if (rinfo.interrupted) stats.interrupted = 1, stats.stop_reason = g_stop ? LSQT_STOP_INTERRUPT : LSQT_STOP_TIME;
-        if (have_ps && !rinfo.interrupted) {
-            lsqt_state_free(&ps);
-            have_ps = 0;
-        }
-    }
-    if (!rc && !c.quiet) lsqt_rrss_notes(stderr, &rinfo);
+    lsqt_stages sg;
+    rc = lsqt_run_stages(&cx, &a, &st, &c, lss_path, out.path[OUT_LSS], &so, &sg, err, sizeof err);
+    lsqt_sim_stats stats = sg.stats;
+    const lsqt_work before = sg.before;
     if (rc) {
-        fail(1, "%s%s", err, "");
-    } else if (pilot_shard) {
+        fail(rc, "%s%s", err, "");
+    } else if (sg.pilot_shard) {
         /* a pilot shard holds candidate blocks, not a BSDF yet: its LSS is all there is */
         const char *ls = out.path[OUT_LSS];
         if (lsqt_lss_write(ls, &st, err, sizeof err)) rc = fail(1, "%s%s", err, "");
         else if (!c.quiet)
             fprintf(info, "shard %d/%d of the RRSS pilot: paths [%llu, %llu) of [0, %llu) in %.3g s; wrote %s\n"
                           "(merge all %d pilot shards, then run the shards with --refine)\n",
-                    c.shard_k, c.shard_n, (unsigned long long)part_lo, (unsigned long long)part_hi,
-                    (unsigned long long)pilot, stats.seconds, ls, c.shard_n);
+                    c.shard_k, c.shard_n, (unsigned long long)sg.part_lo, (unsigned long long)sg.part_hi,
+                    (unsigned long long)sg.pilot, stats.seconds, ls, c.shard_n);
         if (!c.quiet && c.output) fprintf(stderr, "note: a pilot shard writes no RAW (-o is not used)\n");
         if (stats.interrupted && g_stop) {
             fprintf(stderr, "lsqt-cl: interrupted (%s): %s the paths done so far\n", signal_name(g_stop),
@@ -713,12 +525,12 @@ int main(int argc, char **argv)
                                           "the time limit (--time-limit)", "an interrupt"};
         if (c.target_error > 0 || c.time_limit > 0) ri.stopped_by = why[stats.stop_reason];
         if (!est) rc = fail(1, "out of memory%s%s", "", "");
-        else rc = write_outputs(&out, &c, &st, have_ps ? &ps : &st, est, &ri, info);
+        else rc = write_outputs(&out, &c, &st, sg.have_ps ? &sg.ps : &st, est, &ri, info);
         if (est && !c.quiet) lsqt_report_summary(info, &st, est, &ri);
         if (!c.quiet && c.shard_n)
             fprintf(info, "shard %d/%d: paths [%llu, %llu) of this run's [%llu, %llu)%s\n", c.shard_k, c.shard_n,
-                    (unsigned long long)part_lo, (unsigned long long)part_hi, (unsigned long long)run_lo,
-                    (unsigned long long)run_hi, part_lo == part_hi ? " (nothing to do: an empty part)" : "");
+                    (unsigned long long)sg.part_lo, (unsigned long long)sg.part_hi, (unsigned long long)sg.run_lo,
+                    (unsigned long long)sg.run_hi, sg.part_lo == sg.part_hi ? " (nothing to do: an empty part)" : "");
         lsqt_estimates_free(est, st.n_slices);
         if (stats.interrupted && g_stop) {
             fprintf(stderr, "lsqt-cl: interrupted (%s): %s the paths done so far\n", signal_name(g_stop),
@@ -726,7 +538,7 @@ int main(int argc, char **argv)
             rc = 1;
         }
     }
-    if (have_ps) lsqt_state_free(&ps);
+    if (sg.have_ps) lsqt_state_free(&sg.ps);
     lsqt_context_release(&cx);
     lsqt_state_free(&st);
     lsqt_assembly_free(&a);
