@@ -138,6 +138,13 @@ int lsqt_merge_main(const char *prog, int argc, char **argv)
             break;
         }
         n_read++;
+        for (int k = 0; k < st[i].n_slices && !rc; k++)
+            if (st[i].slice_flags[k] & LSQT_SLICE_BELOW) {
+                snprintf(err, sizeof err, "'%s' has slices from below (--from-below): two-sided states are not "
+                                          "merged yet (they are not sharded either)", in[i]);
+                rc = fail(2, prog, err);
+            }
+        if (rc) break;
         const char *what = i ? lsqt_state_differs(&st[0], &st[i]) : NULL;
         if (what) {
             snprintf(err, sizeof err, "'%s' and '%s' differ in their %s: they are not parts of one run", in[0],

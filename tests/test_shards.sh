@@ -130,6 +130,11 @@ expect 2 "an RRSS pilot must be whole" -- "$BIN" merge --partial x.lss r.lsqt.sh
 expect 2 "differ in their stage" -- "$BIN" merge x.lss r.lsqt.shard-0-of-3.lss m.lsqt.shard-1-of-4.lss
 expect 2 "holds no merged run yet" -- "$BIN" -p 3000 -wo 4 -wi 16 --shard 0/3 --refine --lss none.lss r.lsqt
 
+# Two-sided states (--from-below) are neither sharded nor merged yet: refused, not mixed.
+one -p 1000 -wo 4 -wi 16 --wi-spread --from-below --lss two.lss -o two.raw m.lsqt
+expect 2 "slices from below" -- "$BIN" merge x.lss two.lss
+expect 2 "cannot be sharded yet" -- "$BIN" -p 1000 --shard 0/2 --lss two.lss m.lsqt
+
 # 6. Bad flags.
 for v in 4/4 1 a/b 0/0 -1/2 1/70000; do expect 2 "bad value '$v' for --shard" -- "$BIN" --shard "$v" r.lsqt; done
 expect 2 "give --shard K/N too" -- "$BIN" --refine r.lsqt
