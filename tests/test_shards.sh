@@ -27,10 +27,14 @@ one() { "$BIN" -q "$@" >/dev/null; }
 # 1. RRSS (default directions), 4 shards, -rp 0.3: the two-stage flow equals one process.
 F=(-p 20000 -wo 4 -wi 24 -s 7 -rp 0.3)
 fresh a; fresh b
-bash "$SH" 4 a.lsqt "${F[@]}" -q >/dev/null 2>shards.err || bad "local-shards.sh failed: $(cat shards.err)"
-one "${F[@]}" b.lsqt
+bash "$SH" 4 a.lsqt "${F[@]}" -q -o a.out.raw --json a.json >/dev/null 2>shards.err ||
+  bad "local-shards.sh failed: $(cat shards.err)"
+one "${F[@]}" -o b.out.raw b.lsqt
 same a.lsqt.lss b.lsqt.lss
-same a.lsqt.raw b.lsqt.raw
+same a.out.raw b.out.raw
+python3 -c 'import json, sys; assert json.load(open(sys.argv[1]))["slices"][0]["paths"] == 20000' a.json && ok ||
+  bad "the merged JSON is not of the whole run"
+[ -e a.lsqt.raw ] && bad "a shard wrote the default RAW though -o names another" || ok
 ls a.lsqt.shard-* >/dev/null 2>&1 && bad "shard files left behind after the merge" || ok
 "$BIN" info a.lsqt.lss | grep -q "directions: RRSS (4 candidates per direction, pilot of 6000 paths)" && ok ||
   bad "merged LSS lacks the RRSS pilot: $("$BIN" info a.lsqt.lss | head -12)"

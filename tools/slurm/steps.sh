@@ -22,22 +22,26 @@ else
   shift 3
 fi
 # The run's LSS, and the flags merge takes (the RAW's name and form, JSON, quiet).
+# The shards get the rest: a RAW of a part (-o) or its JSON would only be overwritten.
 lss="$file.lss"
 merge_flags=()
+shard_flags=()
 args=("$@")
 for ((i = 0; i < ${#args[@]}; i++)); do
   a=${args[i]}
   case "$a" in
-    --lss) lss=${args[i + 1]}; i=$((i + 1)) ;;
-    --lss=*) lss=${a#--lss=} ;;
+    --lss) lss=${args[i + 1]}; shard_flags+=("$a" "$lss"); i=$((i + 1)) ;;
+    --lss=*) lss=${a#--lss=}; shard_flags+=("$a") ;;
     -o|--output|--json) merge_flags+=("$a" "${args[i + 1]}"); i=$((i + 1)) ;;
-    -o=*|--output=*|--json=*|-H|--only-hemispherical|-q|--quiet) merge_flags+=("$a") ;;
+    -o=*|--output=*|--json=*) merge_flags+=("$a") ;;
+    -H|--only-hemispherical|-q|--quiet) merge_flags+=("$a"); shard_flags+=("$a") ;;
+    *) shard_flags+=("$a") ;;
   esac
 done
 base=${lss%.lss}
 case "$step" in
-  shard) exec "$LSQT_CL" "$@" --shard "$k/$n" "$file" ;;
-  refine) exec "$LSQT_CL" "$@" --shard "$k/$n" --refine "$file" ;;
+  shard) exec "$LSQT_CL" "${shard_flags[@]}" --shard "$k/$n" "$file" ;;
+  refine) exec "$LSQT_CL" "${shard_flags[@]}" --shard "$k/$n" --refine "$file" ;;
   merge)
     parts=()
     for ((j = 0; j < n; j++)); do parts+=("$base.shard-$j-of-$n.lss"); done
