@@ -13,7 +13,7 @@ EX=$2
 SH="$(cd "$(dirname "${BASH_SOURCE[0]}")/../tools/slurm" && pwd)/local-shards.sh"
 T=$(mktemp -d)
 trap 'rm -rf "$T"' EXIT
-cd "$T"
+cd "$T" || exit 1
 export LSQT_CL=$BIN
 
 # same A B: both files exist and are byte-identical
