@@ -302,11 +302,6 @@ static int plan_sides(const lsqt_cli *c, int from_stdin, const lsqt_assembly *a,
         fprintf(stderr, "note: the LSS has %sslices from below: %s\n", below ? "" : "no ",
                 below ? "both sides are continued" : "--from-below is ignored (use -R to start over with them)");
     int rc = below ? plan_outputs(c, from_stdin, st->transmits, 1, out, err, errcap) : 0;
-    if (!rc && below && c->shard_n) {
-        snprintf(err, errcap, "--shard: a state with slices from below (--from-below) cannot be sharded yet; run it "
-                              "in one process");
-        rc = 2;
-    }
     if (rc) {
         lsqt_state_free(st);
         fail(rc, "%s%s", err, "");

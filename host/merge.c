@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "lsqt/below.h"
 #include "lsqt/lss.h"
 #include "lsqt/raw.h"
 #include "lsqt/report.h"
@@ -138,12 +139,6 @@ int lsqt_merge_main(const char *prog, int argc, char **argv)
             break;
         }
         n_read++;
-        for (int k = 0; k < st[i].n_slices && !rc; k++)
-            if (st[i].slice_flags[k] & LSQT_SLICE_BELOW) {
-                snprintf(err, sizeof err, "'%s' has slices from below (--from-below): two-sided states are not "
-                                          "merged yet (they are not sharded either)", in[i]);
-                rc = fail(2, prog, err);
-            }
         if (rc) break;
         const char *what = i ? lsqt_state_differs(&st[0], &st[i]) : NULL;
         if (what) {
@@ -234,35 +229,60 @@ int lsqt_merge_main(const char *prog, int argc, char **argv)
         }
     }
 
-    /* Outputs: the LSS, the RAW (named from OUT.lss), JSON. */
+    /* Outputs: the LSS, the RAW (named from OUT.lss; -H: R and T), JSON, and for a
+     * two-sided state the RAW of the side from below (lsqt-cl's names, below.h). */
     if (!rc) {
-        char raw_name[LSQT_PATH_CAP + 16], r_name[LSQT_PATH_CAP + 24], t_name[LSQT_PATH_CAP + 24];
+        enum { O_LSS, O_RAW, O_RAW_T, O_RAW_B, O_RAW_BT, O_JSON, O_N };
+        char raw_name[LSQT_PATH_CAP + 16], names[O_N][LSQT_PATH_CAP + 48], below_name[LSQT_PATH_CAP + 32];
         if (raw) snprintf(raw_name, sizeof raw_name, "%s", raw);
         else {
             size_t n = strlen(out_lss);
             if (n >= 4 && strcmp(out_lss + n - 4, ".lss") == 0) n -= 4;
             snprintf(raw_name, sizeof raw_name, "%.*s.raw", (int)n, out_lss);
         }
-        lsqt_raw_hemi_name(raw_name, "R", r_name, sizeof r_name);
-        lsqt_raw_hemi_name(raw_name, "T", t_name, sizeof t_name);
-        const char *outs[4] = {out_lss, hemi ? r_name : raw_name, hemi && sum.transmits ? t_name : NULL, json};
-        for (int i = 0; i < 4 && !rc; i++)
-            for (int j = i + 1; j < 4 && !rc; j++)
+        lsqt_below_raw_name(raw_name, below_name, sizeof below_name);
+        const int two = lsqt_state_below_count(&sum) > 0;
+        const char *outs[O_N] = {out_lss, NULL, NULL, NULL, NULL, json};
+        for (int side = 0; side < 1 + two; side++) {
+            const char *base = side ? below_name : raw_name;
+            char *m = names[side ? O_RAW_B : O_RAW], *t = names[side ? O_RAW_BT : O_RAW_T];
+            if (hemi) {
+                lsqt_raw_hemi_name(base, "R", m, sizeof names[0]);
+                lsqt_raw_hemi_name(base, "T", t, sizeof names[0]);
+            } else {
+                snprintf(m, sizeof names[0], "%s", base);
+            }
+            outs[side ? O_RAW_B : O_RAW] = m;
+            outs[side ? O_RAW_BT : O_RAW_T] = hemi && sum.transmits ? t : NULL;
+        }
+        if (two && (!raw_name[0] || strcmp(raw_name, "-") == 0))
+            rc = fail(2, prog, "a two-sided state has a second RAW named from the first: give -o a file name");
+        for (int i = 0; i < O_N && !rc; i++)
+            for (int j = i + 1; j < O_N && !rc; j++)
                 if (outs[i] && outs[j] && lsqt_same_file(outs[i], outs[j])) {
                     snprintf(err, sizeof err, "two outputs would be written to '%s'", outs[i]);
                     rc = fail(2, prog, err);
                 }
-        lsqt_slice_est *est = rc ? NULL : lsqt_estimates(&sum);
+        /* RAW files hold one side each, as lsqt-cl writes them */
+        lsqt_state sides[2];
+        memset(sides, 0, sizeof sides);
+        lsqt_slice_est *est = rc ? NULL : lsqt_estimates(&sum), *side_est[2] = {NULL, NULL};
         if (!rc && !est) rc = fail(1, prog, "out of memory");
+        if (!rc && two &&
+            (lsqt_state_split_sides(&sum, &sides[0], &sides[1]) || !(side_est[0] = lsqt_estimates(&sides[0])) ||
+             !(side_est[1] = lsqt_estimates(&sides[1]))))
+            rc = fail(1, prog, "out of memory");
         int skipped = 0;
         lsqt_run_info ri = {"(merged: no device)", 0.0, 0.0, 0ULL, NULL, lsqt_work_totals(&sum)};
-        for (int i = 0; i < 4 && !rc; i++) {
+        for (int i = 0; i < O_N && !rc; i++) {
             if (!outs[i]) continue;
-            int w = i == 0   ? lsqt_lss_write(outs[i], &sum, err, sizeof err)
-                    : i == 3 ? lsqt_report_json(outs[i], &sum, est, &ri, err, sizeof err)
-                             : lsqt_raw_write(outs[i], &sum, est,
-                                              !hemi ? LSQT_RAW_ALL : i == 1 ? LSQT_RAW_REFLECT : LSQT_RAW_TRANSMIT,
-                                              &skipped, err, sizeof err);
+            const int b = i == O_RAW_B || i == O_RAW_BT;
+            const lsqt_state *rs = two ? &sides[b] : &sum;
+            const lsqt_slice_est *re = two ? side_est[b] : est;
+            const int mode = !hemi ? LSQT_RAW_ALL : (i == O_RAW || i == O_RAW_B) ? LSQT_RAW_REFLECT : LSQT_RAW_TRANSMIT;
+            int w = i == O_LSS    ? lsqt_lss_write(outs[i], &sum, err, sizeof err)
+                    : i == O_JSON ? lsqt_report_json(outs[i], &sum, est, &ri, err, sizeof err)
+                                  : lsqt_raw_write(outs[i], rs, re, mode, &skipped, err, sizeof err);
             if (w) rc = fail(1, prog, err);
         }
         if (!rc && !quiet) {
@@ -274,11 +294,15 @@ int lsqt_merge_main(const char *prog, int argc, char **argv)
                 snprintf(owed, sizeof owed, " (the run owes %llu more)", (unsigned long long)(sum.span_end - h));
             fprintf(info, "merged %d file%s: %llu paths per slice%s; wrote %s", n_in, n_in > 1 ? "s" : "",
                     (unsigned long long)sum.paths, owed, out_lss);
-            for (int i = 1; i < 4; i++)
+            for (int i = 1; i < O_N; i++)
                 if (outs[i] && strcmp(outs[i], "-") != 0) fprintf(info, ", %s", outs[i]);
             fprintf(info, "\n");
         }
         lsqt_estimates_free(est, sum.n_slices);
+        for (int b = 0; b < 2; b++) {
+            lsqt_estimates_free(side_est[b], sides[b].n_slices);
+            lsqt_state_free(&sides[b]);
+        }
     }
     lsqt_state_free(&sum);
     free(in);

@@ -68,10 +68,15 @@ int lsqt_run_stages(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, co
         if (o->pilot > c->paths) o->pilot = c->paths;
     }
     int finish_pilot = 1;
-    if (lsqt_state_below_count(st)) {
+    const int two = lsqt_state_below_count(st) > 0;
+    if (two && !c->shard_n) {
         rc = run_sides(cx, a, st, c, fresh_rrss, o->pilot, add, so, &o->stats, &o->rinfo, err, errcap);
     } else if (c->shard_n) {
-        if (c->refine && st->paths == 0 && !owes) {
+        if (two && fresh_rrss) {
+            snprintf(err, errcap, "--shard: a fresh RRSS run with slices from below (--from-below) cannot be "
+                                  "sharded yet (its pilot is not): run its first -p in one process, or use --wi-spread");
+            rc = 2;
+        } else if (c->refine && st->paths == 0 && !owes) {
             snprintf(err, errcap, "--refine: '%s' holds no merged run yet: run the shards without --refine first, "
                                   "then lsqt-cl merge", lss_path ? lss_path : "the LSS");
             rc = 2;
@@ -138,7 +143,7 @@ int lsqt_run_stages(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, co
                 } else {
                     lsqt_state_clear_tallies(st);
                 }
-                rc = lsqt_simulate_range(cx, a, st, resume, o->part_hi - resume, so, &o->stats, err, errcap);
+                rc = lsqt_simulate_range_sides(cx, a, st, resume, o->part_hi - resume, so, &o->stats, err, errcap);
                 st->span_end = o->run_hi;
             }
         }

@@ -134,10 +134,24 @@ expect 2 "an RRSS pilot must be whole" -- "$BIN" merge --partial x.lss r.lsqt.sh
 expect 2 "differ in their stage" -- "$BIN" merge x.lss r.lsqt.shard-0-of-3.lss m.lsqt.shard-1-of-4.lss
 expect 2 "holds no merged run yet" -- "$BIN" -p 3000 -wo 4 -wi 16 --shard 0/3 --refine --lss none.lss r.lsqt
 
-# Two-sided states (--from-below) are neither sharded nor merged yet: refused, not mixed.
-one -p 1000 -wo 4 -wi 16 --wi-spread --from-below --lss two.lss -o two.raw m.lsqt
-expect 2 "slices from below" -- "$BIN" merge x.lss two.lss
-expect 2 "cannot be sharded yet" -- "$BIN" -p 1000 --shard 0/2 --lss two.lss m.lsqt
+# Two-sided states (--from-below): shards of a spread run, and of a continued RRSS run,
+# merge into one process's LSS and both RAWs; a fresh RRSS pilot is not sharded (yet).
+fresh w1; fresh w2
+F2=(-p 3000 -wo 4 -wi 16 --wi-spread --from-below -s 4)
+bash "$SH" 2 w1.lsqt "${F2[@]}" -q >/dev/null 2>&1 || bad "local-shards.sh (two-sided) failed"
+one "${F2[@]}" w2.lsqt
+same w1.lsqt.lss w2.lsqt.lss
+same w1.lsqt.raw w2.lsqt.raw
+same w1.lsqt.below.raw w2.lsqt.below.raw
+fresh w3; fresh w4
+one -p 2000 -wo 4 -wi 16 --from-below w3.lsqt && one -p 2000 -wo 4 -wi 16 --from-below w4.lsqt
+bash "$SH" 3 w3.lsqt -p 2500 -H -q >/dev/null 2>&1 || bad "local-shards.sh (two-sided RRSS, continued) failed"
+one -p 2500 -H w4.lsqt
+same w3.lsqt.lss w4.lsqt.lss
+same w3.lsqt.below.R.raw w4.lsqt.below.R.raw
+same w3.lsqt.T.raw w4.lsqt.T.raw
+fresh w5
+expect 2 "cannot be sharded yet" -- "$BIN" -p 1000 -wo 4 -wi 16 --from-below --shard 0/2 w5.lsqt
 
 # 6. Bad flags.
 for v in 4/4 1 a/b 0/0 -1/2 1/70000; do expect 2 "bad value '$v' for --shard" -- "$BIN" --shard "$v" r.lsqt; done
