@@ -216,25 +216,65 @@ static int sides_close(sides *sd, lsqt_state *st, int ok, char *err, size_t errc
     return rc;
 }
 
-int lsqt_rrss_sides(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, int rx, uint64_t pilot_paths,
-                    const lsqt_sim_opts *o, lsqt_rrss_info *info, char *err, size_t errcap)
+/* Both sides of a pilot state PS (or of the fresh ST) on the same paths: the side from
+ * above may be stopped; the side from below then runs as many, unstopped. Checkpoints
+ * are off (one side's pilot is not the state); an interrupt saves the joined pilot. */
+static int pilot_sides(lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st, lsqt_state *ps, int rx,
+                       uint64_t pilot_total, uint64_t run_paths, uint64_t begin, uint64_t n_paths,
+                       const lsqt_sim_opts *o, lsqt_rrss_info *info, char *err, size_t errcap)
 {
-    if (!lsqt_state_below_count(st)) return lsqt_rrss(cx, a, st, rx, pilot_paths, o, info, err, errcap);
+    const int fresh = st != NULL;
     sides sd;
-    if (sides_open(&sd, a, st, err, errcap)) return 1;
-    int ok = !lsqt_rrss(cx, a, &sd.up, rx, pilot_paths, o, info, err, errcap);
-    if (ok) {
-        /* the pilot from below does what the one from above did, unstopped */
-        lsqt_sim_opts ob = *o;
-        ob.stop = NULL, ob.time_limit = 0.0;
-        lsqt_rrss_info ib;
-        ok = !lsqt_rrss(cx, &sd.mirror, &sd.dn, rx, sd.up.paths, &ob, &ib, err, errcap);
-        if (ok) {
-            info->short_slices += ib.short_slices, info->density_fallback += ib.density_fallback;
-            info->seconds += ib.seconds, info->select_seconds += ib.select_seconds;
-        }
+    if (sides_open(&sd, a, fresh ? st : ps, err, errcap)) return 1;
+    lsqt_sim_opts po = *o;
+    po.checkpoint = NULL;
+    lsqt_sim_opts ob = po;
+    ob.stop = NULL, ob.time_limit = 0.0;
+    lsqt_state pu, pd;
+    memset(&pu, 0, sizeof pu), memset(&pd, 0, sizeof pd);
+    lsqt_rrss_info ib;
+    int ok;
+    if (fresh) {
+        ok = !lsqt_rrss_pilot(cx, a, &sd.up, rx, pilot_total, run_paths, begin, n_paths, &po, &pu, info, err, errcap);
+        ok = ok && !lsqt_rrss_pilot(cx, &sd.mirror, &sd.dn, rx, pilot_total, run_paths, begin, pu.paths, &ob, &pd,
+                                    &ib, err, errcap);
+    } else {
+        const uint64_t had = sd.up.paths;
+        ok = !lsqt_rrss_pilot_continue(cx, a, &sd.up, begin, n_paths, &po, info, err, errcap);
+        ok = ok && !lsqt_rrss_pilot_continue(cx, &sd.mirror, &sd.dn, begin, sd.up.paths - had, &ob, &ib, err, errcap);
     }
-    return sides_close(&sd, st, ok, err, errcap);
+    if (ok) info->short_slices += ib.short_slices, info->seconds += ib.seconds;
+    lsqt_state both;
+    if (ok && lsqt_state_join_sides(fresh ? &pu : &sd.up, fresh ? &pd : &sd.dn, &both, err, errcap)) ok = 0;
+    if (ok) {
+        if (!fresh) lsqt_state_free(ps);
+        *ps = both;
+    }
+    lsqt_state_free(&pu), lsqt_state_free(&pd);
+    lsqt_state_free(&sd.up), lsqt_state_free(&sd.dn);
+    lsqt_assembly_free(&sd.mirror);
+    return ok ? 0 : 1;
+}
+
+int lsqt_rrss_pilot_sides(lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st, int rx, uint64_t pilot_total,
+                          uint64_t run_paths, uint64_t begin, uint64_t n_paths, const lsqt_sim_opts *o, lsqt_state *ps,
+                          lsqt_rrss_info *info, char *err, size_t errcap)
+{
+    if (!lsqt_state_below_count(st))
+        return lsqt_rrss_pilot(cx, a, st, rx, pilot_total, run_paths, begin, n_paths, o, ps, info, err, errcap);
+    memset(info, 0, sizeof *info);
+    memset(ps, 0, sizeof *ps);
+    return pilot_sides(cx, a, st, ps, rx, pilot_total, run_paths, begin, n_paths, o, info, err, errcap);
+}
+
+int lsqt_rrss_pilot_continue_sides(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *ps, uint64_t begin,
+                                   uint64_t n_paths, const lsqt_sim_opts *o, lsqt_rrss_info *info, char *err,
+                                   size_t errcap)
+{
+    if (!lsqt_state_below_count(ps)) return lsqt_rrss_pilot_continue(cx, a, ps, begin, n_paths, o, info, err, errcap);
+    memset(info, 0, sizeof *info);
+    return pilot_sides(cx, a, NULL, ps, (int)ps->rx, ps->pilot_paths, ps->span_end, begin, n_paths, o, info, err,
+                       errcap);
 }
 
 int lsqt_simulate_sides(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint64_t add_paths,

@@ -13,27 +13,6 @@
 #include "lsqt/lss.h"
 #include "lsqt/util.h"
 
-/* --from-below (below.h): a two-sided state runs each side with its own assembly, RRSS
- * per side for a fresh state (an interrupted pilot chooses from what it did), then both
- * sides on the same paths. Shards are refused before (plan_sides). */
-static int run_sides(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, const lsqt_cli *c, int fresh_rrss,
-                     uint64_t pilot, uint64_t add, const lsqt_sim_opts *so, lsqt_sim_stats *stats,
-                     lsqt_rrss_info *rinfo, char *err, size_t errcap)
-{
-    const uint64_t before = st->paths;
-    int rc = 0;
-    if (fresh_rrss) {
-        rc = lsqt_rrss_sides(cx, a, st, c->rx, pilot, so, rinfo, err, errcap);
-        if (!rc && rinfo->interrupted) add = 0;
-        else if (!rc && add != UINT64_MAX) add -= st->paths;
-    }
-    if (!rc && add) rc = lsqt_simulate_sides(cx, a, st, add, so, stats, err, errcap);
-    stats->seconds += rinfo->seconds;
-    stats->paths_added = st->paths - before;
-    if (rinfo->interrupted) stats->interrupted = 1, stats->stop_reason = *so->stop ? LSQT_STOP_INTERRUPT : LSQT_STOP_TIME;
-    return rc;
-}
-
 int lsqt_run_stages(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, const lsqt_cli *c, const char *lss_path,
                     const char *own_lss, const lsqt_sim_opts *so, lsqt_stages *o, char *err, size_t errcap)
 {
@@ -68,15 +47,10 @@ int lsqt_run_stages(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, co
         if (o->pilot > c->paths) o->pilot = c->paths;
     }
     int finish_pilot = 1;
-    const int two = lsqt_state_below_count(st) > 0;
-    if (two && !c->shard_n) {
-        rc = run_sides(cx, a, st, c, fresh_rrss, o->pilot, add, so, &o->stats, &o->rinfo, err, errcap);
-    } else if (c->shard_n) {
-        if (two && fresh_rrss) {
-            snprintf(err, errcap, "--shard: a fresh RRSS run with slices from below (--from-below) cannot be "
-                                  "sharded yet (its pilot is not): run its first -p in one process, or use --wi-spread");
-            rc = 2;
-        } else if (c->refine && st->paths == 0 && !owes) {
+    /* (every run below goes through the _sides functions: a state with slices from below
+     * runs each side with its own assembly on the same paths, below.h) */
+    if (c->shard_n) {
+        if (c->refine && st->paths == 0 && !owes) {
             snprintf(err, errcap, "--refine: '%s' holds no merged run yet: run the shards without --refine first, "
                                   "then lsqt-cl merge", lss_path ? lss_path : "the LSS");
             rc = 2;
@@ -119,11 +93,11 @@ int lsqt_run_stages(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, co
             }
             if (fresh_rrss && resumed) {
                 o->ps = prev;
-                rc = lsqt_rrss_pilot_continue(cx, a, &o->ps, resume, o->part_hi - resume, so, &o->rinfo, err, errcap);
+                rc = lsqt_rrss_pilot_continue_sides(cx, a, &o->ps, resume, o->part_hi - resume, so, &o->rinfo, err, errcap);
                 if (rc) lsqt_state_free(&o->ps);
             } else if (fresh_rrss) {
                 /* the pilot's part, on every slice's candidates; the merge chooses */
-                rc = lsqt_rrss_pilot(cx, a, st, c->rx, o->pilot, c->paths, o->part_lo, o->part_hi - o->part_lo, so, &o->ps, &o->rinfo,
+                rc = lsqt_rrss_pilot_sides(cx, a, st, c->rx, o->pilot, c->paths, o->part_lo, o->part_hi - o->part_lo, so, &o->ps, &o->rinfo,
                                      err, errcap);
             }
             if (fresh_rrss) {
@@ -151,7 +125,7 @@ int lsqt_run_stages(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, co
         /* RRSS: the pilot (fresh, or the rest of a saved one), the choice, the rest of the
          * run. Checkpoints during the pilot save the pilot state, which continues exactly. */
         if (fresh_rrss) {
-            rc = lsqt_rrss_pilot(cx, a, st, c->rx, o->pilot, add == UINT64_MAX ? o->pilot : c->paths, 0, o->pilot, so, &o->ps,
+            rc = lsqt_rrss_pilot_sides(cx, a, st, c->rx, o->pilot, add == UINT64_MAX ? o->pilot : c->paths, 0, o->pilot, so, &o->ps,
                                  &o->rinfo, err, errcap);
             o->have_ps = !rc;
         } else if (pilot_base) {
@@ -174,7 +148,7 @@ int lsqt_run_stages(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, co
                 snprintf(err, errcap, "'%s' does not hold one range [0, h) of its RRSS pilot", lss_path);
                 rc = 1;
             } else {
-                rc = lsqt_rrss_pilot_continue(cx, a, &o->ps, held, o->ps.pilot_paths - held, so, &o->rinfo, err, errcap);
+                rc = lsqt_rrss_pilot_continue_sides(cx, a, &o->ps, held, o->ps.pilot_paths - held, so, &o->rinfo, err, errcap);
             }
         }
         if (o->have_ps && !rc) {
@@ -195,7 +169,7 @@ int lsqt_run_stages(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, co
                 else if (add != UINT64_MAX) add -= st->paths;
             }
         }
-        if (!rc && !o->rinfo.interrupted) rc = lsqt_simulate(cx, a, st, add, so, &o->stats, err, errcap);
+        if (!rc && !o->rinfo.interrupted) rc = lsqt_simulate_sides(cx, a, st, add, so, &o->stats, err, errcap);
         o->stats.seconds += o->rinfo.seconds;
         o->stats.paths_added = st->paths - paths_before;
         if (o->rinfo.interrupted) o->stats.interrupted = 1, o->stats.stop_reason = *so->stop ? LSQT_STOP_INTERRUPT : LSQT_STOP_TIME;

@@ -135,7 +135,7 @@ expect 2 "differ in their stage" -- "$BIN" merge x.lss r.lsqt.shard-0-of-3.lss m
 expect 2 "holds no merged run yet" -- "$BIN" -p 3000 -wo 4 -wi 16 --shard 0/3 --refine --lss none.lss r.lsqt
 
 # Two-sided states (--from-below): shards of a spread run, and of a continued RRSS run,
-# merge into one process's LSS and both RAWs; a fresh RRSS pilot is not sharded (yet).
+# merge into one process's LSS and both RAWs, the two-sided RRSS pilot too.
 fresh w1; fresh w2
 F2=(-p 3000 -wo 4 -wi 16 --wi-spread --from-below -s 4)
 bash "$SH" 2 w1.lsqt "${F2[@]}" -q >/dev/null 2>&1 || bad "local-shards.sh (two-sided) failed"
@@ -150,8 +150,11 @@ one -p 2500 -H w4.lsqt
 same w3.lsqt.lss w4.lsqt.lss
 same w3.lsqt.below.R.raw w4.lsqt.below.R.raw
 same w3.lsqt.T.raw w4.lsqt.T.raw
-fresh w5
-expect 2 "cannot be sharded yet" -- "$BIN" -p 1000 -wo 4 -wi 16 --from-below --shard 0/2 w5.lsqt
+fresh w5; fresh w6
+bash "$SH" 2 w5.lsqt -p 3000 -wo 4 -wi 16 --from-below -q >/dev/null 2>&1 || bad "local-shards.sh (two-sided RRSS) failed"
+one -p 3000 -wo 4 -wi 16 --from-below w6.lsqt
+same w5.lsqt.lss w6.lsqt.lss
+same w5.lsqt.below.raw w6.lsqt.below.raw
 
 # 6. Bad flags.
 for v in 4/4 1 a/b 0/0 -1/2 1/70000; do expect 2 "bad value '$v' for --shard" -- "$BIN" --shard "$v" r.lsqt; done

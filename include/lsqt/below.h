@@ -45,23 +45,29 @@ int lsqt_state_split_sides(const lsqt_state *st, lsqt_state *above, lsqt_state *
 int lsqt_state_join_sides(const lsqt_state *above, const lsqt_state *below, lsqt_state *out, char *err,
                           size_t errcap);
 
-/* lsqt_rrss and lsqt_simulate(_range) for a state that may have slices from below: a
- * one-sided state goes straight through; a two-sided one runs each side with its own
- * assembly (A, and A mirrored for below) through those functions, on the same paths:
- *  - RRSS: the pilot from above first; the one from below then runs as many paths (not
- *    stopped early), so both hold the same;
- *  - the run goes in segments of both sides (about a second each): a stop (interrupt,
- *    time limit) ends the side from above, and the side from below then does the same
- *    paths; --target-error is checked on both sides at the counts lsqt_simulate uses;
- *    checkpoints get the joined state between segments.
+/* lsqt_simulate(_range) for a state that may have slices from below: a one-sided state
+ * goes straight through; a two-sided one runs each side with its own assembly (A, and A
+ * mirrored for below) on the same paths, in segments of both sides (about a second each):
+ * a stop (interrupt, time limit) ends the side from above, and the side from below then
+ * does the same paths; --target-error is checked on both sides at the counts
+ * lsqt_simulate uses; checkpoints get the joined state between segments.
  * Same returns and stats as the functions they wrap. */
-int lsqt_rrss_sides(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, int rx, uint64_t pilot_paths,
-                    const lsqt_sim_opts *o, lsqt_rrss_info *info, char *err, size_t errcap);
 int lsqt_simulate_sides(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint64_t add_paths,
                         const lsqt_sim_opts *o, lsqt_sim_stats *stats, char *err, size_t errcap);
 int lsqt_simulate_range_sides(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint64_t begin,
                               uint64_t add_paths, const lsqt_sim_opts *o, lsqt_sim_stats *stats, char *err,
                               size_t errcap);
+
+/* lsqt_rrss_pilot and lsqt_rrss_pilot_continue (rrss.h) for both sides: a two-sided
+ * pilot state holds the candidate blocks of the slices from above, then those from below,
+ * on the same paths (the side from below runs as many as the side from above did, not
+ * stopped early; no checkpoints). One-sided states go straight through. */
+int lsqt_rrss_pilot_sides(lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st, int rx, uint64_t pilot_total,
+                          uint64_t run_paths, uint64_t begin, uint64_t n_paths, const lsqt_sim_opts *o, lsqt_state *ps,
+                          lsqt_rrss_info *info, char *err, size_t errcap);
+int lsqt_rrss_pilot_continue_sides(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *ps, uint64_t begin,
+                                   uint64_t n_paths, const lsqt_sim_opts *o, lsqt_rrss_info *info, char *err,
+                                   size_t errcap);
 
 /* The RAW name of the side from below: RAW with its final ".raw" replaced by ".below.raw"
  * (appended when RAW does not end in ".raw"). */
