@@ -1,12 +1,12 @@
 #!/usr/bin/env bash
-# Builds everything with clang under AddressSanitizer + UBSan (and the libFuzzer targets),
+# Builds everything (C and lssview's C++) with clang under AddressSanitizer + UBSan (and the libFuzzer targets),
 # runs the whole ctest suite in that build (OpenCL tests included, on the default
 # device), then fuzzes the LSQT parser, the LSS reader and the --wi-file parser for
 # SECONDS in all (default 60), starting from the seed corpora.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 BUDGET=${1:-60}
-CC=clang cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=Debug -DLSQT_FUZZ=ON -DLSQT_SANITIZE=ON \
+CC=clang CXX=clang++ cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=Debug -DLSQT_FUZZ=ON -DLSQT_SANITIZE=ON \
   -DLSQT_WERROR=ON >/dev/null
 cmake --build build-fuzz -j "$(nproc)"
 export UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1

@@ -1,0 +1,546 @@
+// lssview: previews of an LSS file (SPEC §7). A sphere under a few directional lights,
+// direct lighting only, from the BSDF estimates of the LSS (read by the project's C
+// library, no second reader); or, with --error, the relative standard error of every
+// pixel's value in false colour with a colour bar.
+//
+// Camera and scene. Orthographic camera looking down -z (view direction V = +z towards
+// the camera, +x right, +y up) at a unit sphere whose radius is 0.45 of the image width,
+// centred. Pixel (i, j) (row j from the top) has its centre at
+//   x = (i + 0.5 - dim/2) / (0.45 dim),  y = (dim/2 - j - 0.5) / (0.45 dim),
+// and the normal n = (x, y, sqrt(1 - x² - y²)) where x² + y² < 1 (black outside).
+// Value = sum over lights L of E_L · f(wo, wi_L) · max(cos θi_L, 0), in the local frame
+// z = n, x = V projected onto the tangent plane: wo = V = (sin θo, 0, cos θo) as the
+// slices store it (paths enter along -wo, i.e. from the camera), wi_L = the direction
+// towards light L. Light below the local horizon adds nothing (direct light only, the
+// sphere is opaque to it), so only the reflection half of the BSDF is used.
+//
+// Interpolation of f(θo, wi) between the estimates (isotropy: f depends on θo, θi, Δφ,
+// so every direction is expressed in the slice frame where wo lies at azimuth 0):
+//  - in θo: linearly between the two slices θ_a <= θo <= θ_b (sorted, slices from below
+//    ignored). To keep a sharp lobe from splitting into two ghosts, wi is carried to each
+//    slice by the disk automorphism of its projection p = (x, y) on the unit disk,
+//    p -> (p + c)/(1 + c p) (complex, c = (s - s_k)/(1 - s s_k), s = sin θo, s_k =
+//    sin θ_k): real c keeps the plane of incidence and the y-mirror symmetry, the horizon
+//    stays the horizon, it is the identity at θo = θ_k, and it sends the mirror direction
+//    of θo, p = -s, exactly onto the slice's mirror direction -s_k.
+//  - within a slice: the stored directions (y >= 0) and their mirror images (y -> -y,
+//    the BSDF is mirror symmetric about the plane of wo), upper hemisphere only, are
+//    scattered data. f at q is the weighted mean of the K = 8 nearest (chord distance d),
+//    weight (1 - (d/R)²)² with R = min(distance of the 9th nearest, the --max-gap radius):
+//    a neighbour enters or leaves the set with weight 0, so the result is continuous in
+//    q, and it is a convex combination, so it never leaves the range of its neighbours
+//    (no spikes, no overshoot; a constant BSDF comes out exactly constant).
+//  - no stored direction within the --max-gap angle (default 40°) of q, or θo outside
+//    the slices' range: the pixel is not covered by the LSS and is marked magenta
+//    (1, 0, 1), never filled in.
+// Errors (--error): the estimates of one slice share their paths, so their errors are
+// combined as fully correlated (err = the same weighted mean of the errors, summed over
+// lights like the values): an upper bound that scales as 1/sqrt(paths) like each error.
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <OpenImageIO/imageio.h>
+#include <glm/glm.hpp>
+
+#include "lsqt/lss.h"
+#include "lsqt/state.h"
+#include "lsqt/tally.h"
+
+namespace {
+
+constexpr int K_NEAR = 8;
+constexpr double SPHERE_FRAC = 0.45; // sphere radius / image width
+
+struct Light {
+    glm::dvec3 dir; // unit, towards the light
+    double E;       // irradiance on a surface facing it
+};
+
+struct Sample {
+    glm::dvec3 d;
+    double f, e;
+};
+
+struct Slice {
+    double theta, s;
+    std::vector<Sample> pts; // upper hemisphere, both mirror images
+};
+
+struct Options {
+    std::string in, out;
+    int dim = 512;
+    double mul = 1.0;
+    bool error = false;
+    double error_max = 0.0; // 0: automatic
+    double max_gap_deg = 40.0;
+    bool quiet = false;
+    std::vector<Light> lights;
+};
+
+void usage(FILE *f)
+{
+    std::fprintf(f,
+                 "usage: lssview [OPTIONS] IN.lss\n"
+                 "Renders a sphere with the BSDF of IN.lss under directional lights (direct light only).\n"
+                 "  -o, --output PATH    image to write, any format OpenImageIO writes (default IN.lss.png,\n"
+                 "                       IN.lss.error.png with --error); .exr/.hdr/.pfm get linear values,\n"
+                 "                       others are tone mapped (1 - exp(-v)) and sRGB encoded\n"
+                 "  --image-dim N        image width and height in pixels (512; 16-8192)\n"
+                 "  --image-mul M        brightness: values are multiplied by M (1)\n"
+                 "  --error              the relative standard error of each pixel in false colour, with a bar\n"
+                 "  --error-max E        top of the colour bar, relative (default: the largest error, rounded up)\n"
+                 "  --light X,Y,Z,E      a directional light towards (X, Y, Z) (camera space: +x right, +y up,\n"
+                 "                       +z to the camera) of irradiance E; repeat it; replaces the default lights\n"
+                 "                       (-1,1,1.2) E=2.5, (1,0.2,0.6) E=0.8, (0,1,-0.3) E=1.2\n"
+                 "  --max-gap DEG        a direction with no estimate within DEG degrees is uncovered (40)\n"
+                 "  -q, --quiet          no summary line\n"
+                 "  -h, --help           this text\n"
+                 "Pixels the LSS does not cover (view angle beyond the slices, or no estimate near the light\n"
+                 "direction) are magenta. Exit status: 0 success, 2 bad input or flags, 1 other failure.\n");
+}
+
+[[noreturn]] void die(int code, const char *fmt, const char *a = "", const char *b = "")
+{
+    std::fprintf(stderr, "lssview: ");
+    std::fprintf(stderr, fmt, a, b);
+    std::fprintf(stderr, "\n");
+    std::exit(code);
+}
+
+double parse_num(const char *flag, const char *v, double lo, double hi)
+{
+    char *end = nullptr;
+    errno = 0;
+    double x = std::strtod(v, &end);
+    if (end == v || *end || errno || !std::isfinite(x) || x < lo || x > hi) {
+        char range[96];
+        std::snprintf(range, sizeof range, "%s: '%%s' is not a number in [%g, %g]", flag, lo, hi);
+        die(2, range, v);
+    }
+    return x;
+}
+
+Options parse_args(int argc, char **argv)
+{
+    Options o;
+    bool lights_given = false;
+    for (int i = 1; i < argc; i++) {
+        std::string a = argv[i];
+        std::string val;
+        bool has_eq = false;
+        if (a.size() > 2 && a[0] == '-' && a.find('=') != std::string::npos) {
+            val = a.substr(a.find('=') + 1);
+            a = a.substr(0, a.find('='));
+            has_eq = true;
+        }
+        auto need = [&]() -> std::string {
+            if (has_eq) return val;
+            if (i + 1 >= argc) die(2, "%s needs a value (see --help)", a.c_str());
+            return argv[++i];
+        };
+        if (a == "-h" || a == "--help") {
+            usage(stdout);
+            std::exit(0);
+        } else if (a == "-o" || a == "--output") {
+            o.out = need();
+        } else if (a == "--image-dim") {
+            std::string v = need();
+            double d = parse_num("--image-dim", v.c_str(), 16, 8192);
+            if (d != std::floor(d)) die(2, "--image-dim: '%s' is not a whole number", v.c_str());
+            o.dim = (int)d;
+        } else if (a == "--image-mul") {
+            std::string v = need();
+            o.mul = parse_num("--image-mul", v.c_str(), 0, 1e30);
+        } else if (a == "--error") {
+            o.error = true;
+        } else if (a == "--error-max") {
+            std::string v = need();
+            o.error_max = parse_num("--error-max", v.c_str(), 1e-12, 1e12);
+        } else if (a == "--max-gap") {
+            std::string v = need();
+            o.max_gap_deg = parse_num("--max-gap", v.c_str(), 0.01, 180);
+        } else if (a == "--light") {
+            std::string v = need();
+            double c[4];
+            char tail = 0;
+            if (std::sscanf(v.c_str(), "%lf,%lf,%lf,%lf%c", &c[0], &c[1], &c[2], &c[3], &tail) != 4)
+                die(2, "--light: '%s' is not X,Y,Z,E", v.c_str());
+            glm::dvec3 d(c[0], c[1], c[2]);
+            double len = glm::length(d);
+            if (!std::isfinite(len) || len <= 0 || !std::isfinite(c[3]) || c[3] < 0)
+                die(2, "--light: '%s' needs a nonzero direction and E >= 0", v.c_str());
+            if (!lights_given) o.lights.clear();
+            lights_given = true;
+            o.lights.push_back({d / len, c[3]});
+        } else if (a == "-q" || a == "--quiet") {
+            o.quiet = true;
+        } else if (a.size() > 1 && a[0] == '-') {
+            die(2, "unknown option '%s' (see --help)", argv[i]);
+        } else {
+            if (!o.in.empty()) die(2, "more than one input ('%s' and '%s')", o.in.c_str(), argv[i]);
+            o.in = argv[i];
+        }
+    }
+    if (o.in.empty()) {
+        usage(stderr);
+        std::exit(2);
+    }
+    if (!lights_given) {
+        o.lights = {{glm::normalize(glm::dvec3(-1, 1, 1.2)), 2.5},
+                    {glm::normalize(glm::dvec3(1, 0.2, 0.6)), 0.8},
+                    {glm::normalize(glm::dvec3(0, 1, -0.3)), 1.2}};
+    }
+    if (o.out.empty()) o.out = o.in + (o.error ? ".error.png" : ".png");
+    return o;
+}
+
+// The slices from above, sorted by θo, each with its upper-hemisphere estimates and their
+// mirror images.
+std::vector<Slice> build_slices(const lsqt_state &st, const lsqt_slice_est *est)
+{
+    std::vector<Slice> out;
+    for (int s = 0; s < st.n_slices; s++) {
+        if (st.slice_flags && (st.slice_flags[s] & LSQT_SLICE_BELOW)) continue;
+        Slice sl;
+        sl.theta = st.theta_o[s];
+        sl.s = std::sin(sl.theta);
+        for (int k = 0; k < st.n_wi; k++) {
+            const float *w = st.wi + ((size_t)s * (size_t)st.n_wi + (size_t)k) * 4;
+            double f = est[s].f[k].mean, e = est[s].f[k].err;
+            if (!(w[2] > 0) || !std::isfinite(f)) continue;
+            glm::dvec3 d = glm::normalize(glm::dvec3(w[0], w[1], w[2]));
+            sl.pts.push_back({d, f, e});
+            if (d.y > 1e-7) sl.pts.push_back({glm::dvec3(d.x, -d.y, d.z), f, e});
+        }
+        out.push_back(std::move(sl));
+    }
+    std::sort(out.begin(), out.end(), [](const Slice &a, const Slice &b) { return a.theta < b.theta; });
+    return out;
+}
+
+struct Eval {
+    double f, e;
+    bool ok;
+};
+
+// Scattered-data interpolation within one slice (see the top of the file).
+Eval eval_slice(const Slice &sl, const glm::dvec3 &q, double rmax_chord)
+{
+    double dist[K_NEAR + 1];
+    int idx[K_NEAR + 1];
+    int n = 0;
+    const size_t np = sl.pts.size();
+    for (size_t j = 0; j < np; j++) {
+        glm::dvec3 v = sl.pts[j].d - q;
+        double d2 = glm::dot(v, v);
+        if (n == K_NEAR + 1 && d2 >= dist[K_NEAR]) continue;
+        int p = n < K_NEAR + 1 ? n++ : K_NEAR;
+        while (p > 0 && dist[p - 1] > d2) {
+            dist[p] = dist[p - 1];
+            idx[p] = idx[p - 1];
+            p--;
+        }
+        dist[p] = d2;
+        idx[p] = (int)j;
+    }
+    double R2 = rmax_chord * rmax_chord;
+    if (n == K_NEAR + 1 && dist[K_NEAR] < R2) R2 = dist[K_NEAR];
+    double sw = 0, sf = 0, se = 0;
+    for (int m = 0; m < n && m < K_NEAR; m++) {
+        if (dist[m] >= R2) break;
+        double u = 1.0 - dist[m] / R2;
+        double w = u * u;
+        sw += w;
+        sf += w * sl.pts[(size_t)idx[m]].f;
+        se += w * sl.pts[(size_t)idx[m]].e;
+    }
+    if (!(sw > 0)) return {0, 0, false};
+    return {sf / sw, se / sw, true};
+}
+
+// wi (slice frame of θo) carried to the frame of a slice at sin θ_k = sk.
+glm::dvec3 warp(const glm::dvec3 &wi, double s, double sk)
+{
+    double c = (s - sk) / (1.0 - s * sk);
+    if (c == 0) return wi;
+    // (p + c) / (1 + c p), p = x + i y
+    double nr = wi.x + c, ni = wi.y;
+    double dr = 1.0 + c * wi.x, di = c * wi.y;
+    double den = dr * dr + di * di;
+    double x = (nr * dr + ni * di) / den, y = (ni * dr - nr * di) / den;
+    double z2 = 1.0 - x * x - y * y;
+    return glm::dvec3(x, y, z2 > 0 ? std::sqrt(z2) : 0.0);
+}
+
+struct Renderer {
+    const std::vector<Slice> &slices;
+    const std::vector<Light> &lights;
+    double rmax_chord;
+
+    // f and its error at (θo, wi in the frame where wo = (sin θo, 0, cos θo)).
+    Eval f(double theta_o, const glm::dvec3 &wi) const
+    {
+        if (slices.empty() || theta_o < slices.front().theta || theta_o > slices.back().theta) return {0, 0, false};
+        size_t b = 0;
+        while (b + 1 < slices.size() && slices[b + 1].theta < theta_o) b++;
+        // slices[b].theta <= theta_o; the upper neighbour, if theta_o is not on slice b
+        if (slices[b].theta == theta_o || b + 1 == slices.size()) {
+            if (slices[b].theta != theta_o) return {0, 0, false};
+            return eval_slice(slices[b], wi, rmax_chord);
+        }
+        const Slice &A = slices[b], &B = slices[b + 1];
+        double t = (theta_o - A.theta) / (B.theta - A.theta);
+        double s = std::sin(theta_o);
+        Eval ea = eval_slice(A, warp(wi, s, A.s), rmax_chord);
+        Eval eb = eval_slice(B, warp(wi, s, B.s), rmax_chord);
+        if (!ea.ok || !eb.ok) return {0, 0, false};
+        return {(1 - t) * ea.f + t * eb.f, (1 - t) * ea.e + t * eb.e, true};
+    }
+
+    // value and error of the pixel with normal n; ok false when uncovered.
+    Eval pixel(const glm::dvec3 &n) const
+    {
+        const glm::dvec3 V(0, 0, 1);
+        double cos_o = std::min(1.0, std::max(-1.0, n.z));
+        double theta_o = std::acos(cos_o);
+        glm::dvec3 t = V - cos_o * n;
+        double tl = glm::length(t);
+        t = tl > 1e-12 ? t / tl : glm::normalize(glm::dvec3(1, 0, 0) - n.x * n);
+        glm::dvec3 b = glm::cross(n, t);
+        double v = 0, e = 0;
+        for (const Light &L : lights) {
+            double ci = glm::dot(L.dir, n);
+            if (ci <= 0 || L.E == 0) continue;
+            glm::dvec3 wi(glm::dot(L.dir, t), glm::dot(L.dir, b), ci);
+            Eval fe = f(theta_o, wi);
+            if (!fe.ok) return {0, 0, false};
+            v += L.E * ci * fe.f;
+            e += L.E * ci * fe.e;
+        }
+        if (slices.empty() || theta_o < slices.front().theta || theta_o > slices.back().theta) return {0, 0, false};
+        return {v, e, true};
+    }
+};
+
+// A 3x5 pixel font for the colour bar's labels.
+const char *glyph(char c)
+{
+    switch (c) {
+    case '0': return "111101101101111";
+    case '1': return "010110010010111";
+    case '2': return "111001111100111";
+    case '3': return "111001111001111";
+    case '4': return "101101111001001";
+    case '5': return "111100111001111";
+    case '6': return "111100111101111";
+    case '7': return "111001001001001";
+    case '8': return "111101111101111";
+    case '9': return "111101111001111";
+    case '.': return "000000000000010";
+    case '%': return "101001010100101";
+    case 'e': return "000111111100111";
+    case '-': return "000000111000000";
+    case '+': return "000010111010000";
+    default: return "000000000000000";
+    }
+}
+
+void draw_text(std::vector<float> &img, int W, int H, int x0, int y0, int scale, const std::string &s)
+{
+    for (size_t k = 0; k < s.size(); k++) {
+        const char *g = glyph(s[k]);
+        for (int gy = 0; gy < 5; gy++)
+            for (int gx = 0; gx < 3; gx++) {
+                if (g[gy * 3 + gx] != '1') continue;
+                for (int dy = 0; dy < scale; dy++)
+                    for (int dx = 0; dx < scale; dx++) {
+                        int x = x0 + ((int)k * 4 + gx) * scale + dx, y = y0 + gy * scale + dy;
+                        if (x < 0 || y < 0 || x >= W || y >= H) continue;
+                        for (int c = 0; c < 3; c++) img[((size_t)y * (size_t)W + (size_t)x) * 3 + (size_t)c] = 1.0f;
+                    }
+            }
+    }
+}
+
+// False colour for u in [0, 1]: dark blue, blue, green, yellow, red.
+glm::dvec3 false_colour(double u)
+{
+    static const glm::dvec3 stops[] = {{0.05, 0.05, 0.35}, {0.1, 0.35, 0.9}, {0.1, 0.75, 0.3}, {0.95, 0.9, 0.1},
+                                       {0.9, 0.1, 0.05}};
+    u = std::min(1.0, std::max(0.0, u)) * 4.0;
+    int i = std::min(3, (int)u);
+    return glm::mix(stops[i], stops[i + 1], u - i);
+}
+
+double nice_ceil(double x)
+{
+    if (!(x > 0)) return 1.0;
+    double p = std::pow(10.0, std::floor(std::log10(x)));
+    for (double m : {1.0, 2.0, 2.5, 5.0, 10.0})
+        if (m * p >= x * (1 - 1e-12)) return m * p;
+    return 10 * p;
+}
+
+std::string percent_label(double v)
+{
+    char b[32];
+    std::snprintf(b, sizeof b, "%.3g%%", v * 100);
+    return b;
+}
+
+bool is_linear_format(const std::string &path)
+{
+    std::string ext = path.substr(path.find_last_of('.') == std::string::npos ? path.size() : path.find_last_of('.'));
+    for (char &c : ext) c = (char)std::tolower((unsigned char)c);
+    return ext == ".exr" || ext == ".hdr" || ext == ".pfm";
+}
+
+double srgb(double v)
+{
+    v = std::min(1.0, std::max(0.0, v));
+    return v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1 / 2.4) - 0.055;
+}
+
+} // namespace
+
+int main(int argc, char **argv)
+{
+    Options o = parse_args(argc, argv);
+
+    lsqt_state st;
+    std::memset(&st, 0, sizeof st);
+    char err[512];
+    if (lsqt_lss_read(o.in.c_str(), &st, err, sizeof err)) die(2, "%s", err);
+    if (st.stage != LSQT_STAGE_RUN) {
+        lsqt_state_free(&st);
+        die(2, "%s: an RRSS pilot shard, not a run's state (merge the shards first)", o.in.c_str());
+    }
+    if (st.paths == 0) {
+        lsqt_state_free(&st);
+        die(2, "%s: holds no paths", o.in.c_str());
+    }
+    lsqt_slice_est *est = lsqt_estimates(&st);
+    if (!est) {
+        lsqt_state_free(&st);
+        die(1, "out of memory");
+    }
+    if (o.error && st.paths < LSQT_MIN_ERR_PATHS) {
+        char msg[64];
+        std::snprintf(msg, sizeof msg, "%llu", (unsigned long long)LSQT_MIN_ERR_PATHS);
+        die(2, "%s holds too few paths per slice for error bars (at least %s are needed)", o.in.c_str(), msg);
+    }
+    std::vector<Slice> slices = build_slices(st, est);
+    lsqt_estimates_free(est, st.n_slices);
+    lsqt_state_free(&st);
+    if (slices.size() < 2 && !o.quiet)
+        std::fprintf(stderr, "lssview: warning: fewer than two slices from above: only θo = θ_0 is covered\n");
+
+    const double gap = o.max_gap_deg * M_PI / 180.0;
+    Renderer r{slices, o.lights, 2.0 * std::sin(std::min(gap, M_PI) / 2.0)};
+    const int D = o.dim;
+    std::vector<double> val((size_t)D * D, 0.0), rel((size_t)D * D, 0.0);
+    std::vector<unsigned char> kind((size_t)D * D, 0); // 0 outside, 1 value, 2 uncovered
+    const double rad = SPHERE_FRAC * D;
+    auto rows = [&](int j0, int j1) {
+        for (int j = j0; j < j1; j++)
+            for (int i = 0; i < D; i++) {
+                double x = (i + 0.5 - D / 2.0) / rad, y = (D / 2.0 - j - 0.5) / rad;
+                double r2 = x * x + y * y;
+                if (r2 >= 1) continue;
+                size_t p = (size_t)j * (size_t)D + (size_t)i;
+                Eval e = r.pixel(glm::dvec3(x, y, std::sqrt(1 - r2)));
+                if (!e.ok) {
+                    kind[p] = 2;
+                    continue;
+                }
+                kind[p] = 1;
+                val[p] = e.f;
+                rel[p] = e.f > 0 ? e.e / e.f : (e.e > 0 ? INFINITY : 0.0);
+            }
+    };
+    unsigned nt = std::max(1u, std::min(16u, std::thread::hardware_concurrency()));
+    std::vector<std::thread> pool;
+    for (unsigned t = 0; t < nt; t++) pool.emplace_back(rows, (int)(D * (long)t / nt), (int)(D * (long)(t + 1) / nt));
+    for (auto &th : pool) th.join();
+
+    size_t n_unc = (size_t)std::count(kind.begin(), kind.end(), (unsigned char)2);
+    const bool linear = is_linear_format(o.out);
+    int W = D;
+    std::vector<float> img;
+    double emax = o.error_max;
+    std::vector<double> errs;
+    if (!o.error) {
+        img.assign((size_t)D * D * 3, 0.0f);
+        for (size_t p = 0; p < val.size(); p++) {
+            float *px = &img[p * 3];
+            if (kind[p] == 2) {
+                px[0] = 1, px[1] = 0, px[2] = 1;
+            } else if (kind[p] == 1) {
+                double v = val[p] * o.mul;
+                float g = (float)(linear ? v : srgb(1.0 - std::exp(-std::max(0.0, v))));
+                px[0] = px[1] = px[2] = g;
+            }
+        }
+    } else {
+        for (size_t p = 0; p < val.size(); p++)
+            if (kind[p] == 1 && val[p] > 0 && std::isfinite(rel[p])) errs.push_back(rel[p]);
+        if (emax == 0) emax = nice_ceil(errs.empty() ? 0.0 : *std::max_element(errs.begin(), errs.end()));
+        int bar = std::max(40, D / 6);
+        W = D + bar;
+        img.assign((size_t)W * D * 3, 0.0f);
+        for (int j = 0; j < D; j++)
+            for (int i = 0; i < D; i++) {
+                size_t p = (size_t)j * (size_t)D + (size_t)i;
+                float *px = &img[((size_t)j * (size_t)W + (size_t)i) * 3];
+                glm::dvec3 c(0);
+                if (kind[p] == 2) c = glm::dvec3(1, 0, 1);
+                else if (kind[p] == 1 && val[p] > 0) c = false_colour(rel[p] / emax);
+                else if (kind[p] == 1) c = glm::dvec3(0.3); // no light reaches it: no relative error
+                px[0] = (float)c.x, px[1] = (float)c.y, px[2] = (float)c.z;
+            }
+        // the bar: bottom 0, top emax, with labels at 0, emax/2, emax
+        int scale = std::max(1, D / 170);
+        int top = D / 10, bottom = D - D / 10, x0 = D + bar / 8, x1 = D + bar / 8 + bar / 4;
+        for (int y = top; y <= bottom; y++) {
+            glm::dvec3 c = false_colour((double)(bottom - y) / (bottom - top));
+            for (int x = x0; x < x1; x++) {
+                float *px = &img[((size_t)y * (size_t)W + (size_t)x) * 3];
+                px[0] = (float)c.x, px[1] = (float)c.y, px[2] = (float)c.z;
+            }
+        }
+        for (int k = 0; k <= 2; k++) {
+            int y = bottom - (bottom - top) * k / 2;
+            draw_text(img, W, D, x1 + 2 * scale, y - 2 * scale, scale, percent_label(emax * k / 2.0));
+        }
+    }
+
+    std::unique_ptr<OIIO::ImageOutput> out = OIIO::ImageOutput::create(o.out);
+    if (!out) die(2, "cannot write '%s': %s", o.out.c_str(), OIIO::geterror().c_str());
+    OIIO::ImageSpec spec(W, D, 3, linear ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
+    spec.attribute("oiio:ColorSpace", linear && !o.error ? "Linear" : "sRGB");
+    spec.attribute("ImageDescription", o.error ? "lssview --error: relative standard error, magenta: not covered"
+                                               : "lssview: BSDF sphere, magenta: not covered");
+    if (!out->open(o.out, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, img.data()) || !out->close())
+        die(1, "cannot write '%s': %s", o.out.c_str(), out->geterror().c_str());
+
+    if (!o.quiet) {
+        size_t n_sphere = (size_t)std::count_if(kind.begin(), kind.end(), [](unsigned char k) { return k != 0; });
+        std::printf("lssview: wrote %s (%dx%d), %zu of %zu sphere pixels not covered (magenta)\n", o.out.c_str(), W,
+                    D, n_unc, n_sphere);
+        if (o.error) {
+            std::sort(errs.begin(), errs.end());
+            auto q = [&](double p) { return errs.empty() ? NAN : errs[(size_t)(p * (double)(errs.size() - 1))]; };
+            std::printf("relative error: median %.4g, 90th percentile %.4g, max %.4g over %zu pixels (bar 0 to %g)\n",
+                        q(0.5), q(0.9), errs.empty() ? NAN : errs.back(), errs.size(), emax);
+        }
+    }
+    return 0;
+}
