@@ -8,6 +8,9 @@
 #        tools/bench.sh phases [PATHS] [lsqt-cl options...]: a slab of optical thickness 1
 #        between null layers with each phase function (default -p 1e6), and the slab over
 #        a Lambertian and an Oren-Nayar floor.
+#        tools/bench.sh lssview [lsqt-cl options...]: wall and CPU seconds of a 512x512 lssview
+#        render (PNG, the default lights) of LSS files of the tutorial (-p 1e4, default -wo/-wi
+#        unless given), the best of 3.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 P=${1:-1e6}
@@ -19,9 +22,31 @@ if [ "$P" = phases ]; then
   if [[ ${1:-} =~ ^[0-9.e]+$ ]]; then P=$1; shift; fi
 fi
 BIN=./build/lsqt-cl
-[ -x "$BIN" ] || bash tools/build.sh
+[ -x "$BIN" ] && [ -x ./build/tools/lssview/lssview ] || bash tools/build.sh
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
+if [ "$P" = lssview ]; then
+  printf "%-34s %9s %9s %9s\n" "lssview 512x512" n_wi wall_s cpu_s
+  for ex in examples/tutorial/Lambertian.lsqt examples/tutorial/Silver.lsqt examples/tutorial/Substr.lsqt; do
+    "$BIN" -q -R -p 1e4 --lss "$work/v.lss" -o "$work/v.raw" "$@" "$ex"
+    best=""
+    for _ in 1 2 3; do
+      TIMEFORMAT='%R %U %S'
+      { time ./build/tools/lssview/lssview -q "$work/v.lss" -o "$work/v.png" ; } 2>"$work/t"
+      read -r w u s < "$work/t"
+      line=$(python3 -c "print('%.3f %.3f' % ($w, $u + $s))")
+      if [ -z "$best" ] || python3 -c "import sys; sys.exit(0 if ${line% *} < ${best% *} else 1)"; then best=$line; fi
+    done
+    nwi=$(python3 - "$work/v.raw" <<'PY'
+import sys
+lines = open(sys.argv[1]).read().splitlines()[3:]
+print(sum(1 for l in lines if l.split()[0] == "0") // 2)
+PY
+)
+    printf "%-34s %9s %9s %9s\n" "$(basename "$ex") $*" "$nwi" ${best}
+  done
+  exit 0
+fi
 # wall_s: the simulation (launch loop); cpu_s: the whole process, user + sys
 printf "%-34s %10s %12s %9s %9s %12s %12s\n" example paths/slice "paths/s" wall_s cpu_s "max rel err" efficiency
 if [ "$MICRO" = 1 ]; then
