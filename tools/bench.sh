@@ -22,7 +22,7 @@ if [ "$P" = phases ]; then
   if [[ ${1:-} =~ ^[0-9.e]+$ ]]; then P=$1; shift; fi
 fi
 BIN=./build/lsqt-cl
-[ -x "$BIN" ] && [ -x ./build/tools/lssview/lssview ] || bash tools/build.sh
+[ -x "$BIN" ] && [ -x ./build/lssview ] || bash tools/build.sh
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 if [ "$P" = lssview ]; then
@@ -32,7 +32,7 @@ if [ "$P" = lssview ]; then
     best=""
     for _ in 1 2 3; do
       TIMEFORMAT='%R %U %S'
-      { time ./build/tools/lssview/lssview -q "$work/v.lss" -o "$work/v.png" ; } 2>"$work/t"
+      { time ./build/lssview -q "$work/v.lss" -o "$work/v.png" ; } 2>"$work/t"
       read -r w u s < "$work/t"
       line=$(python3 -c "print('%.3f %.3f' % ($w, $u + $s))")
       if [ -z "$best" ] || python3 -c "import sys; sys.exit(0 if ${line% *} < ${best% *} else 1)"; then best=$line; fi
