@@ -19,7 +19,7 @@
 static void usage(FILE *f, const char *prog)
 {
     fprintf(f,
-            "usage: %s FILE.lss [--json PATH]\n"
+            "usage: %s FILE.lss [--json PATH [--bsdf]]\n"
             "Prints what an LSS file (the progressive state of lsqt-cl) holds: its format version\n"
             "and layout, the canonical assembly and its hash, seed, precision, slices, incident\n"
             "direction count, device flags, the path ranges it holds, and per slice theta_o, paths,\n"
@@ -27,6 +27,10 @@ static void usage(FILE *f, const char *prog)
             "estimates and the count of non-finite ones. Needs no OpenCL device.\n"
             "\n"
             "      --json PATH   also write it as JSON (- is stdout; the text then goes to stderr)\n"
+            "      --bsdf        the JSON gets every slice's incident directions too, each with\n"
+            "                    the BSDF value (1/sr, not cosine-weighted) and its standard error:\n"
+            "                    \"bsdf\": [[x, y, z, f, f_err], ...] (y >= 0; the BSDF is mirror\n"
+            "                    symmetric in y; null for a value or error not known)\n"
             "  -h, --help        this text\n"
             "FILE - reads stdin. Exit status: 0 success, 1 an output could not be written,\n"
             "2 bad flags or a file that is not a readable LSS (missing, not a regular file,\n"
@@ -176,7 +180,7 @@ static void print_text(FILE *f, const char *path, const lsqt_state *st, const ls
 }
 
 static int write_json(const char *out, const char *path, const lsqt_state *st, const lsqt_slice_est *est,
-                      char *err, size_t errcap)
+                      int bsdf, char *err, size_t errcap)
 {
     lsqt_out af;
     if (lsqt_out_open(&af, out, err, errcap)) return -1;
@@ -204,7 +208,21 @@ static int write_json(const char *out, const char *path, const lsqt_state *st, c
     fprintf(f, ",\n \"slices\": [");
     for (int s = 0; s < st->n_slices; s++) {
         fprintf(f, "%s\n  ", s ? "," : "");
-        lsqt_json_slice(f, st, &est[s], s, 1);
+        lsqt_json_slice_fields(f, st, &est[s], s, 1);
+        if (!bsdf) {
+            fprintf(f, "}");
+            continue;
+        }
+        fprintf(f, ",\n   \"bsdf\": [");
+        for (int k = 0; k < st->n_wi; k++) {
+            const float *w = st->wi + ((size_t)s * (size_t)st->n_wi + (size_t)k) * 4;
+            fprintf(f, "%s[%.9g, %.9g, %.9g, ", k ? ", " : "", w[0], w[1], w[2]);
+            json_num(f, est[s].f[k].mean);
+            fprintf(f, ", ");
+            json_num(f, est[s].f[k].err);
+            fprintf(f, "]");
+        }
+        fprintf(f, "]}");
     }
     fprintf(f, "\n ]}\n");
     return lsqt_out_commit(&af, err, errcap);
@@ -215,6 +233,7 @@ int lsqt_info_main(const char *prog, int argc, char **argv)
     /* A closed pipe is a write error to report, not a silent death. */
     signal(SIGPIPE, SIG_IGN);
     const char *input = NULL, *json = NULL;
+    int bsdf = 0;
     char msg[LSQT_PATH_CAP + 1024];
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
@@ -231,6 +250,9 @@ int lsqt_info_main(const char *prog, int argc, char **argv)
                 json = v;
                 continue;
             }
+        } else if (strcmp(a, "--bsdf") == 0) {
+            bsdf = 1;
+            continue;
         } else if (a[0] == '-' && a[1] != '\0') {
             snprintf(msg, sizeof msg, "unknown option '%.64s'", a);
         } else if (input) {
@@ -241,6 +263,10 @@ int lsqt_info_main(const char *prog, int argc, char **argv)
         }
         fprintf(stderr, "%s: error: %s\n", prog, msg);
         usage(stderr, prog);
+        return 2;
+    }
+    if (bsdf && !json) {
+        fprintf(stderr, "%s: error: --bsdf adds to the JSON: give --json PATH too\n", prog);
         return 2;
     }
     if (!input) {
@@ -283,7 +309,7 @@ int lsqt_info_main(const char *prog, int argc, char **argv)
         snprintf(msg, sizeof msg, "cannot write to %s: %s", text == stdout ? "stdout" : "stderr", strerror(errno));
         rc = info_fail(prog, 1, msg);
     }
-    if (json && write_json(json, name, &st, est, msg, sizeof msg)) rc = info_fail(prog, 1, msg);
+    if (json && write_json(json, name, &st, est, bsdf, msg, sizeof msg)) rc = info_fail(prog, 1, msg);
     lsqt_estimates_free(est, st.n_slices);
     lsqt_state_free(&st);
     return rc;

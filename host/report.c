@@ -68,6 +68,12 @@ void lsqt_json_num(FILE *f, double v)
 
 void lsqt_json_slice(FILE *f, const lsqt_state *st, const lsqt_slice_est *e, int s, int detail)
 {
+    lsqt_json_slice_fields(f, st, e, s, detail);
+    fprintf(f, "}");
+}
+
+void lsqt_json_slice_fields(FILE *f, const lsqt_state *st, const lsqt_slice_est *e, int s, int detail)
+{
     fprintf(f, "{\"theta_o\": %.17g, \"paths\": %llu, \"R\": ", e->theta_o, (unsigned long long)e->paths);
     json_num(f, e->R.mean);
     fprintf(f, ", \"R_err\": ");
@@ -91,7 +97,7 @@ void lsqt_json_slice(FILE *f, const lsqt_state *st, const lsqt_slice_est *e, int
         json_num(f, e->medium_events);
         fprintf(f, ", \"nee_evaluations\": %.17g", e->nee_evaluations);
     }
-    fprintf(f, ", \"from_below\": %s}", st->slice_flags[s] & LSQT_SLICE_BELOW ? "true" : "false");
+    fprintf(f, ", \"from_below\": %s", st->slice_flags[s] & LSQT_SLICE_BELOW ? "true" : "false");
 }
 
 int lsqt_report_json(const char *path, const lsqt_state *st, const lsqt_slice_est *est,

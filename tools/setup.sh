@@ -3,11 +3,12 @@
 # a C compiler, CMake, the OpenCL headers and ICD loader, PoCL's CPU device, and clang
 # with its sanitizer/fuzzer runtimes, and SLURM with munge (test_slurm starts a single-node
 # SLURM of its own; no daemon of these packages needs to run). Installs nothing when
-# everything is present. OpenImageIO and GLM are for lssview (C++17, tools/lssview).
+# everything is present. OpenImageIO and GLM are for lssview (C++17, tools/lssview),
+# Debian's matplotlib for tools/lssplot.
 set -euo pipefail
 PKGS=(build-essential cmake pkg-config ocl-icd-opencl-dev opencl-headers opencl-c-headers
       ocl-icd-libopencl1 pocl-opencl-icd clinfo clang libclang-rt-14-dev python3
-      slurm-wlm munge libopenimageio-dev libglm-dev)
+      slurm-wlm munge libopenimageio-dev libglm-dev python3-matplotlib)
 missing=()
 for p in "${PKGS[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

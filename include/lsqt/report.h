@@ -31,6 +31,8 @@ int lsqt_report_json(const char *path, const lsqt_state *st, const lsqt_slice_es
  * finite), and slice s's object (detail: non-finite count and work counters too). */
 void lsqt_json_num(FILE *f, double v);
 void lsqt_json_slice(FILE *f, const lsqt_state *st, const lsqt_slice_est *e, int s, int detail);
+/* The same object's fields without its closing brace (more fields may follow). */
+void lsqt_json_slice_fields(FILE *f, const lsqt_state *st, const lsqt_slice_est *e, int s, int detail);
 
 #ifdef __cplusplus
 }
