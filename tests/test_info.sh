@@ -24,8 +24,8 @@ cp "$EX/slab.lsqt" S.lsqt
 
 # The help of lsqt-cl names the subcommand; info's own help and usage.
 expect 0 "lsqt-cl info FILE.lss" -- "$BIN" --help
-expect 0 "usage: lsqt-cl info FILE.lss [--json PATH]" -- "$BIN" info --help
-expect 0 "usage: lssinfo FILE.lss [--json PATH]" -- "$INFO" -h
+expect 0 "usage: lsqt-cl info FILE.lss [--json PATH [--bsdf]]" -- "$BIN" info --help
+expect 0 "usage: lssinfo FILE.lss [--json PATH [--bsdf]]" -- "$INFO" -h
 
 # Both programs print the same text (they are one function, host/info.c), to stdout.
 for f in L S; do
@@ -223,4 +223,8 @@ expect 0 "flags: 0xa (non-finite, unknown 0x8)" -- "$INFO" flags.lss
 [ -p fifo.lss ] && ok || bad "fifo.lss is no longer a FIFO"
 ls ./*.json.tmp* ./*.tmp.* >/dev/null 2>&1 && bad "temporary files left behind" || ok
 
+# --bsdf: the directions with values and errors, only in the JSON
+expect 2 "give --json PATH too" -- "$BIN" info --bsdf L.lsqt.lss
+"$BIN" info L.lsqt.lss --json b.json --bsdf >/dev/null
+python3 -c 'import json, sys; j = json.load(open(sys.argv[1])); s = j["slices"][0]; assert len(s["bsdf"]) == j["n_wi"] and all(len(d) == 5 for d in s["bsdf"])' b.json && ok || bad "--bsdf: no direction list of n_wi entries"
 finish test_info
