@@ -131,7 +131,7 @@ static int new_state(lsqt_state *st, const lsqt_cli *c, const lsqt_assembly *a, 
     st->use_double = c->use_double;
     if (c->n_wo_angles) memcpy(st->theta_o, c->wo_angles, (size_t)n_slices * sizeof(double));
     else lsqt_wo_angles(n_slices, st->theta_o);
-    /* RRSS directions are chosen once the device is ready (lsqt_rrss); the spread stands
+    /* RRSS directions are chosen once the device is ready (host/stages.c); the spread stands
      * in until then. */
     st->dir_method = wi_file ? LSQT_DIRS_FILE : c->wi_spread ? LSQT_DIRS_SPREAD : LSQT_DIRS_RRSS;
     for (int s = 0; s < n_slices; s++) {

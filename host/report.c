@@ -66,6 +66,15 @@ void lsqt_json_num(FILE *f, double v)
 }
 #define json_num lsqt_json_num
 
+/* ", "NAME": mean, "NAME_err": err" */
+static void json_est(FILE *f, const char *name, lsqt_est v)
+{
+    fprintf(f, ", \"%s\": ", name);
+    json_num(f, v.mean);
+    fprintf(f, ", \"%s_err\": ", name);
+    json_num(f, v.err);
+}
+
 void lsqt_json_slice(FILE *f, const lsqt_state *st, const lsqt_slice_est *e, int s, int detail)
 {
     lsqt_json_slice_fields(f, st, e, s, detail);
@@ -74,18 +83,10 @@ void lsqt_json_slice(FILE *f, const lsqt_state *st, const lsqt_slice_est *e, int
 
 void lsqt_json_slice_fields(FILE *f, const lsqt_state *st, const lsqt_slice_est *e, int s, int detail)
 {
-    fprintf(f, "{\"theta_o\": %.17g, \"paths\": %llu, \"R\": ", e->theta_o, (unsigned long long)e->paths);
-    json_num(f, e->R.mean);
-    fprintf(f, ", \"R_err\": ");
-    json_num(f, e->R.err);
-    fprintf(f, ", \"T\": ");
-    json_num(f, e->T.mean);
-    fprintf(f, ", \"T_err\": ");
-    json_num(f, e->T.err);
-    fprintf(f, ", \"delta_T\": ");
-    json_num(f, e->delta_T.mean);
-    fprintf(f, ", \"delta_T_err\": ");
-    json_num(f, e->delta_T.err);
+    fprintf(f, "{\"theta_o\": %.17g, \"paths\": %llu", e->theta_o, (unsigned long long)e->paths);
+    json_est(f, "R", e->R);
+    json_est(f, "T", e->T);
+    json_est(f, "delta_T", e->delta_T);
     fprintf(f, ", \"max_rel_err\": ");
     json_num(f, e->max_rel_err);
     if (detail) fprintf(f, ", \"n_nonfinite\": %d", e->n_nonfinite);

@@ -78,12 +78,6 @@ int lsqt_simulate_range(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st
     return rc;
 }
 
-int lsqt_run_session(lsqt_session *sp, lsqt_state *st, uint64_t add_paths, const lsqt_sim_opts *o,
-                     lsqt_sim_stats *stats, char *err, size_t errcap)
-{
-    return lsqt_run_range(sp, st, lsqt_state_contiguous(st), add_paths, o, stats, err, errcap);
-}
-
 /* ST's tallies hold its base ranges and [first, pos) now. */
 static int hold(lsqt_state *st, const uint64_t *base, int n_base, uint64_t first, uint64_t pos, char *err,
                 size_t errcap)

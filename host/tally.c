@@ -6,13 +6,6 @@
 
 #include "lsqt/util.h"
 
-lsqt_est lsqt_batch_estimate(const lsqt_u128 *sums, size_t stride, uint64_t total_paths, double scale)
-{
-    uint64_t nb[LSQT_BATCHES];
-    for (int b = 0; b < LSQT_BATCHES; b++) nb[b] = lsqt_batch_paths(total_paths, b);
-    return lsqt_batch_estimate_n(sums, stride, nb, scale);
-}
-
 lsqt_est lsqt_batch_estimate_n(const lsqt_u128 *sums, size_t stride, const uint64_t nbatch[LSQT_BATCHES], double scale)
 {
     lsqt_est r = {0.0, NAN};

@@ -58,10 +58,8 @@ int lsqt_simulate(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint
 int lsqt_simulate_range(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint64_t begin, uint64_t add_paths,
                         const lsqt_sim_opts *o, lsqt_sim_stats *stats, char *err, size_t errcap);
 
-/* The launch loop of lsqt_simulate on an open session (whose tallies are ST's): from the
- * end of ST's paths (which must be one range [0, h)), or from begin. */
-int lsqt_run_session(lsqt_session *s, lsqt_state *st, uint64_t add_paths, const lsqt_sim_opts *o,
-                     lsqt_sim_stats *stats, char *err, size_t errcap);
+/* The launch loop of lsqt_simulate on an open session (whose tallies are ST's), paths
+ * [begin, begin + add_paths). */
 int lsqt_run_range(lsqt_session *s, lsqt_state *st, uint64_t begin, uint64_t add_paths, const lsqt_sim_opts *o,
                    lsqt_sim_stats *stats, char *err, size_t errcap);
 

@@ -45,9 +45,8 @@ lsqt_slice_est *lsqt_estimates(const lsqt_state *st);
 void lsqt_estimates_free(lsqt_slice_est *e, int n_slices);
 
 /* Ratio estimator over the LSQT_BATCHES batches: sums[b * stride] holds batch b's
- * fixed-point (or count when scale is 1) sum. */
-lsqt_est lsqt_batch_estimate(const lsqt_u128 *sums, size_t stride, uint64_t total_paths, double scale);
-/* The same with the paths of each batch given (a state of several ranges). */
+ * fixed-point (or count when scale is 1) sum, nbatch[b] the paths of batch b (over all
+ * the ranges a state holds: lsqt_state_batch_counts). */
 lsqt_est lsqt_batch_estimate_n(const lsqt_u128 *sums, size_t stride, const uint64_t nbatch[LSQT_BATCHES],
                                double scale);
 
