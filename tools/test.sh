@@ -10,5 +10,5 @@ cd "$(dirname "$0")/.."
 bash tools/setup.sh
 bash tools/build.sh -DLSQT_WERROR=ON
 bash tools/fuzz/run.sh "${LSQT_FUZZ_SECONDS:-60}"
-(cd build && ctest --output-on-failure -j 2 "$@")
+(cd build && ctest --output-on-failure -j 2 "$@") || { bash tools/ctest_tail.sh build; exit 8; }
 if [ "${LSQT_MUTATE:-1}" != 0 ]; then bash tools/mutate/run.sh; fi

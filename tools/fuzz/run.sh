@@ -10,7 +10,7 @@ CC=clang CXX=clang++ cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=Debug -DLSQT_FU
   -DLSQT_WERROR=ON >/dev/null
 cmake --build build-fuzz -j "$(nproc)"
 export UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1
-(cd build-fuzz && ctest --output-on-failure -j 2)
+(cd build-fuzz && ctest --output-on-failure -j 2) || { bash tools/ctest_tail.sh build-fuzz; exit 8; }
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 mkdir -p "$work/lsqt" "$work/lss" "$work/wi"
