@@ -1,0 +1,71 @@
+#!/usr/bin/env python3
+"""The validation suite's reference numbers (tests/data/validation_fixtures.json, written by
+tools/validate/validate.py --write-fixtures from closed forms, iadpython, mitsuba and an
+independent numpy random walk) against lsqt-cl at each case's fixture_paths, with the
+standard library only: no network, no PyPI package.
+
+    test_fixtures.py LSQT_CL [FIXTURES]
+
+Each row: z = (lsqt-cl - reference) / sqrt(std_err^2 + ref_err^2). The seeds are fixed, so
+the result is reproducible; the tolerance is a family one: all rows together fail by
+chance with probability 1e-3 (two-sided normal, Bonferroni over the rows: |z| about 4.6
+for 300 rows). Rows the suite marks as known limitations are printed, not judged."""
+import json
+import math
+import os
+import sys
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(ROOT, "tools", "validate"))
+import common  # noqa: E402
+
+
+def z_family(n, alpha=1e-3):
+    """|z| whose two-sided normal tail is alpha / n (bisection on erfc)."""
+    lo, hi = 0.0, 40.0
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        if math.erfc(mid / math.sqrt(2)) > alpha / n:
+            lo = mid
+        else:
+            hi = mid
+    return hi
+
+
+def main():
+    if len(sys.argv) < 2:
+        sys.exit("usage: test_fixtures.py LSQT_CL [FIXTURES]")
+    binary = sys.argv[1]
+    path = sys.argv[2] if len(sys.argv) > 2 else os.path.join(ROOT, "tests", "data", "validation_fixtures.json")
+    cases = json.load(open(path))["cases"]
+    n_rows = sum(len(c["checks"]) for c in cases)
+    zmax = z_family(n_rows)
+    common.Z_MAX = zmax
+    print(f"{len(cases)} cases, {n_rows} rows; |z| <= {zmax:.2f} (family 1e-3)")
+    print(common.HEADER)
+    t0 = time.time()
+    failed = passed = known = 0
+    worst = 0.0
+    groups = {}
+    for c in cases:
+        t = time.time()
+        for r in common.rows_of_case(c, c["fixture_paths"], binary):
+            print(common.format_row(r), flush=True)
+            if r["verdict"] == "known":
+                known += 1
+                continue
+            worst = max(worst, abs(r["z"]))
+            if r["verdict"] == "pass":
+                passed += 1
+            else:
+                failed += 1
+        groups[c["group"]] = groups.get(c["group"], 0.0) + time.time() - t
+    print("seconds per group: " + ", ".join(f"{g} {s:.1f}" for g, s in groups.items()))
+    print(f"largest |z| {worst:.2f}; {time.time() - t0:.1f} s")
+    print(f"{passed} passed, {failed} failed, {known} skipped")
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
