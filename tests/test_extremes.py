@@ -57,22 +57,25 @@ def assemblies():
         a.append((f"microsurface Lambertian alpha={al} single",
                   stack("Medium", f"Layer z=0 MicrosurfaceLambertianBrdf alpha={al} use_multiple_scattering=false",
                         "Medium")))
-    for al in (1e-4, 10):
+    for al in (1e-4, 1e-2, 1, 10):
         for up, down in ((1, 4), (4, 1), (1, 1.0001)):  # eta ratios 4, 1/4 (total internal reflection), ~1
             for ms in ("true", "false"):
                 a.append((f"microsurface dielectric alpha={al} eta {up}|{down} ms={ms}",
                           stack(f"Medium eta={up}", f"Layer z=0 MicrosurfaceDielectricBsdf alpha={al} "
                                 f"use_multiple_scattering={ms}", f"Medium eta={down}")))
+        if al not in (1e-4, 10):
+            continue
         a.append((f"microsurface dielectric alpha={al} kR=0 kT=1", stack(
             "Medium", f"Layer z=0 MicrosurfaceDielectricBsdf alpha={al} kR=0 kT=1", "Medium eta=1.5")))
         a.append((f"microsurface dielectric alpha={al} kR=1 kT=0", stack(
             "Medium", f"Layer z=0 MicrosurfaceDielectricBsdf alpha={al} kR=1 kT=0", "Medium eta=1.5")))
+    for al in (1e-4, 1e-2, 1, 10):
         for eta, k in ((0.01, 10), (4, 0), (0.2, 3.9)):
             for ms in ("true", "false"):
                 a.append((f"conductor alpha={al} n={eta}+{k}i ms={ms}", stack(
                     "Medium", f"Layer z=0 MicrosurfaceConductiveBrdf alpha={al} use_multiple_scattering={ms}",
                     f"Medium eta={eta} mua={k}")))
-    for sig in (0, 0.8):
+    for sig in (0, 0.4, 0.8):
         for fr in (0, 1):
             a.append((f"Oren-Nayar sigma={sig} fR={fr}", stack("Medium", f"Layer z=0 OrenNayarDiffuseBrdf fR={fr} sigma={sig}",
                                                                "Medium")))
@@ -85,7 +88,7 @@ def assemblies():
     for ap, ae in ((1, 1e-3), (1e-3, 1), (1, 1e3), (1e3, 1)):
         for ty in ("Specular", "Diffuse"):
             a.append((f"SGGX {ty} Apara={ap} Aperp={ae} tau=3", slab(f"mus=3 mua=0.3 SggxPhase Apara={ap} Aperp={ae} type={ty}")))
-    for tau, alb in ((1e-4, 0.5), (1e4, 0.99), (1e4, 0.5), (1e4, 0.0)):
+    for tau, alb in ((1e-4, 0.5), (1e-4, 1.0), (1e4, 0.99), (1e4, 0.5), (1e4, 0.0)):
         a.append((f"HG g=0.8 tau={tau} albedo {alb}", slab(f"mus={tau * alb!r} mua={tau * (1 - alb)!r} HenyeyGreensteinPhase g=0.8")))
     a.append(("tau=1e4 albedo 0.99 between rough dielectrics eta 1.5",
               slab("eta=1.5 mus=9900 mua=100 HenyeyGreensteinPhase g=0.9", top="MicrosurfaceDielectricBsdf alpha=0.1",
