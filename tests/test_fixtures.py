@@ -4,7 +4,9 @@ tools/validate/validate.py --write-fixtures from closed forms, iadpython, mitsub
 independent numpy random walk) against lsqt-cl at each case's fixture_paths, with the
 standard library only: no network, no PyPI package.
 
-    test_fixtures.py LSQT_CL [FIXTURES]
+    test_fixtures.py [--every N] LSQT_CL [FIXTURES]
+
+(--every N: every N-th case only; the sanitizer build, where each process costs seconds.)
 
 Each row: z = (lsqt-cl - reference) / sqrt(std_err^2 + ref_err^2). The seeds are fixed, so
 the result is reproducible; the tolerance is a family one: all rows together fail by
@@ -34,11 +36,15 @@ def z_family(n, alpha=1e-3):
 
 
 def main():
-    if len(sys.argv) < 2:
-        sys.exit("usage: test_fixtures.py LSQT_CL [FIXTURES]")
-    binary = sys.argv[1]
-    path = sys.argv[2] if len(sys.argv) > 2 else os.path.join(ROOT, "tests", "data", "validation_fixtures.json")
-    cases = json.load(open(path))["cases"]
+    args = sys.argv[1:]
+    every = 1
+    if args[:1] == ["--every"]:
+        every, args = int(args[1]), args[2:]
+    if not args:
+        sys.exit("usage: test_fixtures.py [--every N] LSQT_CL [FIXTURES]")
+    binary = args[0]
+    path = args[1] if len(args) > 1 else os.path.join(ROOT, "tests", "data", "validation_fixtures.json")
+    cases = json.load(open(path))["cases"][::every]
     n_rows = sum(len(c["checks"]) for c in cases)
     zmax = z_family(n_rows)
     common.Z_MAX = zmax
