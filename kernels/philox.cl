@@ -6,10 +6,14 @@
 #define PHILOX_W0 0x9E3779B9u
 #define PHILOX_W1 0xBB67AE85u
 
+/* Both halves of each 32x32 product from one 64-bit multiply: PoCL's mul_hi builds it from
+ * 16-bit pieces (it was most of the cost of a scattering event), and a GPU compiles this
+ * form to its native high multiply too. */
 inline uint4 philox4x32_round(uint4 c, uint2 k)
 {
-    uint hi0 = mul_hi(PHILOX_M0, c.x), lo0 = PHILOX_M0 * c.x;
-    uint hi1 = mul_hi(PHILOX_M1, c.z), lo1 = PHILOX_M1 * c.z;
+    ulong p0 = (ulong)PHILOX_M0 * c.x, p1 = (ulong)PHILOX_M1 * c.z;
+    uint hi0 = (uint)(p0 >> 32), lo0 = (uint)p0;
+    uint hi1 = (uint)(p1 >> 32), lo1 = (uint)p1;
     return (uint4)(hi1 ^ c.y ^ k.x, lo1, hi0 ^ c.w ^ k.y, lo0);
 }
 
