@@ -3,6 +3,7 @@
 #ifdef LSQT_DOUBLE
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 typedef double real;
+typedef double2 real2;
 typedef double3 real3;
 typedef double4 real4;
 typedef long4 mask4; /* what comparing two real4 gives */
@@ -11,6 +12,7 @@ typedef long4 mask4; /* what comparing two real4 gives */
 #define convert_real convert_double
 #else
 typedef float real;
+typedef float2 real2;
 typedef float3 real3;
 typedef float4 real4;
 typedef int4 mask4;

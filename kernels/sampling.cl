@@ -10,11 +10,21 @@ inline void make_frame(real3 n, real3 *t, real3 *b)
     *b = make_real3(c, s + n.y * n.y * a, -n.y);
 }
 
+/* (cos, sin) of the azimuth 2 pi u, u in [0, 1): cospi and sinpi of 2u - 1 (|x| <= 1, no
+ * costly reduction of a radian argument; the point is the same, rotated by pi, so the
+ * signs flip back). Twice as fast as cos and sin of 2 pi u on PoCL. */
+inline real2 azimuth_cs(real u)
+{
+    real x = R(2.0) * u - R(1.0);
+    return (real2)(-cospi(x), -sinpi(x));
+}
+
 /* Cosine-weighted direction on the upper (+z) hemisphere; pdf = cos / pi. */
 inline real3 sample_cosine_hemisphere(real u1, real u2)
 {
-    real r = sqrt(u1), phi = R(2.0) * LSQT_PI * u2;
-    return make_real3(r * cos(phi), r * sin(phi), safe_sqrt(R(1.0) - u1));
+    real r = sqrt(u1);
+    real2 cs = azimuth_cs(u2);
+    return make_real3(r * cs.x, r * cs.y, safe_sqrt(R(1.0) - u1));
 }
 
 /* Direction with cosine mu to the axis n and uniform azimuth. */
@@ -22,8 +32,9 @@ inline real3 direction_around(real3 n, real mu, real u)
 {
     real3 t, b;
     make_frame(n, &t, &b);
-    real s = safe_sqrt(R(1.0) - mu * mu), phi = R(2.0) * LSQT_PI * u;
-    return normalize(s * cos(phi) * t + s * sin(phi) * b + mu * n);
+    real s = safe_sqrt(R(1.0) - mu * mu);
+    real2 cs = azimuth_cs(u);
+    return normalize(s * cs.x * t + s * cs.y * b + mu * n);
 }
 
 /* Direction at angle t from the unit axis n, given q = 1 - cos t (accurate near t = 0,
@@ -32,6 +43,7 @@ inline real3 direction_around_q(real3 n, real q, real u)
 {
     real3 t, b;
     make_frame(n, &t, &b);
-    real s = safe_sqrt(q * (R(2.0) - q)), phi = R(2.0) * LSQT_PI * u;
-    return normalize(s * cos(phi) * t + s * sin(phi) * b + (R(1.0) - q) * n);
+    real s = safe_sqrt(q * (R(2.0) - q));
+    real2 cs = azimuth_cs(u);
+    return normalize(s * cs.x * t + s * cs.y * b + (R(1.0) - q) * n);
 }
