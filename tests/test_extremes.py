@@ -34,6 +34,7 @@ import time
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "tools", "validate"))
 from refs_closed import oren_nayar_albedo  # noqa: E402  (the formula's albedo, quadrature)
+from common import test_args  # noqa: E402
 
 ANGLES = [0, 60, 89.9]
 PATHS = 1024
@@ -206,14 +207,8 @@ def run(binary, name, text, double, d, paths):
 
 
 def main():
-    args = sys.argv[1:]
-    every = 1
-    if args[:1] == ["--every"]:
-        every, args = int(args[1]), args[2:]
-    if not args:
-        sys.exit("usage: test_extremes.py [--every N] LSQT_CL [FILTER]")
-    binary = args[0]
-    pat = re.compile(args[1]) if len(args) > 1 else None
+    every, binary, flt = test_args(sys.argv[1:], "test_extremes.py [--every N] LSQT_CL [FILTER]")
+    pat = re.compile(flt) if flt else None
     limit_names = {n for pair in LIMITS for n in pair}
     todo = [(n, t) for i, (n, t) in enumerate(assemblies())
             if (not pat or pat.search(n)) and (i % every == 0 or (every == 1 and n in limit_names))]

@@ -36,14 +36,8 @@ def z_family(n, alpha=1e-3):
 
 
 def main():
-    args = sys.argv[1:]
-    every = 1
-    if args[:1] == ["--every"]:
-        every, args = int(args[1]), args[2:]
-    if not args:
-        sys.exit("usage: test_fixtures.py [--every N] LSQT_CL [FIXTURES]")
-    binary = args[0]
-    path = args[1] if len(args) > 1 else os.path.join(ROOT, "tests", "data", "validation_fixtures.json")
+    every, binary, path = common.test_args(sys.argv[1:], "test_fixtures.py [--every N] LSQT_CL [FIXTURES]")
+    path = path or os.path.join(ROOT, "tests", "data", "validation_fixtures.json")
     cases = json.load(open(path))["cases"][::every]
     n_rows = sum(len(c["checks"]) for c in cases)
     zmax = z_family(n_rows)

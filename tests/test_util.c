@@ -73,6 +73,33 @@ static void test_seeds(void)
     for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) CHECK(lsqt_parse_u64(bad[i], &v) != 0, "'%s' accepted", bad[i]);
 }
 
+/* CRC-32 (IEEE): the standard check value, and the table-driven form against the bitwise
+ * definition (written here) at every length and alignment, continued in pieces. */
+static uint32_t crc_bitwise(uint32_t crc, const unsigned char *p, size_t n)
+{
+    crc = ~crc;
+    for (size_t i = 0; i < n; i++) {
+        crc ^= p[i];
+        for (int k = 0; k < 8; k++) crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1u)));
+    }
+    return ~crc;
+}
+
+static void test_crc32(void)
+{
+    CHECK(lsqt_crc32(0, "123456789", 9) == 0xCBF43926u, "CRC-32 check value: %08x", lsqt_crc32(0, "123456789", 9));
+    unsigned char b[300];
+    for (int i = 0; i < 300; i++) b[i] = (unsigned char)(i * 131u + 7u);
+    int bad = 0;
+    for (size_t n = 0; n + 3 <= 300; n++)
+        for (int o = 0; o < 3; o++) {
+            uint32_t whole = lsqt_crc32(0, b + o, n);
+            bad += whole != crc_bitwise(0, b + o, n);
+            bad += lsqt_crc32(lsqt_crc32(0, b + o, n / 3), b + o + n / 3, n - n / 3) != whole;
+        }
+    CHECK(bad == 0, "%d CRC-32 values differ from the bitwise definition", bad);
+}
+
 static void test_device_check(void)
 {
     lsqt_device_info d;
@@ -360,6 +387,7 @@ int main(void)
         return 1;
     }
     test_seeds();
+    test_crc32();
     test_device_check();
     test_wi_file();
     test_regular_and_links();

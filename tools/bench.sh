@@ -11,8 +11,15 @@
 #        tools/bench.sh lssview [lsqt-cl options...]: wall and CPU seconds of a 512x512 lssview
 #        render (PNG, the default lights) of LSS files of the tutorial (-p 1e4, default -wo/-wi
 #        unless given), the best of 3.
+#        tools/bench.sh targets [--csv PATH] [-- lsqt-cl options...]: the four speed targets
+#        of issue 13 (tools/bench_targets.py): CPU-seconds, events per CPU-second.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+if [ "${1:-}" = targets ]; then
+  shift
+  [ -x ./build/lsqt-cl ] || bash tools/build.sh
+  exec python3 tools/bench_targets.py ./build/lsqt-cl "$@"
+fi
 P=${1:-1e6}
 shift || true
 MICRO=0 PHASES=0

@@ -25,6 +25,16 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 Z_MAX = 4.0
 
 
+def test_args(argv, usage):
+    """A ctest script's arguments: [--every N] LSQT_CL [MORE]; returns (N, LSQT_CL, MORE or None)."""
+    args, every = list(argv), 1
+    if args[:1] == ["--every"]:
+        every, args = int(args[1]), args[2:]
+    if not args:
+        raise SystemExit("usage: " + usage)
+    return every, args[0], args[1] if len(args) > 1 else None
+
+
 def default_bin():
     return os.environ.get("LSQT_CL", os.path.join(ROOT, "build", "lsqt-cl"))
 
