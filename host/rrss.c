@@ -33,6 +33,38 @@ static int nbr_cmp(const void *x, const void *y)
     return (a->j > b->j) - (a->j < b->j);
 }
 
+/* nbr_cmp's order, inline: before = larger dot, or equal dot and smaller index. */
+static int nbr_before(const nbr *a, const nbr *b) { return a->dot > b->dot || (a->dot == b->dot && a->j < b->j); }
+
+/* Puts the first k of v[0..n) in nbr_cmp's order into v[0..k), sorted: a quickselect
+ * (median of three) and a sort of those k only. The order is total, so the result is the
+ * same as sorting all n; the selection made RRSS's choice 30 % of a Substr run. */
+static void nbr_first_k(nbr *v, int n, int k)
+{
+    int lo = 0, hi = n - 1;
+    while (hi - lo > 16 && lo < k) { /* lo <= k <= hi + 1 throughout */
+        int mid = lo + (hi - lo) / 2;
+        nbr a = v[lo], b = v[mid], c = v[hi], piv;
+        if (nbr_before(&a, &b)) piv = nbr_before(&b, &c) ? b : (nbr_before(&a, &c) ? c : a);
+        else piv = nbr_before(&a, &c) ? a : (nbr_before(&b, &c) ? c : b);
+        int i = lo, j = hi;
+        while (i <= j) {
+            while (nbr_before(&v[i], &piv)) i++;
+            while (nbr_before(&piv, &v[j])) j--;
+            if (i <= j) {
+                nbr t = v[i];
+                v[i] = v[j], v[j] = t;
+                i++, j--;
+            }
+        }
+        if (k <= j) hi = j;
+        else if (k >= i) lo = i;
+        else break; /* v[j+1..i) equal the pivot: the split is at k */
+    }
+    /* everything in v[0..hi] comes before everything after it, and k <= hi + 1 */
+    qsort(v, (size_t)(hi + 1), sizeof *v, nbr_cmp);
+}
+
 /* The density of the m candidates (per steradian) at each of them: k of them within the
  * cap out to the k-th nearest other one, k / (m * 2 pi (1 - cos)). It resolves a narrow
  * lobe, where the candidates crowd, as no fixed bin can. */
@@ -90,7 +122,7 @@ int lsqt_rrss_select(const float *dirs, const double *f, int m, int n, int spher
         int c = 0;
         for (int j = 0; j < m; j++)
             if (j != i) row[c].dot = dot3f(dirs + 4 * i, dirs + 4 * j), row[c++].j = j;
-        qsort(row, (size_t)c, sizeof *row, nbr_cmp);
+        nbr_first_k(row, c, kn);
         memcpy(list + (size_t)i * kn, row, (size_t)kn * sizeof *row);
     }
     /* Disable the most redundant candidate until n remain (ties: the lowest index). */
