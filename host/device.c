@@ -1,6 +1,7 @@
 #include "lsqt/device.h"
 
 #include <ctype.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -146,6 +147,21 @@ int lsqt_device_select(const char *spec, lsqt_device_info *out, char *err, size_
     return 0;
 }
 
+#ifdef LSQT_LSAN_EARLY
+/* Sanitizer builds: LeakSanitizer's exit-time check stops every thread to scan it, and
+ * twice in CI its tracer crashed ("Tracer caught signal 11 ... LeakSanitizer has
+ * encountered a fatal error") after a test had passed, with PoCL's worker threads about
+ * to be torn down. A handler registered after the OpenCL platform is up runs before that
+ * teardown (exit handlers run last-registered first), while the workers wait idle; the
+ * check is the same one, and it disables the one at exit. */
+void __lsan_do_leak_check(void);
+static void leak_check_early(void)
+{
+    fflush(NULL); /* a leak report ends the process without the stdio flush of exit */
+    __lsan_do_leak_check();
+}
+#endif
+
 int lsqt_context_create(lsqt_context *cx, const char *spec, char *err, size_t errcap)
 {
     memset(cx, 0, sizeof *cx);
@@ -167,6 +183,10 @@ int lsqt_context_create(lsqt_context *cx, const char *spec, char *err, size_t er
         cx->ctx = NULL;
         return 3;
     }
+#ifdef LSQT_LSAN_EARLY
+    static int registered = 0;
+    if (!registered) registered = atexit(leak_check_early) == 0;
+#endif
     return 0;
 }
 

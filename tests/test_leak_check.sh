@@ -13,8 +13,14 @@ grep -q "leak_canary: compiled and ran a kernel" <<<"$out" || bad "the canary di
 grep -q "Direct leak of 4242 byte(s)" <<<"$out" || bad "the 4242-byte leak is not reported"
 grep -A8 "Direct leak of 4242 byte(s)" <<<"$out" | grep -q "canary_leak" || bad "its stack does not name canary_leak"
 grep -q "lsqt_state_init" <<<"$out" || bad "the leaked state (lsqt_state_init) is not reported"
-# The kernel build leaked inside LLVM/PoCL, and those leaks were suppressed, not shown.
-grep -A6 "Suppressions used" <<<"$out" | grep -qE "libLLVM|libpocl" || bad "no OpenCL leak was suppressed (are the suppressions in use?)"
+# The check runs from an exit handler that host/device.c registers once the OpenCL
+# platform is up, before PoCL and LLVM tear down (LSQT_LSAN_EARLY): their compiler state
+# is still reachable then and is not reported at all; what they do leak by then is
+# suppressed, and a suppression used may name only those libraries.
+if grep -q "Suppressions used" <<<"$out"; then
+  grep -A8 "Suppressions used" <<<"$out" | grep -E "^ +[0-9]+ +[0-9]+ " | grep -vqE "libLLVM|libclang-cpp|libpocl|libOpenCL" &&
+    bad "a suppression outside the OpenCL implementation was used"
+fi
 # Every leak reported is the canary's own: each report (from its "leak of" line to the
 # next blank line) has canary_leak in its stack. A report without it is the OpenCL
 # implementation's, not suppressed (or a stack cut short by the fast unwinder).

@@ -132,11 +132,8 @@ def write_doc(rows, docs, times, args, seconds):
         known = [r for r in grows if r["verdict"] == "known"]
         if known:
             lines += ["", "Known limitations:", ""]
-            seen = set()
             for r in known:
-                if r["limitation"] not in seen:
-                    seen.add(r["limitation"])
-                    lines.append(f"- {r['name']}: {r['limitation']}")
+                lines.append(f"- {r['name']}, theta_o {r['theta_o_deg']:.0f} deg, {r['q']}: {r['limitation']}")
         lines.append("")
     os.makedirs(os.path.dirname(DOC), exist_ok=True)
     with open(DOC, "w") as f:
