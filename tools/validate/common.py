@@ -39,8 +39,9 @@ def default_bin():
     return os.environ.get("LSQT_CL", os.path.join(ROOT, "build", "lsqt-cl"))
 
 
-def run_case(case, paths, binary=None, extra=()):
-    """Runs lsqt-cl on a case; returns (summary JSON, info JSON with the BSDF values)."""
+def run_case(case, paths, binary=None, extra=(), bsdf=None):
+    """Runs lsqt-cl on a case; returns (summary JSON, info JSON with the BSDF values, or None
+    unless bsdf, by default whether a check needs them)."""
     binary = binary or default_bin()
     with tempfile.TemporaryDirectory() as d:
         src = os.path.join(d, "case.lsqt")
@@ -58,7 +59,7 @@ def run_case(case, paths, binary=None, extra=()):
         with open(os.path.join(d, "s.json")) as f:
             summary = json.load(f)
         info = None
-        if any(c["q"].startswith("f:") for c in case["checks"]):
+        if bsdf if bsdf is not None else any(c["q"].startswith("f:") for c in case["checks"]):
             subprocess.run([binary, "info", os.path.join(d, "s.lss"), "--json", os.path.join(d, "i.json"), "--bsdf"],
                            check=True, stdout=subprocess.DEVNULL)
             with open(os.path.join(d, "i.json")) as f:

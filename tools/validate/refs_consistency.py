@@ -60,8 +60,8 @@ def integrals(summary, info, n):
 
 
 def run(case, n, paths, seed):
-    c = dict(case, args=case["args"] + ["--wi-spread", "-wi", str(n), "-s", str(seed)], checks=[{"q": "f:0", "slice": 0}])
-    summary, info = common.run_case(c, paths)
+    c = dict(case, args=case["args"] + ["--wi-spread", "-wi", str(n), "-s", str(seed)])
+    summary, info = common.run_case(c, paths, bsdf=True)
     return integrals(summary, info, n), summary["seconds"]
 
 

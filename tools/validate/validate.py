@@ -82,8 +82,7 @@ def run_groups(names, quick, scale):
                 rows.append(r)
                 print(common.format_row(r), flush=True)
         times[g] = (t_ref, time.time() - t0)
-        yield_cases = [c for c in cs if c.get("fixture_paths")]
-        docs[g] += (yield_cases,)
+        docs[g] += ([c for c in cs if c.get("fixture_paths")],)  # the cases a fixture keeps
     return rows, docs, times
 
 
