@@ -160,14 +160,20 @@ static int candidates(lsqt_session *s, int n_sim, int m, int sphere, float *cand
                       size_t errcap)
 {
     int *have = calloc((size_t)n_sim, sizeof *have);
-    const uint32_t block = (uint32_t)(4 * m > 4096 ? 4 * m : 4096);
-    float *out = malloc((size_t)n_sim * block * 4 * sizeof *out);
+    const uint32_t max_block = (uint32_t)(4 * m > 4096 ? 4 * m : 4096);
+    float *out = malloc((size_t)n_sim * max_block * 4 * sizeof *out);
     int rc = 1;
     if (!have || !out) {
         snprintf(err, errcap, "out of memory");
         goto done;
     }
-    for (uint64_t begin = 0; begin < (uint64_t)block * 64; begin += block) {
+    /* Launches of 2m paths, doubling to max_block: most stacks give m exits in the first
+     * (a walk in an optically thick medium costs hundreds of events, so the walks beyond
+     * those needed were most of the pilot there). Which walks are candidates does not
+     * depend on the launch sizes. */
+    uint32_t block = (uint32_t)(2 * m < 64 ? 64 : 2 * m);
+    if (block > max_block) block = max_block;
+    for (uint64_t begin = 0; begin < (uint64_t)max_block * 64; begin += block, block = block * 2 < max_block ? block * 2 : max_block) {
         if (lsqt_session_exits(s, begin, block, out, err, errcap)) goto done;
         int missing = 0;
         for (int sl = 0; sl < n_sim; sl++) {

@@ -13,7 +13,14 @@ static cl_mem make_buffer(lsqt_context *cx, cl_mem_flags fl, size_t size, void *
     return clCreateBuffer(cx->ctx, fl | (host ? CL_MEM_COPY_HOST_PTR : 0), size, host, e);
 }
 
-static int build_options(lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st,
+/* A grouped session's kernels see each simulated slice's slice_group blocks of n_wi
+ * directions as one set of slice_group x PAD4(n_wi) (the padding inside is zero). */
+static size_t kernel_nwi(const lsqt_state *st, int group)
+{
+    return group > 1 ? (size_t)group * LSQT_PAD4((size_t)st->n_wi) : (size_t)st->n_wi;
+}
+
+static int build_options(lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st, int group,
                          char *opt, size_t cap, char *err, size_t errcap)
 {
     size_t n = lsqt_assembly_build_options(a, opt, cap);
@@ -21,16 +28,18 @@ static int build_options(lsqt_context *cx, const lsqt_assembly *a, const lsqt_st
         snprintf(err, errcap, "kernel build options too long");
         return 1;
     }
-    n += (size_t)snprintf(opt + n, cap - n, " -cl-std=CL1.2 -DLSQT_NWI=%d", st->n_wi);
+    n += (size_t)snprintf(opt + n, cap - n, " -cl-std=CL1.2 -DLSQT_NWI=%zu", kernel_nwi(st, group));
+    if (group > 1) n += (size_t)snprintf(opt + n, cap - n, " -DLSQT_GROUP_NWI=%d", st->n_wi);
     if (lsqt_device_check(&cx->dev, st->use_double, err, errcap)) return 1;
     if (st->use_double) n += (size_t)snprintf(opt + n, cap - n, " -DLSQT_DOUBLE=1");
     if (!cx->dev.has_int64_atomics) snprintf(opt + n, cap - n, " -DLSQT_NO_INT64_ATOMICS=1");
     return 0;
 }
 
-/* The directions as the kernel reads them: coordinate arrays zero-padded to fours, in
- * the kernel's precision (double ones normalised again: float leaves |wi| - 1 at 1e-7). */
-static void *directions_of(const lsqt_state *st, size_t *bytes)
+/* The directions as the kernel reads them: per simulated slice, x, y and z arrays of its
+ * blocks (state slices) one after the other, each zero-padded to fours, in the kernel's
+ * precision (double ones normalised again: float leaves |wi| - 1 at 1e-7). */
+static void *directions_of(const lsqt_state *st, int group, size_t *bytes)
 {
     const size_t pad = LSQT_PAD4((size_t)st->n_wi), n = (size_t)st->n_slices * 3 * pad;
     const size_t sz = st->use_double ? sizeof(double) : sizeof(float);
@@ -41,7 +50,7 @@ static void *directions_of(const lsqt_state *st, size_t *bytes)
             const float *d = st->wi + ((size_t)sl * (size_t)st->n_wi + i) * 4;
             double len = sqrt((double)d[0] * d[0] + (double)d[1] * d[1] + (double)d[2] * d[2]);
             for (size_t j = 0; j < 3; j++) {
-                size_t at = ((size_t)sl * 3 + j) * pad + i;
+                size_t at = (((size_t)(sl / group) * 3 + j) * (size_t)group + (size_t)(sl % group)) * pad + i;
                 if (st->use_double) ((double *)buf)[at] = len > 0 ? d[j] / len : d[j];
                 else ((float *)buf)[at] = d[j];
             }
@@ -66,7 +75,7 @@ static int upload(lsqt_session *s, const lsqt_assembly *a, const lsqt_state *st,
     double *wo = calloc(n_wo, sizeof *wo);
     float *wo_f = calloc(n_wo, sizeof *wo_f);
     size_t wi_bytes = 0;
-    void *wi_up = directions_of(st, &wi_bytes);
+    void *wi_up = directions_of(st, s->slice_group, &wi_bytes);
     int rc = 1;
     cl_int e = CL_SUCCESS;
     if (!media || !layers || !media_f || !layers_f || !wo || !wo_f || !wi_up) {
@@ -118,7 +127,7 @@ static int upload(lsqt_session *s, const lsqt_assembly *a, const lsqt_state *st,
     cl_mem *pargs[] = {&s->scene, &s->media, &s->layers, &s->wi, &s->tab};
     for (cl_uint i = 0; i < 5; i++) e |= clSetKernelArg(s->prepare, i, sizeof(cl_mem), pargs[i]);
     if (e == CL_SUCCESS) {
-        size_t pglobal[2] = {pad, (size_t)st->n_slices};
+        size_t pglobal[2] = {pad * (size_t)s->slice_group, (size_t)(st->n_slices / s->slice_group)};
         e = clEnqueueNDRangeKernel(cx->queue, s->prepare, 2, NULL, pglobal, NULL, 0, NULL, NULL);
     }
     if (e != CL_SUCCESS) {
@@ -150,6 +159,10 @@ int lsqt_session_open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_asse
     memset(s, 0, sizeof *s);
     s->cx = cx;
     s->slice_group = slice_group > 0 ? slice_group : 1;
+    if (st->n_slices % s->slice_group) {
+        snprintf(err, errcap, "%d slices are not groups of %d", st->n_slices, s->slice_group);
+        return 1;
+    }
     s->use_double = st->use_double;
     s->n_slices = st->n_slices;
     s->n_wi = st->n_wi;
@@ -170,7 +183,7 @@ int lsqt_session_open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_asse
         return 1;
     }
     char opt[1024];
-    if (build_options(cx, a, st, opt, sizeof opt, err, errcap)) return 1;
+    if (build_options(cx, a, st, s->slice_group, opt, sizeof opt, err, errcap)) return 1;
     if (extra_options && strlen(opt) + strlen(extra_options) + 2 < sizeof opt) {
         strcat(opt, " ");
         strcat(opt, extra_options);
@@ -213,7 +226,7 @@ int lsqt_session_launch(lsqt_session *s, uint64_t begin, uint64_t end, char *err
     cl_int e = clSetKernelArg(s->walk, 6, sizeof b, &b);
     e |= clSetKernelArg(s->walk, 7, sizeof en, &en);
     e |= clSetKernelArg(s->walk, 8, sizeof chunk0, &chunk0);
-    size_t global[2] = {(size_t)nchunks * s->local_size, (size_t)s->n_slices}, local[2] = {s->local_size, 1};
+    size_t global[2] = {(size_t)nchunks * s->local_size, (size_t)(s->n_slices / s->slice_group)}, local[2] = {s->local_size, 1};
     if (e == CL_SUCCESS) e = clEnqueueNDRangeKernel(s->cx->queue, s->walk, 2, NULL, global, local, 0, NULL, NULL);
     if (e == CL_SUCCESS) e = clFinish(s->cx->queue);
     if (e != CL_SUCCESS) {
@@ -242,7 +255,7 @@ int lsqt_session_read(lsqt_session *s, lsqt_state *st, char *err, size_t errcap)
 int lsqt_session_set_directions(lsqt_session *s, const lsqt_state *st, char *err, size_t errcap)
 {
     size_t bytes = 0;
-    void *dirs = directions_of(st, &bytes);
+    void *dirs = directions_of(st, s->slice_group, &bytes);
     if (!dirs) {
         snprintf(err, errcap, "out of memory");
         return 1;
@@ -250,7 +263,7 @@ int lsqt_session_set_directions(lsqt_session *s, const lsqt_state *st, char *err
     cl_int e = clEnqueueWriteBuffer(s->cx->queue, s->wi, CL_TRUE, 0, bytes, dirs, 0, NULL, NULL);
     free(dirs);
     if (e == CL_SUCCESS) {
-        size_t pglobal[2] = {LSQT_PAD4((size_t)st->n_wi), (size_t)st->n_slices};
+        size_t pglobal[2] = {LSQT_PAD4((size_t)st->n_wi) * (size_t)s->slice_group, (size_t)(st->n_slices / s->slice_group)};
         e = clEnqueueNDRangeKernel(s->cx->queue, s->prepare, 2, NULL, pglobal, NULL, 0, NULL, NULL);
     }
     if (e == CL_SUCCESS) e = clFinish(s->cx->queue);

@@ -21,7 +21,7 @@ int lsqt_run_stages(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, co
     const int pilot_base = st->stage == LSQT_STAGE_PILOT; /* a checkpoint or an interrupted pilot */
     o->before = lsqt_work_totals(st);
     if (pilot_base) {
-        /* its candidate blocks replay the same paths: one block's work is the pilot's */
+        /* each candidate block holds the same walks' work: one block's work is the pilot's */
         o->before.paths /= st->rx, o->before.layer_events /= st->rx, o->before.medium_events /= st->rx;
         o->before.nee_evaluations /= st->rx;
     }

@@ -54,6 +54,13 @@ inline real4 safe_sqrt4(real4 x) { return sqrt(fmax(x, (real4)(R(0.0)))); }
 #define LSQT_NWI 1
 #endif
 #define LSQT_NWI_PAD LSQT_PAD4(LSQT_NWI)
+/* The directions of one block of a grouped session (the RRSS pilot: one walk serves the
+ * scene->slice_group candidate blocks of a slice, each LSQT_GROUP_PAD long within the
+ * LSQT_NWI = slice_group x LSQT_GROUP_PAD directions); a plain session is one block. */
+#ifndef LSQT_GROUP_NWI
+#define LSQT_GROUP_NWI LSQT_NWI
+#endif
+#define LSQT_GROUP_PAD LSQT_PAD4(LSQT_GROUP_NWI)
 
 /* lgamma(x) for x >= 1, four at once, without the library's general (and, on PoCL,
  * scalar) lgamma: the Stirling series to 1/x^7 for x >= 8, error below 3e-11, after

@@ -231,8 +231,11 @@ inline void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulong *hi
                 }
                 acc_add(c, LSQT_NWI + (up ? LSQT_T_R : LSQT_T_T), w);
                 if (scattered) {
+                    /* every block of a grouped session holds the same paths' exits */
                     fix1 q = to_fixed(w, c->flags);
-                    global_add128(hist + 2 * hist_bin(d, up), q.lo, q.hi, c->flags);
+                    const int bin = hist_bin(d, up), g = max(c->scene->slice_group, 1);
+                    for (int b = 0; b < g; b++)
+                        global_add128(hist + 2 * ((size_t)b * LSQT_BATCHES * LSQT_HIST_BINS + bin), q.lo, q.hi, c->flags);
                 } else {
                     acc_add(c, LSQT_NWI + LSQT_T_DELTA_T, w);
                 }
@@ -271,8 +274,8 @@ inline void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulong *hi
 /* The RRSS candidates: analog walks (purpose RNG_PURPOSE_CANDIDATES, no point estimates)
  * of paths [path_begin, path_begin + n) of every simulated slice; out[slice][path] is the
  * direction of its scattered exit, w = 1, or all 0 (absorbed, unscattered, cut). Global
- * size (n rounded up, simulated slices); a simulated slice s reads launch slice
- * s * slice_group's outgoing direction and tables. */
+ * size (n rounded up, simulated slices); simulated slice s is the state's slices
+ * s * slice_group ... (their outgoing direction is the same). */
 __kernel void lsqt_exits(__constant lsqt_dev_scene *scene, __global const lsqt_dev_medium *media,
                          __global const lsqt_dev_layer *layers, __global const real *wo_dirs,
                          __global const real *wi_dirs, __global const real *tab, ulong path_begin, uint n,
@@ -281,10 +284,11 @@ __kernel void lsqt_exits(__constant lsqt_dev_scene *scene, __global const lsqt_d
     __local acc_word acc[LSQT_ACC_WORDS * ACC_N]; /* the safety cap's count, unused */
     const uint i = (uint)get_global_id(0), slice = (uint)get_global_id(1);
     const uint v = slice * (uint)max(scene->slice_group, 1);
-    ulong nee_priv[LSQT_NWI_PAD], work[WORK_N] = {0, 0, 0};
-    real path_sum[LSQT_NWI_PAD];
-    walk_ctx c = {scene, media, layers, wi_dirs + 3 * LSQT_NWI_PAD * v, tab + (size_t)v * scene->n_layers * LSQT_TAB_STRIDE,
-                  path_sum, nee_priv, work, acc, flags, 0, out + 4 * ((size_t)slice * n + i)};
+    /* no point estimates, so no sums (they would fill a CPU worker's stack: a work-group
+     * of 256 at the pilot's 4 x 300 directions is 3.7 MB) */
+    ulong work[WORK_N] = {0, 0, 0};
+    walk_ctx c = {scene, media, layers, wi_dirs + 3 * LSQT_NWI_PAD * slice, tab + (size_t)slice * scene->n_layers * LSQT_TAB_STRIDE,
+                  0, 0, work, acc, flags, 0, out + 4 * ((size_t)slice * n + i)};
     if (i >= n) return;
     real3 wo = make_real3(wo_dirs[4 * v], wo_dirs[4 * v + 1], wo_dirs[4 * v + 2]);
     rng_t rng = rng_init(scene->seed_lo, scene->seed_hi, slice, path_begin + i, RNG_PURPOSE_CANDIDATES | scene->rng_side);
@@ -292,9 +296,12 @@ __kernel void lsqt_exits(__constant lsqt_dev_scene *scene, __global const lsqt_d
     run_path(&c, wo, &rng, 0);
 }
 
-/* One work-group per (chunk of LSQT_CHUNK paths, slice): global size
- * (n_chunks * local size, n_slices). It runs the paths of its chunk that fall in
- * [path_begin, path_end), sums in local memory and adds once per chunk to the batch. */
+/* One work-group per (chunk of LSQT_CHUNK paths, simulated slice): global size
+ * (n_chunks * local size, n_slices / slice_group). It runs the paths of its chunk that
+ * fall in [path_begin, path_end), sums in local memory and adds once per chunk to the
+ * batch. In a grouped session (the RRSS pilot) one walk serves every block of the slice:
+ * block b's directions are [b LSQT_GROUP_PAD, + LSQT_GROUP_NWI), and its tallies are
+ * state slice slice * slice_group + b, whose R, T, work and histogram are the walk's. */
 __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
                         __global const lsqt_dev_medium *media,
                         __global const lsqt_dev_layer *layers,
@@ -320,12 +327,11 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
     for (int k = 0; k < LSQT_NWI_PAD; k++) nee_priv[k] = 0, path_sum[k] = R(0.0);
     walk_ctx c = {scene, media, layers, wi_dirs + 3 * LSQT_NWI_PAD * slice,
                   tab + (size_t)slice * scene->n_layers * LSQT_TAB_STRIDE, path_sum, nee_priv, work, acc, flags, 1, 0};
-    /* the paths of simulated slice slice / slice_group (RRSS pilot: each candidate block) */
-    const uint rng_slice = slice / (uint)max(scene->slice_group, 1);
-    real3 wo = make_real3(wo_dirs[4 * slice], wo_dirs[4 * slice + 1], wo_dirs[4 * slice + 2]);
+    const uint g = (uint)max(scene->slice_group, 1), v = slice * g; /* v: the first state slice */
+    real3 wo = make_real3(wo_dirs[4 * v], wo_dirs[4 * v + 1], wo_dirs[4 * v + 2]);
     for (ulong p = begin + (ulong)lid; p < end; p += (ulong)lsz) {
-        rng_t rng = rng_init(scene->seed_lo, scene->seed_hi, rng_slice, p, RNG_PURPOSE_WALK | scene->rng_side);
-        run_path(&c, wo, &rng, hist + 2 * ((ulong)slice * LSQT_BATCHES + (ulong)batch) * LSQT_HIST_BINS);
+        rng_t rng = rng_init(scene->seed_lo, scene->seed_hi, slice, p, RNG_PURPOSE_WALK | scene->rng_side);
+        run_path(&c, wo, &rng, hist + 2 * ((ulong)v * LSQT_BATCHES + (ulong)batch) * LSQT_HIST_BINS);
         nee_flush(&c);
     }
     for (int k = 0; k < LSQT_NWI; k++)
@@ -334,10 +340,17 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
         if (work[k]) local_add128(acc + LSQT_ACC_WORDS * (LSQT_NWI + LSQT_T_LAYER_EVENTS + k), work[k], 0, flags);
     barrier(CLK_LOCAL_MEM_FENCE);
 
-    ulong base = (ulong)slice * LSQT_BATCHES + (ulong)batch;
     for (int k = lid; k < ACC_N; k += lsz) {
-        fix1 v = acc_read(acc + LSQT_ACC_WORDS * k);
-        if (k < LSQT_NWI) global_add128(nee + 2 * (base * LSQT_NWI + k), v.lo, v.hi, flags);
-        else global_add128(scalars + 2 * (base * LSQT_T_COUNT + (k - LSQT_NWI)), v.lo, v.hi, flags);
+        fix1 a = acc_read(acc + LSQT_ACC_WORDS * k);
+        if (k < LSQT_NWI) {
+            const uint b = (uint)k / LSQT_GROUP_PAD, j = (uint)k % LSQT_GROUP_PAD;
+            const ulong base = (ulong)(v + b) * LSQT_BATCHES + (ulong)batch;
+            if (j < LSQT_GROUP_NWI) global_add128(nee + 2 * (base * LSQT_GROUP_NWI + j), a.lo, a.hi, flags);
+        } else {
+            for (uint b = 0; b < g; b++) {
+                const ulong base = (ulong)(v + b) * LSQT_BATCHES + (ulong)batch;
+                global_add128(scalars + 2 * (base * LSQT_T_COUNT + (k - LSQT_NWI)), a.lo, a.hi, flags);
+            }
+        }
     }
 }

@@ -7,7 +7,8 @@
  *  - on the device: two RRSS runs, and two work-group sizes, give byte-identical states;
  *    the kept directions' tallies are bit for bit those of a plain run of the pilot's
  *    paths with those directions (so "they keep their pilot tallies" holds exactly), and
- *    continuing both by the same paths keeps them equal;
+ *    continuing both by the same paths keeps them equal; every candidate block of the
+ *    pilot state holds the R, T, work and histogram of a plain run of the same paths;
  *  - placement: for a smooth dielectric (alpha 0.05) the share of kept directions within
  *    10 degrees of the mirror direction is well above the even spread's (which is about
  *    the cap's solid angle, 0.095 sr of the pi-sr half hemisphere). */
@@ -185,11 +186,45 @@ static void test_device(void)
     }
 }
 
+/* The pilot state itself: one walk serves a slice's rx candidate blocks, so every block
+ * holds the same R, T, work counters and histogram, and those are a plain run's of the
+ * same paths (its directions do not change them). */
+static void test_pilot_blocks(void)
+{
+    const double deg[] = {0, 60};
+    enum { RX = 3, NWI = 18 }; /* 18: blocks padded inside the kernel's direction set */
+    run_t r, plain;
+    fresh(&r, DUSTY, 2, deg, NWI, 9);
+    fresh(&plain, DUSTY, 2, deg, NWI, 9);
+    char err[1024];
+    lsqt_sim_opts o = {0, 0.0, 0, NULL, NULL, 0, 0.0, 0.0, NULL, NULL};
+    lsqt_state ps;
+    lsqt_rrss_info info;
+    lsqt_sim_stats stats;
+    memset(&ps, 0, sizeof ps);
+    CHECK(lsqt_rrss_pilot(&fixture_cx, &r.a, &r.st, RX, 2000, 2000, 0, 2000, &o, &ps, &info, err, sizeof err) == 0, "%s",
+          err);
+    CHECK(lsqt_simulate(&fixture_cx, &plain.a, &plain.st, 2000, &o, &stats, err, sizeof err) == 0, "%s", err);
+    CHECK(ps.n_slices == 2 * RX, "pilot slices %d", ps.n_slices);
+    const size_t ns = (size_t)LSQT_BATCHES * LSQT_T_COUNT, nh = (size_t)LSQT_BATCHES * LSQT_HIST_BINS;
+    for (int s = 0; s < 2 && ps.n_slices == 2 * RX; s++)
+        for (int b = 0; b < RX; b++) {
+            const size_t v = (size_t)s * RX + (size_t)b;
+            CHECK(!memcmp(ps.scalars + v * ns, plain.st.scalars + (size_t)s * ns, ns * sizeof *ps.scalars),
+                  "pilot slice %d block %d: R, T or work differ from a plain run of the same paths", s, b);
+            CHECK(!memcmp(ps.hist + v * nh, plain.st.hist + (size_t)s * nh, nh * sizeof *ps.hist),
+                  "pilot slice %d block %d: the exit histogram differs from a plain run's", s, b);
+        }
+    lsqt_state_free(&ps);
+    free_run(&r), free_run(&plain);
+}
+
 int main(void)
 {
     test_select();
     fixture_open();
     test_device();
+    test_pilot_blocks();
     lsqt_context_release(&fixture_cx);
     return check_finish("test_rrss");
 }

@@ -13,12 +13,21 @@
 #        unless given), the best of 3.
 #        tools/bench.sh targets [--csv PATH] [-- lsqt-cl options...]: the four speed targets
 #        of issue 13 (tools/bench_targets.py): CPU-seconds, events per CPU-second.
+#        tools/bench.sh study [--quick] [--doc] [--seeds N] [--out DIR] [-- lsqt-cl options...]:
+#        the speed/accuracy study (tools/bench_study.py): error against a known answer
+#        and CPU time over -p, float/double, iter_count, multiple scattering, -wi, -rp;
+#        CSV and plots in build/study, or with --doc docs/speed-accuracy.md and its plots.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if [ "${1:-}" = targets ]; then
   shift
   [ -x ./build/lsqt-cl ] || bash tools/build.sh
   exec python3 tools/bench_targets.py ./build/lsqt-cl "$@"
+fi
+if [ "${1:-}" = study ]; then
+  shift
+  [ -x ./build/lsqt-cl ] || bash tools/build.sh
+  exec /usr/bin/python3 tools/bench_study.py "$@"
 fi
 P=${1:-1e6}
 shift || true

@@ -106,8 +106,8 @@ typedef struct lsqt_dev_scene {
     lsqt_i32 top_nonnull;     /* index of the topmost non-null layer, -1 if none */
     lsqt_i32 bottom_nonnull;  /* index of the bottommost non-null layer, -1 if none */
     lsqt_u32 seed_lo, seed_hi;
-    lsqt_i32 slice_group;     /* launch slices per simulated slice (the RRSS pilot runs each
-                                 slice's candidates as that many slices of the same paths) */
+    lsqt_i32 slice_group;     /* state slices per simulated slice (the RRSS pilot: one walk
+                                 serves a slice's candidate blocks, one state slice each) */
     lsqt_u32 rng_side;        /* OR'ed into every RNG purpose: 0, or LSQT_RNG_BELOW for a state
                                  of light entering from below, so its paths are not those of
                                  the slices from above */

@@ -33,8 +33,10 @@ typedef struct lsqt_session {
 int lsqt_session_open(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st,
                       const char *extra_options, size_t local_size, int verbose, char *err, size_t errcap);
 
-/* The same, where every slice_group consecutive slices of ST are one simulated slice run
- * with several direction sets (the RRSS pilot): their paths are the same. */
+/* The same, where every slice_group consecutive slices of ST are one simulated slice
+ * whose walks serve all their direction sets at once (the RRSS pilot: the kernels are
+ * built for slice_group x PAD4(n_wi) directions; each slice gets the walks' R, T, work
+ * and histogram). */
 int lsqt_session_open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st,
                               int slice_group, const char *extra_options, size_t local_size, int verbose,
                               char *err, size_t errcap);
