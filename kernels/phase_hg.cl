@@ -30,9 +30,9 @@ inline real3 hg_sample(real g, real3 wo, real u1, real u2)
     if (ag < R(1e-3)) {
         q = R(2.0) * u1; /* isotropic: cos t uniform */
     } else {
-        real t = R(1.0) - ag + R(2.0) * ag * u1;
-        real s = (R(1.0) - ag) * (R(1.0) + ag) / t;
-        q = (R(1.0) - ag) * (R(1.0) - u1) * (s + R(1.0) - ag) / t;
+        real it = R(1.0) / (R(1.0) - ag + R(2.0) * ag * u1);
+        real s = (R(1.0) - ag) * (R(1.0) + ag) * it;
+        q = (R(1.0) - ag) * (R(1.0) - u1) * (s + R(1.0) - ag) * it;
     }
     return direction_around_q(axis, clamp(q, R(0.0), R(2.0)), u2);
 }

@@ -8,22 +8,18 @@
 
 /* Both halves of each 32x32 product from one 64-bit multiply: PoCL's mul_hi builds it from
  * 16-bit pieces (it was most of the cost of a scattering event), and a GPU compiles this
- * form to its native high multiply too. */
-inline uint4 philox4x32_round(uint4 c, uint2 k)
-{
-    ulong p0 = (ulong)PHILOX_M0 * c.x, p1 = (ulong)PHILOX_M1 * c.z;
-    uint hi0 = (uint)(p0 >> 32), lo0 = (uint)p0;
-    uint hi1 = (uint)(p1 >> 32), lo1 = (uint)p1;
-    return (uint4)(hi1 ^ c.y ^ k.x, lo1, hi0 ^ c.w ^ k.y, lo0);
-}
-
+ * form to its native high multiply too. The state is four scalars, not a uint4: as a
+ * vector every round extracted and inserted lanes, a quarter of a scattering event. */
 inline uint4 philox4x32_rounds(uint4 c, uint2 k, int rounds)
 {
+    uint c0 = c.x, c1 = c.y, c2 = c.z, c3 = c.w, k0 = k.x, k1 = k.y;
     for (int r = 0; r < rounds; r++) {
-        if (r > 0) k += (uint2)(PHILOX_W0, PHILOX_W1);
-        c = philox4x32_round(c, k);
+        if (r > 0) k0 += PHILOX_W0, k1 += PHILOX_W1;
+        ulong p0 = (ulong)PHILOX_M0 * c0, p1 = (ulong)PHILOX_M1 * c2;
+        uint n0 = (uint)(p1 >> 32) ^ c1 ^ k0, n2 = (uint)(p0 >> 32) ^ c3 ^ k1;
+        c1 = (uint)p1, c3 = (uint)p0, c0 = n0, c2 = n2;
     }
-    return c;
+    return (uint4)(c0, c1, c2, c3);
 }
 
 inline uint4 philox4x32_10(uint4 c, uint2 k) { return philox4x32_rounds(c, k, 10); }
