@@ -84,7 +84,7 @@ def sq_errors_checks(case, summary, info):
             continue
         s = summary["slices"][c["slice"]]
         est = info["slices"][c["slice"]]["bsdf"][int(c["q"][2:])][3] if c["q"].startswith("f:") else s[c["q"]]
-        out.append(((est - c["ref"]) ** 2 - c.get("ref_err", 0.0) ** 2) / c["ref"] ** 2)
+        out.append(((est - c["ref"]) / c["ref"]) ** 2)
     return out
 
 
@@ -97,56 +97,69 @@ def sq_errors_albedo(case, summary, info, n):
         if c["q"] != "R":
             continue
         ir = sum(e[3] * e[2] for e in info["slices"][c["slice"]]["bsdf"] if e[2] > 0) * w
-        out.append(((ir - c["ref"]) ** 2 - c.get("ref_err", 0.0) ** 2) / c["ref"] ** 2)
+        out.append(((ir - c["ref"]) / c["ref"]) ** 2)
     return out
 
 
-def own_error(summary, info):
-    """Median relative standard error of the stored BSDF values (no known answer)."""
-    rel = [e[4] / e[3] for s in info["slices"] for e in s["bsdf"] if e[3] > 0]
-    return statistics.median(rel) ** 2
+def ref_floor(case, albedo=False):
+    """The RMS relative error of the known answers themselves (the floor of the error)."""
+    rel = [(c.get("ref_err", 0.0) / c["ref"]) ** 2 for c in case["checks"]
+           if c["ref"] != 0 and not c.get("limitation") and (not albedo or c["q"] == "R")]
+    return math.sqrt(statistics.fmean(rel)) if rel else 0.0
+
+
+def own_error(case, summary, info):
+    """The run's own error bars: for R and T (the slab) their relative standard error, RMS
+    over the checks; else the median relative standard error of the stored BSDF values."""
+    if case is not None and all(c["q"] in ("R", "T") for c in case["checks"]) and case["name"].startswith("Fresnel"):
+        rel = [summary["slices"][c["slice"]][c["q"] + "_err"] / summary["slices"][c["slice"]][c["q"]]
+               for c in case["checks"]]
+        return math.sqrt(statistics.fmean(r * r for r in rel))
+    rel = [e[4] / e[3] for s in info["slices"] for e in s["bsdf"] if e[3] and e[4] is not None and e[3] > 0]
+    return statistics.median(rel) if rel else float("nan")
 
 
 def settings(quick):
-    """(study, label, series, x, case, text, args, paths, error function, wants info, wi)."""
+    """(study, label, series, x, case, text, args, paths, known-answer error function or None, wi)."""
     slab = fixture("Fresnel n=1.33 a=0.9 tau=1 g=0.5")
-    ggx = fixture("GGX conductor a=0.3 n=0.2+3i")
     ms = fixture("MS conductor a=1.0 (metal 1.1+2.6i)")
     ss = fixture("SS conductor a=1.0 (quadrature)")
     ms_args = ["--wo-angles=0,45,75", "--wi-spread"]
-    ps_slab = [1000, 4000, 16000] if quick else [1000, 4000, 16000, 64000]
-    ps_ggx = [100, 400, 1600] if quick else [100, 400, 1600, 6400]
-    ps_ms = [250, 1000] if quick else [250, 1000, 4000]
+    checks = lambda c, s, i: sq_errors_checks(c, s, i)
+    albedo = lambda n: lambda c, s, i: sq_errors_albedo(c, s, i, n)
+    # multiples of 8192 = 32 batches of a 256-path chunk: below that some batches are
+    # empty and a run has no error bars of its own
+    ps_slab = [8192, 32768] if quick else [8192, 32768, 131072]
+    ps_ms = [8192] if quick else [8192, 32768]
     out = []
     for prec in ("float", "double"):
         pa = ["--double"] if prec == "double" else []
         for p in ps_slab:
-            out.append(("precision", f"slab {prec}", f"slab {prec}", p, slab, slab["lsqt"], slab["args"] + pa, p,
-                        lambda c, s, i: sq_errors_checks(c, s, i), False, None))
-        for p in ps_ggx:
-            out.append(("precision", f"ggx {prec}", f"ggx {prec}", p, ggx, ggx["lsqt"],
-                        [a for a in ggx["args"] if a != "--double"] + pa, p,
-                        lambda c, s, i: sq_errors_checks(c, s, i), True, ggx["wi"]))
+            out.append(("precision", f"slab {prec}", f"slab {prec}", p, slab, slab["lsqt"], slab["args"] + pa, p, checks,
+                        None))
+        for p in ps_ms:
+            out.append(("precision", f"ms conductor {prec}", f"ms conductor {prec}", p, ms, ms["lsqt"],
+                        ms_args + ["-wi", "256"] + pa, p, albedo(256), None))
     for it in (1, 2, 6, 16):
         text = ms["lsqt"].replace("use_multiple_scattering=true", f"use_multiple_scattering=true iter_count={it}")
         for p in ps_ms:
             out.append(("iter_count", f"iter_count {it}", f"iter_count={it}", p, ms, text, ms_args + ["-wi", "256"], p,
-                        lambda c, s, i: sq_errors_albedo(c, s, i, 256), True, None))
+                        albedo(256), None))
     for label, case in (("multiple scattering on", ms), ("multiple scattering off", ss)):
         for p in ps_ms:
-            out.append(("scattering", label, label, p, case, case["lsqt"], ms_args + ["-wi", "256"], p,
-                        lambda c, s, i: sq_errors_albedo(c, s, i, 256), True, None))
+            out.append(("scattering", label, label, p, case, case["lsqt"], ms_args + ["-wi", "256"], p, albedo(256),
+                        None))
     for n in ((64, 256) if quick else (64, 256, 1024)):
-        out.append(("wi", f"-wi {n} (spread)", "albedo from the spread", n, ms, ms["lsqt"], ms_args + ["-wi", str(n)],
-                    1000, (lambda n: lambda c, s, i: sq_errors_albedo(c, s, i, n))(n), True, None))
+        out.append(("wi", f"-wi {n} (spread)", "ms conductor, even spread", n, ms, ms["lsqt"],
+                    ms_args + ["-wi", str(n)], 8192, albedo(n), None))
     with open(SUBSTR) as f:
         substr = f.read()
     for n in ((80, 300) if quick else (80, 160, 300)):
-        out.append(("rrss", f"Substr -wi {n}", "Substr -wi (-rp 0.3)", n, None, substr, ["-wi", str(n), "-rp", "0.3"],
-                    4000, lambda c, s, i: [own_error(s, i)], True, None))
+        out.append(("rrss", f"Substr -wi {n} -rp 0.3", "Substr -wi (-rp 0.3)", n, None, substr,
+                    ["-wi", str(n), "-rp", "0.3"], 8192, None, None))
     for rp in ((0.1, 0.8) if quick else (0.1, 0.3, 0.8)):
-        out.append(("rrss", f"Substr -rp {rp}", "Substr -rp (-wi 80)", rp, None, substr, ["-rp", str(rp)], 4000,
-                    lambda c, s, i: [own_error(s, i)], True, None))
+        out.append(("rrss", f"Substr -wi 80 -rp {rp}", "Substr -rp (-wi 80)", rp, None, substr, ["-rp", str(rp)], 8192,
+                    None, None))
     return out
 
 
@@ -155,48 +168,53 @@ def plots(rows, out_dir):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     files = []
-    for study, title, xname in (("precision", "error against CPU time: -p from low to high, float and double", None),
-                                ("iter_count", "multiple-scattering conductor: iter_count, -p from low to high", None),
-                                ("scattering", "multiple scattering on and off (each against its own reference)", None)):
-        fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    for study, title in (("precision", "-p from low to high, float and double"),
+                         ("iter_count", "multiple-scattering conductor (alpha 1): iter_count"),
+                         ("scattering", "multiple scattering on and off (each against its own answer)")):
+        fig, axes = plt.subplots(1, 2, figsize=(10, 4.2))
         series = {}
         for r in rows:
             if r["study"] == study:
                 series.setdefault(r["series"], []).append(r)
-        for name, rs in series.items():
-            rs.sort(key=lambda r: r["cpu_s"])
-            ax.plot([r["cpu_s"] for r in rs], [r["error"] for r in rs], "o-", label=name)
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        ax.set_xlabel("CPU seconds (user + sys) per run")
-        ax.set_ylabel("relative RMS error against the known answer")
-        ax.set_title(title, fontsize=9)
-        ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=8)
+        for ax, key, ylabel in ((axes[0], "error", "relative RMS error against the known answer"),
+                                (axes[1], "own_error", "median relative standard error (own error bars)")):
+            for name, rs in series.items():
+                rs.sort(key=lambda r: r["cpu_s"])
+                pts = [(r["cpu_s"], r[key]) for r in rs if r[key]]
+                if pts:
+                    ax.plot([p[0] for p in pts], [p[1] for p in pts], "o-", label=name)
+            ax.set_xscale("log")
+            ax.set_yscale("log")
+            ax.set_xlabel("CPU seconds (user + sys) per run")
+            ax.set_ylabel(ylabel, fontsize=8)
+            ax.grid(True, which="both", alpha=0.3)
+            ax.legend(fontsize=7)
+        fig.suptitle(title, fontsize=9)
         fig.tight_layout()
         path = os.path.join(out_dir, f"error-time-{study}.png")
-        fig.savefig(path, dpi=90)
+        fig.savefig(path, dpi=80)
         plt.close(fig)
         files.append(path)
-    fig, ax = plt.subplots(figsize=(7.2, 5.0))
-    labels = []
+    fig, ax = plt.subplots(figsize=(7.5, 5.5))
     best = {}
-    for r in rows:  # per label: the efficiency at its largest -p (the steadiest figure)
-        key = r["label"]
-        if key not in best or r["x"] > best[key]["x"] or r["study"] in ("wi", "rrss"):
-            best[key] = r
-    for i, (label, r) in enumerate(best.items()):
-        ax.barh(i, r["efficiency"])
-        labels.append(label)
+    for r in rows:  # per label: at its largest -p (start-up matters least there)
+        if r["label"] not in best or r["paths"] > best[r["label"]]["paths"]:
+            best[r["label"]] = r
+    labels = list(best)
+    ax.barh([i - 0.2 for i in range(len(labels))], [best[k]["efficiency"] or 0 for k in labels], height=0.4,
+            label="known answer")
+    ax.barh([i + 0.2 for i in range(len(labels))], [best[k]["own_efficiency"] or 0 for k in labels], height=0.4,
+            label="own error bars")
     ax.set_yticks(range(len(labels)))
     ax.set_yticklabels(labels, fontsize=7)
     ax.set_xscale("log")
     ax.set_xlabel("efficiency 1 / (error^2 x CPU-s), higher is better")
-    ax.set_title("efficiency per setting (compare within a group only)", fontsize=9)
+    ax.set_title("efficiency per setting, at its largest -p (compare within a group)", fontsize=9)
+    ax.legend(fontsize=7)
     ax.invert_yaxis()
     fig.tight_layout()
     path = os.path.join(out_dir, "efficiency.png")
-    fig.savefig(path, dpi=90)
+    fig.savefig(path, dpi=80)
     plt.close(fig)
     files.append(path)
     return files
@@ -207,43 +225,51 @@ def main():
     extra = args[args.index("--") + 1:] if "--" in args else []
     args = args[:args.index("--")] if "--" in args else args
     quick, doc = "--quick" in args, "--doc" in args
-    seeds = int(args[args.index("--seeds") + 1]) if "--seeds" in args else (2 if quick else 3)
+    seeds = int(args[args.index("--seeds") + 1]) if "--seeds" in args else (2 if quick else 8)
     out_dir = args[args.index("--out") + 1] if "--out" in args else os.path.join(ROOT, "build", "study")
     binary = os.environ.get("LSQT_CL", os.path.join(ROOT, "build", "lsqt-cl"))
     os.makedirs(out_dir, exist_ok=True)
     rows = []
     warmed = set()
     print(f"{'study':10s} {'setting':28s} {'x':>7s} {'paths':>7s} {'cpu_s':>7s} {'wall_s':>7s} {'error':>9s} "
-          f"{'efficiency':>10s}", flush=True)
-    for study, label, series, x, case, text, a, paths, err_fn, want_info, wi in settings(quick):
+          f"{'floor':>8s} {'own_err':>9s} {'eff':>9s} {'own_eff':>9s}", flush=True)
+    t_start = time.time()
+    for study, label, series, x, case, text, a, paths, err_fn, wi in settings(quick):
         key = (text, tuple(a))
         if key not in warmed:  # fills the kernel cache: compile time is not the setting's
             run(binary, text, a, 100, 1, extra, wi)
             warmed.add(key)
-        sq, cpu, wall = [], 0.0, 0.0
+        sq, own, cpu, wall = [], [], 0.0, 0.0
         for k in range(seeds):
-            summary, info, c, w = run(binary, text, a, paths, 1 + k, extra, wi, want_info)
-            sq += err_fn(case, summary, info)
+            summary, info, c, w = run(binary, text, a, paths, 1 + k, extra, wi, True)
+            if err_fn:
+                sq += err_fn(case, summary, info)
+            own.append(own_error(case, summary, info))
             cpu += c
             wall += w
         cpu, wall = cpu / seeds, wall / seeds
-        err = math.sqrt(max(statistics.fmean(sq), 1e-30))
+        err = math.sqrt(statistics.fmean(sq)) if sq else None
+        own_err = math.sqrt(statistics.fmean(e * e for e in own))  # 0: an exact estimator (no noise)
+        floor = ref_floor(case, albedo=not label.startswith("slab")) if case else None  # R and T, or R only
         row = {"study": study, "label": label, "series": series, "x": x, "paths": paths, "seeds": seeds,
-               "cpu_s": cpu, "wall_s": wall, "error": err, "efficiency": 1.0 / (err * err * cpu)}
+               "cpu_s": cpu, "wall_s": wall, "error": err, "ref_floor": floor, "own_error": own_err,
+               "efficiency": 1.0 / (err * err * cpu) if err else None,
+               "own_efficiency": 1.0 / (own_err ** 2 * cpu) if own_err > 0 else None}
         rows.append(row)
-        print(f"{study:10s} {label:28s} {x:7g} {paths:7d} {cpu:7.3f} {wall:7.3f} {err:9.3e} {row['efficiency']:10.3g}",
-              flush=True)
+        f = lambda v, spec: format(v, spec) if v is not None else "-"
+        print(f"{study:10s} {label:28s} {x:7g} {paths:7d} {cpu:7.3f} {wall:7.3f} {f(err, '9.3e')} {f(floor, '8.1e')} "
+              f"{own_err:9.3e} {f(row['efficiency'], '9.3g')} {f(row['own_efficiency'], '9.3g')}", flush=True)
     csv_path = os.path.join(out_dir, "study.csv")
     with open(csv_path, "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
         w.writeheader()
         w.writerows(rows)
-    print(f"wrote {csv_path}")
+    print(f"wrote {csv_path} ({time.time() - t_start:.0f} s)")
     if doc:
         img_dir = os.path.join(ROOT, "docs", "speed-accuracy")
         os.makedirs(img_dir, exist_ok=True)
         files = plots(rows, img_dir)
-        write_doc(rows, files, seeds, extra)
+        write_doc(rows, seeds, extra)
     else:
         files = plots(rows, out_dir)
     for p in files:
@@ -251,105 +277,120 @@ def main():
     return 0
 
 
-def write_doc(rows, files, seeds, extra):
-    """docs/speed-accuracy.md: the measured table and what it tells a user."""
-    import platform
-    dev = subprocess.run([os.environ.get("LSQT_CL", os.path.join(ROOT, "build", "lsqt-cl")), "--list-devices"],
-                         capture_output=True, text=True).stdout.strip().splitlines()
+def write_doc(rows, seeds, extra):
+    """docs/speed-accuracy.md: the measured tables and what they tell a user (every number
+    in the text comes from the rows)."""
+    binary = os.environ.get("LSQT_CL", os.path.join(ROOT, "build", "lsqt-cl"))
+    dev = subprocess.run([binary, "--list-devices"], capture_output=True, text=True).stdout.strip().splitlines()
     by = {}
     for r in rows:
         by.setdefault(r["study"], []).append(r)
+    g = lambda v, spec: format(v, spec) if v is not None else "—"
 
     def table(rs):
-        t = ["| setting | x | paths | CPU-s | wall s | rel. error | efficiency |", "|---|---:|---:|---:|---:|---:|---:|"]
+        t = ["| setting | paths | CPU-s | wall s | error (known answer) | its floor | own error | efficiency | own efficiency |",
+             "|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
         for r in rs:
-            t.append(f"| {r['label']} | {r['x']:g} | {r['paths']} | {r['cpu_s']:.3f} | {r['wall_s']:.3f} | "
-                     f"{r['error']:.2e} | {r['efficiency']:.3g} |")
+            t.append(f"| {r['label']} | {r['paths']} | {r['cpu_s']:.3f} | {r['wall_s']:.3f} | {g(r['error'], '.2e')} | "
+                     f"{g(r['ref_floor'], '.1e')} | {g(r['own_error'], '.2e')} | {g(r['efficiency'], '.3g')} | "
+                     f"{g(r['own_efficiency'], '.3g')} |")
         return "\n".join(t)
 
-    def eff(label, x):
-        for r in rows:
-            if r["label"] == label and r["x"] == x:
-                return r
-        return None
+    def at(label, paths=None):
+        rs = [r for r in rows if r["label"] == label and (paths is None or r["paths"] == paths)]
+        return max(rs, key=lambda r: r["paths"]) if rs else None
 
-    ps_ms = sorted({r["x"] for r in by["iter_count"]})
-    top = ps_ms[-1]
-    it = {k: eff(f"iter_count {k}", top) for k in (1, 2, 6, 16)}
-    best_it = max(it, key=lambda k: it[k]["efficiency"])
-    slab_f = max((r for r in by["precision"] if r["label"] == "slab float"), key=lambda r: r["x"])
-    slab_d = max((r for r in by["precision"] if r["label"] == "slab double"), key=lambda r: r["x"])
-    ggx_f = max((r for r in by["precision"] if r["label"] == "ggx float"), key=lambda r: r["x"])
-    ggx_d = max((r for r in by["precision"] if r["label"] == "ggx double"), key=lambda r: r["x"])
-    ms_on = eff("multiple scattering on", top)
-    ms_off = eff("multiple scattering off", top)
-    rel = lambda a, b: a["efficiency"] / b["efficiency"]
+    ratio = lambda a, b, k: a[k] / b[k] if a and b and a[k] and b[k] else float("nan")
+    sf, sd = at("slab float"), at("slab double")
+    mf, md = at("ms conductor float"), at("ms conductor double")
+    its = {k: at(f"iter_count {k}") for k in (1, 2, 6, 16)}
+    best_it = max(its, key=lambda k: its[k]["own_efficiency"])
+    on, off = at("multiple scattering on"), at("multiple scattering off")
+    wis = sorted(by["wi"], key=lambda r: r["x"])
+    rr = {r["label"]: r for r in by["rrss"]}
+    slab_ps = sorted((r for r in by["precision"] if r["label"] == "slab float"), key=lambda r: r["paths"])
+    fall = (slab_ps[0]["own_error"] / slab_ps[-1]["own_error"], math.sqrt(slab_ps[-1]["paths"] / slab_ps[0]["paths"]))
     text = f"""# Speed and accuracy: which settings buy how much accuracy per second
 
-Generated by `tools/bench.sh study --doc` (`tools/bench_study.py`); do not edit by hand.
-Machine: {platform.node() and 'this project machine'} with {os.cpu_count()} cores, device
-`{dev[-1].strip() if dev else 'default'}`{(', flags ' + ' '.join(extra)) if extra else ''}. Each row is the mean of {seeds} seeds.
+Generated by `tools/bench.sh study --doc` (`tools/bench_study.py`, {seeds} seeds per row); do
+not edit by hand. Machine: {os.cpu_count()} cores, device `{dev[-1].strip() if dev else 'default'}`{(', flags ' + ' '.join(extra)) if extra else ''}.
 
-**How to read it.** The error is the root mean square, over the quantities and the seeds, of
-(lsqt-cl − known answer) / known answer, with the known answer's own uncertainty taken out
-in quadrature, so it is lsqt-cl's Monte Carlo error. The known answers are the validation
-suite's (`docs/validation.md`): iadpython for the slab, Mitsuba 3 for the single-scattering
-GGX conductor, the independent walk of Heitz et al. (2016) for the multiple-scattering
-conductor. Efficiency is 1 / (error² × CPU-s): a setting with twice the efficiency reaches
-the same error in half the time. Monte Carlo error falls as 1 / sqrt(paths), so efficiency
-is flat in −p once start-up (about 0.2 CPU-s: OpenCL context, cached kernels) is small
-against the run; compare settings at the largest −p. CPU-s is user + sys (the machine is
-shared); each run's kernels are cached by an untimed first run. At the smallest −p the
-error has few samples and is itself uncertain by tens of percent.
+**How to read it.** Two errors per setting, each the root mean square over the seeds:
+- *error (known answer)*: (lsqt-cl − answer) / answer over the case's quantities. The answers
+  are the validation suite's (`docs/validation.md`): iadpython for the slab's R and T
+  (a slab of albedo 0.9, optical thickness 1, g 0.5 between Fresnel boundaries of index
+  1.33, at 0° and 60°), the independent random walk of Heitz et al. (2016) for the rough
+  conductor (alpha 1, index 1.1 + 2.6i) with multiple scattering, its quadrature for
+  single scattering. For the conductor the quantity is each slice's albedo integrated from
+  the stored point estimates over an even spread of `-wi` directions, so it measures what
+  a user keeps. *its floor* is the answers' own uncertainty: an error near it says
+  nothing more about lsqt-cl.
+- *own error*: the run's own error bars, the relative standard error of R and T (slab)
+  or the median one of the stored BSDF values (the others). lsqt-cl's estimates are
+  unbiased (the validation suite's z-scores), so this is the error a user gets per
+  direction.
+Efficiency is 1 / (error² × CPU-s): twice the efficiency reaches the same error in half the
+time. Monte Carlo error falls as 1 / sqrt(paths), so efficiency is flat in −p once start-up
+(the OpenCL context and cached kernels, about 0.06 CPU-s) is small against the run, and
+the settings compare at their largest −p. CPU-s is user + sys (the machine is shared);
+each setting's kernels are cached by an untimed first run. Runs use multiples of 8192
+paths: 32 batches of 256-path chunks, the fewest that give every batch, and so the error
+bars, its paths.
 
-![error against time, precision](speed-accuracy/error-time-precision.png)
-![error against time, iter_count](speed-accuracy/error-time-iter_count.png)
-![error against time, multiple scattering](speed-accuracy/error-time-scattering.png)
+![error against time: -p, float and double](speed-accuracy/error-time-precision.png)
+![error against time: iter_count](speed-accuracy/error-time-iter_count.png)
+![error against time: multiple scattering](speed-accuracy/error-time-scattering.png)
 ![efficiency per setting](speed-accuracy/efficiency.png)
 
 ## What it tells a user
 
-- **−p**: error falls as 1/sqrt(−p) in every row below (4× the paths, half the error),
-  down to the known answers' own accuracy. Below about 1000 paths per slice start-up
-  dominates the time, so small runs are cheap in error per second only up to that point.
-- **float or double**: on the slab, double costs {slab_d['cpu_s'] / slab_f['cpu_s']:.2f}× the CPU time of float for an
-  error of {slab_d['error']:.2e} against {slab_f['error']:.2e} (efficiency ratio float/double
-  {rel(slab_f, slab_d):.2f}); on the GGX conductor {ggx_d['cpu_s'] / ggx_f['cpu_s']:.2f}× for {ggx_d['error']:.2e} against {ggx_f['error']:.2e}
-  (ratio {rel(ggx_f, ggx_d):.2f}). Float's rounding (1e-7) is far below Monte Carlo error at
-  any −p a user runs, so float is the default; `--double` is for checking extreme
-  parameters (docs/validation.md's extremes), not for accuracy per second.
-- **iter_count** (walks per next-event estimate on a multiple-scattering microsurface): at
-  −p {top}, efficiency {', '.join(f'{k}: {it[k]["efficiency"]:.3g}' for k in (1, 2, 6, 16))}; the best here is
-  iter_count = {best_it}. Raising iter_count beats raising −p when the point estimates' own
-  noise (the random walk on the facets) dominates, as on this rough (alpha 1) conductor; it
-  costs the same per walk as a path only where the layer's next-event work dominates the
-  path (a single layer), so in a deep stack its price is relatively lower still.
-- **Multiple scattering**: on (against the walk's answer) costs {ms_on['cpu_s'] / ms_off['cpu_s']:.2f}× the CPU time of off
-  (against the single-scattering quadrature) at −p {top}, efficiency ratio on/off
-  {rel(ms_on, ms_off):.2f}. Turning it off is not a speed setting: it changes the answer by the
-  missing multiple scattering ({100 * (1 - 0.2281886 / 0.4106477):.0f} % of R at 45° for alpha 1), far more than any Monte
-  Carlo error.
-- **−wi**: the albedo integrated from the point estimates needs enough directions to
-  resolve the BSDF; the rows below show its error and cost as −wi grows at −p 1000.
-- **−rp and −wi with RRSS** (the tutorial's Substr, no known answer: its own error bars):
-  a longer pilot (−rp) costs more (it estimates 4 × −wi candidates) and buys a better
-  choice of directions; the error bars of the stored values are those of the paths.
+- **−p** buys accuracy at the Monte Carlo rate: from {slab_ps[0]['paths']} to {slab_ps[-1]['paths']} paths the slab's
+  own error falls {fall[0]:.2f}× (1/sqrt(paths) predicts {fall[1]:.2f}×) and the known-answer error
+  {slab_ps[0]['error'] / slab_ps[-1]['error']:.2f}× (it is noisier: {seeds} seeds of 4 quantities). Below 8192 paths per slice a
+  run has no error bars of its own, and start-up is a large share of a short run.
+- **float, not double**: double costs {ratio(sd, sf, 'cpu_s'):.2f}× the CPU time on the slab and
+  {ratio(md, mf, 'cpu_s'):.2f}× on the conductor for the same Monte Carlo error (own efficiency float/double
+  {ratio(sf, sd, 'own_efficiency'):.2f} and {ratio(mf, md, 'own_efficiency'):.2f}). Float's rounding (1e-7 relative) is far below
+  the error of any run a user makes; `--double` is for checking extreme parameters, not
+  for accuracy per second.
+- **iter_count** (walks per point estimate on a multiple-scattering microsurface): own
+  efficiency at {its[1]['paths']} paths {', '.join(f'{k}: {its[k]["own_efficiency"]:.3g}' for k in its)}. On this rough
+  conductor raising iter_count to {best_it} beats raising −p: more walks per vertex cut the point
+  estimates' noise for less than the same number of extra paths costs (a path pays for its
+  walk, its sampling and its other vertices). The known-answer error (iter_count 1 to 16:
+  {', '.join(g(its[k]['error'], '.2e') for k in its)}, floor {g(its[1]['ref_floor'], '.1e')}) {'is within 1.5× of its floor from iter_count 6 on, so it does not separate the larger settings' if its[6]['error'] < 1.5 * its[6]['ref_floor'] else 'falls with iter_count too'}. The default (auto:
+  6 for alpha > 0.5) is {'the best here' if best_it == 6 else 'not the best here: iter_count ' + str(best_it) + ' is more efficient'}.
+- **Multiple scattering off** costs {ratio(off, on, 'cpu_s'):.2f}× the CPU time of on, and its point estimates are
+  exact (analytic single scattering: no noise of their own); its error against its own
+  answer is {g(off['error'], '.1e')} against {g(on['error'], '.1e')} with multiple scattering on. But off is not a speed
+  setting: it drops the multiple scattering, {100 * (1 - 0.2281886 / 0.4106477):.0f} % of R at 45° for alpha 1, far more than
+  any Monte Carlo error.
+- **−wi** (even spread, −p 8192): {', '.join(f"-wi {r['x']:g}: {r['cpu_s']:.3f} CPU-s, albedo error {r['error']:.2e}" for r in wis)}. The
+  point estimates' cost grows with the directions while the albedo of this smooth BSDF is
+  resolved already by the fewest; store as many directions as the BSDF's detail needs
+  (narrow lobes: RRSS, below), not more.
+- **RRSS −wi and −rp** (the tutorial's Substr: no known answer, own errors): a longer pilot
+  costs more, since it evaluates rx = 4 × −wi candidates for its share of the paths (−rp 0.1:
+  {rr['Substr -wi 80 -rp 0.1']['cpu_s']:.2f} CPU-s, 0.3: {rr['Substr -wi 80 -rp 0.3']['cpu_s'] if 'Substr -wi 80 -rp 0.3' in rr else float('nan'):.2f}, 0.8: {rr['Substr -wi 80 -rp 0.8']['cpu_s']:.2f}), and leaves the stored
+  values' error bars as they were (the pilot's tallies are kept): what it buys is where
+  the directions go (README, "RRSS against the even spread"). −wi 300 costs
+  {ratio(rr.get('Substr -wi 300 -rp 0.3'), rr.get('Substr -wi 80 -rp 0.3'), 'cpu_s'):.2f}× −wi 80 at the same per-direction error.
 
 ## Tables
 
 ### −p, float and double
 {table(by['precision'])}
 
-### iter_count (multiple-scattering conductor, alpha 1, albedo from 256 directions)
+### iter_count (the multiple-scattering conductor)
 {table(by['iter_count'])}
 
-### Multiple scattering on and off
+### Multiple scattering on and off (the conductor; off against the single-scattering answer)
 {table(by['scattering'])}
 
-### −wi (even spread; albedo error, includes the quadrature's)
-{table(by['wi'])}
+### −wi (even spread, the conductor's albedo)
+{table(sorted(by['wi'], key=lambda r: r['x']))}
 
-### RRSS: −wi and −rp on Substr (error: median relative standard error of the stored values)
+### RRSS: −wi and −rp on Substr (own errors only)
 {table(by['rrss'])}
 """
     with open(os.path.join(ROOT, "docs", "speed-accuracy.md"), "w") as f:
