@@ -3,7 +3,9 @@
  *  - selection: with the BSDF of a narrow lobe the kept candidates crowd at the lobe;
  *    with a constant BSDF they keep about the candidates' own share everywhere; with a
  *    BSDF that is 0 everywhere it falls back to the sampling density; ties go by index
- *    (the same inputs give the same choice, and a permutation-free input is stable);
+ *    (the same inputs give the same choice, and a permutation-free input is stable); the
+ *    choice equals an independent, plain implementation's where discs hold from one to
+ *    several hundred candidates;
  *  - on the device: two RRSS runs, and two work-group sizes, give byte-identical states;
  *    the kept directions' tallies are bit for bit those of a plain run of the pilot's
  *    paths with those directions (so "they keep their pilot tallies" holds exactly), and
@@ -77,6 +79,109 @@ static void test_select(void)
     for (int i = 0; i < M; i++)
         if (keep[i]) { first_kept = i; break; }
     CHECK(first_kept == M - N, "ties: first kept %d, want %d", first_kept, M - N);
+}
+
+/* An independent reading of the selection (SPEC §5 and rrss.c's documented order), plain
+ * and slow: the candidates' density from the 8 nearest, the target q, then m - n times
+ * the most redundant enabled candidate off. A disc's sums run over the others in order
+ * of nearness (dot product descending, then index), the first 256 of them; a disc that
+ * holds all 256 (of more than 256 others) sums all it holds in index order. */
+typedef struct {
+    double dot;
+    int j;
+} ref_nbr;
+
+static int ref_nbr_cmp(const void *x, const void *y)
+{
+    const ref_nbr *a = x, *b = y;
+    if (a->dot != b->dot) return a->dot < b->dot ? 1 : -1;
+    return (a->j > b->j) - (a->j < b->j);
+}
+
+static double ref_dot(const float *a, const float *b)
+{
+    return (double)a[0] * b[0] + (double)a[1] * b[1] + (double)a[2] * b[2];
+}
+
+static void ref_select(const float *dirs, const double *f, int m, int n, int sphere, unsigned char *keep)
+{
+    ref_nbr *all = malloc((size_t)m * (size_t)(m - 1) * sizeof *all);
+    double *q = malloc((size_t)m * sizeof *q), *pe = malloc((size_t)m * sizeof *pe);
+    const int k = m - 1 < 8 ? m - 1 : 8, kmax = m - 1 < 256 ? m - 1 : 256;
+    for (int i = 0; i < m; i++) {
+        ref_nbr *l = all + (size_t)i * (size_t)(m - 1);
+        for (int j = 0, c = 0; j < m; j++)
+            if (j != i) l[c].dot = ref_dot(dirs + 4 * i, dirs + 4 * j), l[c++].j = j;
+        qsort(l, (size_t)(m - 1), sizeof *l, ref_nbr_cmp);
+        double cap = fmax(2 * PI * (1 - fmin(l[k - 1].dot, 1.0)), 1e-12);
+        pe[i] = k / (m * cap);
+    }
+    double z = 0;
+    for (int i = 0; i < m; i++) z += (isfinite(f[i]) && f[i] > 0 ? f[i] : 0.0) / pe[i] / m;
+    const int fb = !(isfinite(z) && z > 0);
+    for (int i = 0; i < m; i++)
+        q[i] = fb ? pe[i] : 0.9 * (isfinite(f[i]) && f[i] > 0 ? f[i] : 0.0) / z + 0.1 / (sphere ? 2 * PI : PI);
+    for (int i = 0; i < m; i++) keep[i] = 1;
+    for (int enabled = m; enabled > n; enabled--) {
+        int worst = -1;
+        double worst_r = -1;
+        for (int i = 0; i < m; i++) {
+            if (!keep[i]) continue;
+            double r = sqrt(1.0 / (PI * q[i] * enabled)), c = r >= PI ? -2.0 : cos(r), e = 0, a = 0, qs = 0;
+            const ref_nbr *l = all + (size_t)i * (size_t)(m - 1);
+            int t = 0;
+            while (t < m - 1 && l[t].dot >= c) t++;
+            if (t >= kmax && kmax < m - 1) {
+                for (int j = 0; j < m; j++)
+                    if (j != i && ref_dot(dirs + 4 * i, dirs + 4 * j) >= c) a += 1, qs += q[j], e += keep[j];
+            } else {
+                for (int u = 0; u < t; u++) a += 1, qs += q[l[u].j], e += keep[l[u].j];
+            }
+            double red = a > 0 ? e * a * q[i] / qs : 0.0;
+            if (red > worst_r) worst_r = red, worst = i;
+        }
+        keep[worst] = 0;
+    }
+    free(all), free(q), free(pe);
+}
+
+/* The selection against the reference on candidates whose discs hold from one to several
+ * hundred others: an even spread of 300 and a dense cluster of 300 away from a narrow
+ * lobe (the cluster's target density is the floor, so its discs are wide). */
+static void test_select_reference(void)
+{
+    enum { M = 600, N = 150 };
+    static float dirs[4 * M];
+    static double f[M];
+    static unsigned char keep[M], ref[M];
+    uint64_t r = 987654321;
+    for (int i = 0; i < M; i++) {
+        r = r * 6364136223846793005ull + 1442695040888963407ull;
+        double u1 = (double)(r >> 11) / 9007199254740992.0;
+        r = r * 6364136223846793005ull + 1442695040888963407ull;
+        double u2 = (double)(r >> 11) / 9007199254740992.0;
+        if (i % 2) { /* the cluster: within 0.15 rad of (-0.5, 0, 0.866) */
+            double t = 0.15 * sqrt(u1), p = 2 * PI * u2;
+            unit(dirs + 4 * i, -0.5 + t * cos(p) * 0.866, t * sin(p), 0.866 + t * cos(p) * 0.5);
+        } else {
+            double z = u1, sn = sqrt(1 - z * z);
+            unit(dirs + 4 * i, sn * cos(PI * u2), sn * sin(PI * u2), z);
+        }
+        double c = dirs[4 * i] * 0.6 + dirs[4 * i + 2] * 0.8, ang = acos(fmin(1, c));
+        f[i] = 50 * exp(-ang * ang / (2 * 0.05 * 0.05));
+    }
+    lsqt_rrss_select(dirs, f, M, N, 0, keep);
+    ref_select(dirs, f, M, N, 0, ref);
+    int diff = 0, kept = 0;
+    for (int i = 0; i < M; i++) diff += keep[i] != ref[i], kept += keep[i];
+    CHECK(diff == 0 && kept == N, "selection differs from the reference in %d of %d candidates (kept %d)", diff, M, kept);
+    /* and a BSDF that is 0 everywhere: the density fallback, the same way */
+    for (int i = 0; i < M; i++) f[i] = 0;
+    lsqt_rrss_select(dirs, f, M, N, 0, keep);
+    ref_select(dirs, f, M, N, 0, ref);
+    diff = 0;
+    for (int i = 0; i < M; i++) diff += keep[i] != ref[i];
+    CHECK(diff == 0, "fallback selection differs from the reference in %d of %d candidates", diff, M);
 }
 
 typedef struct {
@@ -222,6 +327,7 @@ static void test_pilot_blocks(void)
 int main(void)
 {
     test_select();
+    test_select_reference();
     fixture_open();
     test_device();
     test_pilot_blocks();
