@@ -127,9 +127,9 @@ inline real phase_pdf(__global const lsqt_dev_medium *m, real3 wo, real3 wi)
 /* Samples wi given wo; returns the weight p / pdf (1: every sampler here is exact). */
 inline real phase_sample(__global const lsqt_dev_medium *m, const phase_vtx *v, real3 wo, rng_t *rng, real3 *wi)
 {
-    /* u0 picks a lobe: only the two-lobe HG draws it (a draw fewer per scattering event) */
-    real u0 = m->phase_kind == LSQT_PHASE_HG2 ? rng_uniform(rng) : R(0.0);
-    real u1 = rng_uniform(rng), u2 = rng_uniform(rng);
+    /* Every phase function draws three (u0 picks HG2's lobe): HG2 with b = 0 is then HG
+     * sample for sample (test_phases). */
+    real u0 = rng_uniform(rng), u1 = rng_uniform(rng), u2 = rng_uniform(rng);
     (void)u0, (void)v;
     switch (m->phase_kind) {
 #ifdef LSQT_HAS_PHASE_HG

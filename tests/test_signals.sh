@@ -55,19 +55,19 @@ N=$(paths sTERM.lss)
 # SIGTERM during the RRSS pilot (default directions; rp 0.8, so most of a run): the LSS
 # is the pilot so far, and continuing finishes the pilot, chooses and runs the rest: the
 # bytes of the uninterrupted run.
-"$BIN" -v -R -p 1e6 -wo 4 -wi 16 --lss p.lss -o p.raw S.lsqt 2>p.err >/dev/null &
+"$BIN" -v -R -p 3e6 -wo 4 -wi 16 --lss p.lss -o p.raw S.lsqt 2>p.err >/dev/null &
 pid=$!
 (sleep 120; kill -KILL $pid 2>/dev/null) >/dev/null 2>&1 &
 watchdogs+=($!)
 for _ in $(seq 600); do grep -q "RRSS: .* pilot paths" p.err 2>/dev/null && break; sleep 0.1; done
-sleep 1
+sleep 0.3 # the pilot of 2.4e6 paths takes about 2 s on 2 cores
 kill -TERM $pid
 wait $pid
 rc=$?
 "$BIN" info p.lss > p.info 2>&1
 [ "$rc" = 1 ] && grep -q "^stage: RRSS pilot" p.info && [ -s p.raw ] && ok ||
   bad "SIGTERM in the RRSS pilot: exit $rc, $(grep -E 'stage|paths:' p.info), $(tail -2 p.err)"
-"$BIN" -q -p 1e6 --lss p.lss -o p.raw S.lsqt && "$BIN" -q -R -p 1e6 -wo 4 -wi 16 --lss q.lss -o q.raw S.lsqt &&
+"$BIN" -q -p 3e6 --lss p.lss -o p.raw S.lsqt && "$BIN" -q -R -p 3e6 -wo 4 -wi 16 --lss q.lss -o q.raw S.lsqt &&
   cmp -s p.lss q.lss && cmp -s p.raw q.raw && ok || bad "continuing an interrupted RRSS pilot differs from one run"
 
 # Checkpoints: a SIGKILL (nothing can be written then) still leaves the last checkpoint,
