@@ -28,9 +28,10 @@ inline real3 sample_cosine_hemisphere(real u1, real u2)
 }
 
 /* A vector that is unit up to rounding (|v|^2 = 1 + e, |e| < 1e-4), made unit again by
- * one Newton step for 1/sqrt from 1: 1.5 - e/2 - 1/2 has error 3e^2/8, below float's
- * and double's rounding for the e of a few roundings. No sqrt or division: the library's
- * normalize guards against overflow that cannot happen here at several times the cost. */
+ * one Newton step for 1/sqrt from 1: the factor 1.5 - |v|^2 / 2 = 1 - e/2 differs from
+ * 1/sqrt(1 + e) by 3e^2/8, below float's and double's rounding for the e of a few
+ * roundings. No sqrt or division: the library's normalize guards against overflow that
+ * cannot happen here, at several times the cost. */
 inline real3 renormalize(real3 v) { return v * (R(1.5) - R(0.5) * dot(v, v)); }
 
 /* Direction with cosine mu to the axis n and uniform azimuth. */

@@ -251,7 +251,8 @@ inline void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulong *hi
         if (m->mut > R(0.0)) {
             real s = -log(R(1.0) - rng_uniform(rng)) / (real)m->mut;
             /* s < the distance to the boundary ahead, without dividing by d.z (a
-             * horizontal d scatters; a NaN one goes on to a layer and leaves) */
+             * horizontal d scatters below the top; a NaN one goes on to a layer and
+             * leaves) */
             if (d.z < R(0.0) ? s * -d.z < h : s * d.z < m->thickness - h) {
                 h = clamp(h + s * d.z, R(0.0), (real)m->thickness);
                 w *= (real)m->mus / (real)m->mut;
