@@ -95,6 +95,28 @@ static void candidate_density(const float *dirs, int m, double *p)
     }
 }
 
+/* The cosine of the redundancy disc's radius, sqrt(1 / (pi q n)), for n enabled
+ * candidates (-2 when the disc is the whole sphere): it falls as n falls. */
+static double disc_cos(double q, int enabled)
+{
+    double r = sqrt(1.0 / (LSQT_PI * q * enabled));
+    return r >= LSQT_PI ? -2.0 : cos(r);
+}
+
+/* The largest count in [lo, hi] of enabled candidates at which a neighbour at dot product
+ * d lies in the disc, or lo - 1 if it does at none (a bisection: d >= disc_cos holds at
+ * every count up to it). */
+static int enter_count(double d, double q, int lo, int hi)
+{
+    if (!(d >= disc_cos(q, lo))) return lo - 1;
+    while (lo < hi) {
+        int mid = lo + (hi - lo + 1) / 2;
+        if (d >= disc_cos(q, mid)) lo = mid;
+        else hi = mid - 1;
+    }
+    return lo;
+}
+
 int lsqt_rrss_select(const float *dirs, const double *f, int m, int n, int sphere, unsigned char *keep)
 {
     const double domain = sphere ? 2 * LSQT_PI : LSQT_PI; /* the directions have y >= 0 */
@@ -128,30 +150,63 @@ int lsqt_rrss_select(const float *dirs, const double *f, int m, int n, int spher
         nbr_first_k(row, c, kn);
         memcpy(list + (size_t)i * kn, row, (size_t)kn * sizeof *row);
     }
-    /* Disable the most redundant candidate until n remain (ties: the lowest index). */
-    for (int i = 0; i < m; i++) keep[i] = 1;
+    /* Disable the most redundant candidate until n remain (ties: the lowest index). A disc
+     * only grows as candidates are disabled, so each candidate keeps how many of its
+     * ordered neighbours lie in it (with their count and q sum, added in the same order as
+     * a fresh scan adds them) and the count of enabled candidates at which the next one
+     * enters: no cosine per candidate per step. */
+    int *t_in = calloc((size_t)m, sizeof *t_in), *len = malloc((size_t)m * sizeof *len);
+    int *next = malloc((size_t)m * sizeof *next);
+    double *a_in = calloc((size_t)m, sizeof *a_in), *qs_in = calloc((size_t)m, sizeof *qs_in);
+    nbr **lst = malloc((size_t)m * sizeof *lst);
+    unsigned char *wide = calloc((size_t)m, 1); /* 1: ordered again up to NBR_MAX; 2: scanned in full */
+    if (!t_in || !len || !next || !a_in || !qs_in || !lst || !wide) {
+        free(t_in), free(len), free(next), free(a_in), free(qs_in), free(lst), free(wide);
+        free(q), free(pe), free(list), free(row);
+        return -1;
+    }
+    for (int i = 0; i < m; i++) {
+        keep[i] = 1;
+        lst[i] = list + (size_t)i * kn, len[i] = kn;
+        next[i] = kn > 0 ? enter_count(lst[i][0].dot, q[i], n + 1, m) : n;
+    }
+    int status = fallback;
     for (int enabled = m; enabled > n; enabled--) {
         int worst = -1;
         double worst_r = -1.0;
         for (int i = 0; i < m; i++) {
             if (!keep[i]) continue;
-            double r = sqrt(1.0 / (LSQT_PI * q[i] * enabled)), c = r >= LSQT_PI ? -2.0 : cos(r);
-            double e = 0, a = 0, qs = 0;
-            const nbr *l = list + (size_t)i * kn;
-            int t = 0, lim = kn;
-            for (; t < kn && l[t].dot >= c; t++) a += 1, qs += q[l[t].j], e += keep[l[t].j];
-            if (t == kn && kn < kmax) { /* past the kept ones: the first kmax, in order */
-                int cn = 0;
-                for (int j = 0; j < m; j++)
-                    if (j != i) row[cn].dot = dot3f(dirs + 4 * i, dirs + 4 * j), row[cn++].j = j;
-                nbr_first_k(row, cn, kmax);
-                e = a = qs = 0, lim = kmax;
-                for (t = 0; t < kmax && row[t].dot >= c; t++) a += 1, qs += q[row[t].j], e += keep[row[t].j];
+            while (wide[i] < 2 && next[i] >= enabled) { /* the next ordered neighbour enters */
+                const nbr *l = lst[i] + t_in[i];
+                a_in[i] += 1, qs_in[i] += q[l->j], t_in[i]++;
+                if (t_in[i] == len[i] && len[i] < kmax) { /* past the kept ones: the first kmax, in order */
+                    nbr *ext = malloc((size_t)kmax * sizeof *ext);
+                    if (!ext) {
+                        status = -1;
+                        goto out;
+                    }
+                    int cn = 0;
+                    for (int j = 0; j < m; j++)
+                        if (j != i) row[cn].dot = dot3f(dirs + 4 * i, dirs + 4 * j), row[cn++].j = j;
+                    nbr_first_k(row, cn, kmax);
+                    memcpy(ext, row, (size_t)kmax * sizeof *ext); /* its first kn are the kept ones */
+                    lst[i] = ext, len[i] = kmax, wide[i] = 1;
+                }
+                if (t_in[i] == len[i]) {
+                    if (len[i] < m - 1) wide[i] = 2; /* the disc reaches past the ordered ones */
+                    next[i] = n;
+                } else {
+                    next[i] = enter_count(lst[i][t_in[i]].dot, q[i], n + 1, enabled);
+                }
             }
-            if (t == lim && lim < m - 1) { /* the disc reaches past the ordered ones: all of them */
+            double e = 0, a = a_in[i], qs = qs_in[i];
+            if (wide[i] == 2) { /* all of them, in index order */
+                const double c = disc_cos(q[i], enabled);
                 e = a = qs = 0;
                 for (int j = 0; j < m; j++)
                     if (j != i && dot3f(dirs + 4 * i, dirs + 4 * j) >= c) a += 1, qs += q[j], e += keep[j];
+            } else {
+                for (int t = 0; t < t_in[i]; t++) e += keep[lst[i][t].j];
             }
             /* the neighbours are the other candidates: one with none is not redundant */
             double red = a > 0 ? e * a * q[i] / qs : 0.0;
@@ -159,9 +214,13 @@ int lsqt_rrss_select(const float *dirs, const double *f, int m, int n, int spher
         }
         keep[worst] = 0;
     }
+out:
+    for (int i = 0; i < m; i++)
+        if (lst[i] != list + (size_t)i * kn) free(lst[i]);
+    free(t_in), free(len), free(next), free(a_in), free(qs_in), free(lst), free(wide);
     free(list), free(row);
     free(q), free(pe);
-    return fallback;
+    return status;
 }
 
 /* Candidates: the first m scattered exits of each slice's candidate walks, by path index,
