@@ -13,14 +13,20 @@ static cl_mem make_buffer(lsqt_context *cx, cl_mem_flags fl, size_t size, void *
     return clCreateBuffer(cx->ctx, fl | (host ? CL_MEM_COPY_HOST_PTR : 0), size, host, e);
 }
 
+/* The next-event loops take vw directions at a time: 16 on a CPU (AVX-512 holds 16
+ * floats; at 4, Substr's next-event work took 1.6x the time), 4 on a GPU, where a
+ * work-item's vector is sequential work and registers. Per-direction values do not
+ * depend on it; the vector maths of some builtins may round differently per width. */
+static int vector_width(const lsqt_context *cx) { return cx->dev.is_cpu ? 16 : 4; }
+
 /* A grouped session's kernels see each simulated slice's slice_group blocks of n_wi
- * directions as one set of slice_group x PAD4(n_wi) (the padding inside is zero). */
-static size_t kernel_nwi(const lsqt_state *st, int group)
+ * directions as one set of slice_group x PAD(n_wi, vw) (the padding inside is zero). */
+static size_t kernel_nwi(const lsqt_state *st, int group, int vw)
 {
-    return group > 1 ? (size_t)group * LSQT_PAD4((size_t)st->n_wi) : (size_t)st->n_wi;
+    return group > 1 ? (size_t)group * LSQT_PAD((size_t)st->n_wi, (size_t)vw) : (size_t)st->n_wi;
 }
 
-static int build_options(lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st, int group,
+static int build_options(lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st, int group, int vw,
                          char *opt, size_t cap, char *err, size_t errcap)
 {
     size_t n = lsqt_assembly_build_options(a, opt, cap);
@@ -28,7 +34,7 @@ static int build_options(lsqt_context *cx, const lsqt_assembly *a, const lsqt_st
         snprintf(err, errcap, "kernel build options too long");
         return 1;
     }
-    n += (size_t)snprintf(opt + n, cap - n, " -cl-std=CL1.2 -DLSQT_NWI=%zu", kernel_nwi(st, group));
+    n += (size_t)snprintf(opt + n, cap - n, " -cl-std=CL1.2 -DLSQT_NWI=%zu -DLSQT_VW=%d", kernel_nwi(st, group, vw), vw);
     if (group > 1) n += (size_t)snprintf(opt + n, cap - n, " -DLSQT_GROUP_NWI=%d", st->n_wi);
     if (lsqt_device_check(&cx->dev, st->use_double, err, errcap)) return 1;
     if (st->use_double) n += (size_t)snprintf(opt + n, cap - n, " -DLSQT_DOUBLE=1");
@@ -37,11 +43,11 @@ static int build_options(lsqt_context *cx, const lsqt_assembly *a, const lsqt_st
 }
 
 /* The directions as the kernel reads them: per simulated slice, x, y and z arrays of its
- * blocks (state slices) one after the other, each zero-padded to fours, in the kernel's
- * precision (double ones normalised again: float leaves |wi| - 1 at 1e-7). */
-static void *directions_of(const lsqt_state *st, int group, size_t *bytes)
+ * blocks (state slices) one after the other, each zero-padded to a multiple of vw, in the
+ * kernel's precision (double ones normalised again: float leaves |wi| - 1 at 1e-7). */
+static void *directions_of(const lsqt_state *st, int group, int vw, size_t *bytes)
 {
-    const size_t pad = LSQT_PAD4((size_t)st->n_wi), n = (size_t)st->n_slices * 3 * pad;
+    const size_t pad = LSQT_PAD((size_t)st->n_wi, (size_t)vw), n = (size_t)st->n_slices * 3 * pad;
     const size_t sz = st->use_double ? sizeof(double) : sizeof(float);
     void *buf = calloc(n ? n : 1, sz);
     if (!buf) return NULL;
@@ -71,11 +77,11 @@ static int upload(lsqt_session *s, const lsqt_assembly *a, const lsqt_state *st,
     lsqt_dev_medium *media_f = calloc((size_t)n + 1, sizeof *media_f);
     lsqt_dev_layer *layers_f = calloc((size_t)n, sizeof *layers_f);
     /* Directions go to the device in the kernel's precision: double for --double. */
-    const size_t pad = LSQT_PAD4((size_t)st->n_wi), n_wo = (size_t)st->n_slices * 4;
+    const size_t pad = LSQT_PAD((size_t)st->n_wi, (size_t)s->vw), n_wo = (size_t)st->n_slices * 4;
     double *wo = calloc(n_wo, sizeof *wo);
     float *wo_f = calloc(n_wo, sizeof *wo_f);
     size_t wi_bytes = 0;
-    void *wi_up = directions_of(st, s->slice_group, &wi_bytes);
+    void *wi_up = directions_of(st, s->slice_group, s->vw, &wi_bytes);
     int rc = 1;
     cl_int e = CL_SUCCESS;
     if (!media || !layers || !media_f || !layers_f || !wo || !wo_f || !wi_up) {
@@ -183,7 +189,8 @@ int lsqt_session_open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_asse
         return 1;
     }
     char opt[1024];
-    if (build_options(cx, a, st, s->slice_group, opt, sizeof opt, err, errcap)) return 1;
+    s->vw = vector_width(cx);
+    if (build_options(cx, a, st, s->slice_group, s->vw, opt, sizeof opt, err, errcap)) return 1;
     if (extra_options && strlen(opt) + strlen(extra_options) + 2 < sizeof opt) {
         strcat(opt, " ");
         strcat(opt, extra_options);
@@ -258,7 +265,7 @@ int lsqt_session_read(lsqt_session *s, lsqt_state *st, char *err, size_t errcap)
 int lsqt_session_set_directions(lsqt_session *s, const lsqt_state *st, char *err, size_t errcap)
 {
     size_t bytes = 0;
-    void *dirs = directions_of(st, s->slice_group, &bytes);
+    void *dirs = directions_of(st, s->slice_group, s->vw, &bytes);
     if (!dirs) {
         snprintf(err, errcap, "out of memory");
         return 1;
@@ -266,7 +273,7 @@ int lsqt_session_set_directions(lsqt_session *s, const lsqt_state *st, char *err
     cl_int e = clEnqueueWriteBuffer(s->cx->queue, s->wi, CL_TRUE, 0, bytes, dirs, 0, NULL, NULL);
     free(dirs);
     if (e == CL_SUCCESS) {
-        size_t pglobal[2] = {LSQT_PAD4((size_t)st->n_wi) * (size_t)s->slice_group, (size_t)(st->n_slices / s->slice_group)};
+        size_t pglobal[2] = {LSQT_PAD((size_t)st->n_wi, (size_t)s->vw) * (size_t)s->slice_group, (size_t)(st->n_slices / s->slice_group)};
         e = clEnqueueNDRangeKernel(s->cx->queue, s->prepare, 2, NULL, pglobal, NULL, 0, NULL, NULL);
     }
     if (e == CL_SUCCESS) e = clFinish(s->cx->queue);

@@ -7,33 +7,33 @@
  * (microsurface.cl). Parameters p[0] = alpha, p[1] = eta, p[2] = k (relative to the medium
  * above). Light reaches it only from above. */
 
-/* Unpolarised Fresnel reflectance of a conductor for cos(incidence) c, four at once:
+/* Unpolarised Fresnel reflectance of a conductor for cos(incidence) c, LSQT_VW at once:
  * with a^2 + b^2 = sqrt((eta^2 - k^2 - s^2)^2 + 4 eta^2 k^2), s = sin, (the standard
  * closed form of the complex-index Fresnel equations)
  *   Rs = (a2b2 - 2 a c + c^2) / (a2b2 + 2 a c + c^2),
  *   Rp = Rs (a2b2 c^2 - 2 a c s^2 + s^4) / (a2b2 c^2 + 2 a c s^2 + s^4). */
-inline real4 fresnel_conductor4(real eta, real k, real4 c)
+inline realv fresnel_conductorv(real eta, real k, realv c)
 {
-    c = clamp(c, (real4)(R(0.0)), (real4)(R(1.0)));
-    real4 c2 = c * c, s2 = R(1.0) - c2;
-    real4 t = eta * eta - k * k - s2;
-    real4 a2b2 = sqrt(t * t + R(4.0) * eta * eta * k * k);
-    real4 a = safe_sqrt4(R(0.5) * (a2b2 + t));
-    real4 rs = (a2b2 - R(2.0) * a * c + c2) / (a2b2 + R(2.0) * a * c + c2);
-    real4 rp = rs * (a2b2 * c2 - R(2.0) * a * c * s2 + s2 * s2) / (a2b2 * c2 + R(2.0) * a * c * s2 + s2 * s2);
+    c = clamp(c, (realv)(R(0.0)), (realv)(R(1.0)));
+    realv c2 = c * c, s2 = R(1.0) - c2;
+    realv t = eta * eta - k * k - s2;
+    realv a2b2 = sqrt(t * t + R(4.0) * eta * eta * k * k);
+    realv a = safe_sqrtv(R(0.5) * (a2b2 + t));
+    realv rs = (a2b2 - R(2.0) * a * c + c2) / (a2b2 + R(2.0) * a * c + c2);
+    realv rp = rs * (a2b2 * c2 - R(2.0) * a * c * s2 + s2 * s2) / (a2b2 * c2 + R(2.0) * a * c * s2 + s2 * s2);
     return R(0.5) * (rs + rp);
 }
 
 /* The facets' phase function towards u (the ray's side's frame): F D_v(m) / (4 v.m) =
  * F D(m) / (4 A(v)), m = normalize(v + u); 0 towards the other side (a reflection that
  * points into the surface hits it again). */
-inline real4 conductor_phase4(__global const lsqt_dev_layer *l, const ms_vtx *x, dir4 u)
+inline realv conductor_phasev(__global const lsqt_dev_layer *l, const ms_vtx *x, dirv u)
 {
-    dir4 m;
-    ms_half4(x->v, u, (real4)(R(1.0)), &m);
-    real4 vm = x->v.x * m.x + x->v.y * m.y + x->v.z * m.z;
-    real4 f = fresnel_conductor4(l->p[1], l->p[2], vm) * ggx_d4(l->p[0], m.x, m.y, m.z) * (R(0.25) * x->inv_area);
-    return select((real4)(R(0.0)), f, (vm > R(0.0)) & (u.z > R(0.0)));
+    dirv m;
+    ms_halfv(x->v, u, (realv)(R(1.0)), &m);
+    realv vm = x->v.x * m.x + x->v.y * m.y + x->v.z * m.z;
+    realv f = fresnel_conductorv(l->p[1], l->p[2], vm) * ggx_dv(l->p[0], m.x, m.y, m.z) * (R(0.25) * x->inv_area);
+    return select((realv)(R(0.0)), f, (vm > R(0.0)) & (u.z > R(0.0)));
 }
 
 /* Reflects about the vertex's visible normal; returns the facet albedo F. */
@@ -41,21 +41,21 @@ inline real conductor_scatter(__global const lsqt_dev_layer *l, const ms_vtx *x,
 {
     real vm = dot(x->v, x->m);
     *r = normalize(R(2.0) * vm * x->m - x->v);
-    return vm > R(0.0) ? fresnel_conductor4(l->p[1], l->p[2], (real4)(vm)).x : R(0.0);
+    return vm > R(0.0) ? fresnel_conductorv(l->p[1], l->p[2], (realv)(vm)).s0 : R(0.0);
 }
 
 /* Single scattering: the phase function times the chance the reflected light escapes,
  * averaged over the first hit's height: (1 + Lambda(v)) / (1 + Lambda(v) + Lambda(u)). */
-inline real4 conductor_single4(__global const lsqt_dev_layer *l, const ms_vtx *x, dir4 u, real4 lam_u)
+inline realv conductor_singlev(__global const lsqt_dev_layer *l, const ms_vtx *x, dirv u, realv lam_u)
 {
-    return conductor_phase4(l, x, u) * ((R(1.0) + x->lam_v) / (R(1.0) + x->lam_v + lam_u));
+    return conductor_phasev(l, x, u) * ((R(1.0) + x->lam_v) / (R(1.0) + x->lam_v + lam_u));
 }
 
-inline real4 conductor_eval4(__global const lsqt_dev_layer *l, real3 wo, dir4 wi)
+inline realv conductor_evalv(__global const lsqt_dev_layer *l, real3 wo, dirv wi)
 {
-    if (!(wo.z > R(0.0))) return (real4)(R(0.0));
+    if (!(wo.z > R(0.0))) return (realv)(R(0.0));
     ms_vtx x = ms_vertex_single(l->p[0], wo, R(1.0));
-    return conductor_single4(l, &x, wi, ggx_lambda4(l->p[0], wi.z));
+    return conductor_singlev(l, &x, wi, ggx_lambdav(l->p[0], wi.z));
 }
 
 /* Density of conductor_sample's directions (reflections of visible normals, also those
@@ -69,7 +69,7 @@ inline real conductor_pdf(__global const lsqt_dev_layer *l, real3 wo, real3 wi)
     if (!(n > R(1e-12))) return R(0.0);
     h /= n;
     if (!(dot(wo, h) > R(0.0))) return R(0.0);
-    return ggx_d4(alpha, (real4)(h.x), (real4)(h.y), (real4)(h.z)).x / ((R(1.0) + ggx_lambda(alpha, wo.z)) * R(4.0) * wo.z);
+    return ggx_dv(alpha, (realv)(h.x), (realv)(h.y), (realv)(h.z)).s0 / ((R(1.0) + ggx_lambda(alpha, wo.z)) * R(4.0) * wo.z);
 }
 
 /* Single scattering: reflects wo about a visible normal; the weight f/pdf is

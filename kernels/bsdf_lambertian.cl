@@ -1,9 +1,9 @@
 /* Lambertian reflector/transmitter: f = fR |cos(wi)| / pi on the side of wo, fT |cos| / pi
  * on the other (cosine of wi included, SPEC section 4). Parameters p[0] = fR, p[1] = fT. */
 
-inline real4 lambertian_eval4(__global const lsqt_dev_layer *l, real3 wo, dir4 wi)
+inline realv lambertian_evalv(__global const lsqt_dev_layer *l, real3 wo, dirv wi)
 {
-    real4 k = select((real4)((real)l->p[1]), (real4)((real)l->p[0]), wo.z * wi.z > R(0.0));
+    realv k = select((realv)((real)l->p[1]), (realv)((real)l->p[0]), wo.z * wi.z > R(0.0));
     return k * fabs(wi.z) * LSQT_INV_PI;
 }
 

@@ -17,33 +17,33 @@
 
 /* Unpolarised Fresnel reflectance of a dielectric interface for cos(incidence) c >= 0 on
  * the incident side and relative index e = n2 / n1; 1 under total internal reflection. */
-inline real4 fresnel_dielectric4(real e, real4 c)
+inline realv fresnel_dielectricv(real e, realv c)
 {
-    c = clamp(c, (real4)(R(0.0)), (real4)(R(1.0)));
-    real4 g2 = e * e - R(1.0) + c * c;
-    real4 g = safe_sqrt4(g2);
-    real4 a = (g - c) / (g + c);
-    real4 b = (c * (g + c) - R(1.0)) / (c * (g - c) + R(1.0));
-    return select(R(0.5) * a * a * (R(1.0) + b * b), (real4)(R(1.0)), g2 <= R(0.0));
+    c = clamp(c, (realv)(R(0.0)), (realv)(R(1.0)));
+    realv g2 = e * e - R(1.0) + c * c;
+    realv g = safe_sqrtv(g2);
+    realv a = (g - c) / (g + c);
+    realv b = (c * (g + c) - R(1.0)) / (c * (g - c) + R(1.0));
+    return select(R(0.5) * a * a * (R(1.0) + b * b), (realv)(R(1.0)), g2 <= R(0.0));
 }
 
 /* The facets' phase function towards u, in the frame of the ray's side (z up): towards
  * this side reflection kR F D_v(m) / (4 v.m), towards the other side refraction
  * kT (1 - F) D_v(m) e^2 |u.m| / (v.m + e u.m)^2, m the half vector of each. */
-inline real4 dielectric_phase4(__global const lsqt_dev_layer *l, const ms_vtx *x, dir4 u)
+inline realv dielectric_phasev(__global const lsqt_dev_layer *l, const ms_vtx *x, dirv u)
 {
     const real e = x->e;
-    mask4 up = u.z > R(0.0);
-    dir4 m;
-    real4 n2 = ms_half4(x->v, u, select((real4)(e), (real4)(R(1.0)), up), &m);
-    real4 vm = x->v.x * m.x + x->v.y * m.y + x->v.z * m.z;
-    real4 um = u.x * m.x + u.y * m.y + u.z * m.z;
-    real4 fr = fresnel_dielectric4(e, vm);
+    maskv up = u.z > R(0.0);
+    dirv m;
+    realv n2 = ms_halfv(x->v, u, select((realv)(e), (realv)(R(1.0)), up), &m);
+    realv vm = x->v.x * m.x + x->v.y * m.y + x->v.z * m.z;
+    realv um = u.x * m.x + u.y * m.y + u.z * m.z;
+    realv fr = fresnel_dielectricv(e, vm);
     /* reflection: vm^2 / |q|^2 is 1/4 exactly, so no division by |q|^2, which rounding
      * spoils where u is near -v (|q| -> 0); refraction has |q| >= |e - 1| */
-    real4 k = select((real4)(l->p[3]) * (R(1.0) - fr) * (e * e) * fabs(um) * vm / n2, (real4)(R(0.25) * l->p[2]) * fr, up);
-    real4 f = ggx_d4(l->p[0], m.x, m.y, m.z) * k * x->inv_area;
-    return select((real4)(R(0.0)), f, (vm > R(0.0)) & (up | (um < R(0.0))));
+    realv k = select((realv)(l->p[3]) * (R(1.0) - fr) * (e * e) * fabs(um) * vm / n2, (realv)(R(0.25) * l->p[2]) * fr, up);
+    realv f = ggx_dv(l->p[0], m.x, m.y, m.z) * k * x->inv_area;
+    return select((realv)(R(0.0)), f, (vm > R(0.0)) & (up | (um < R(0.0))));
 }
 
 /* Reflects or refracts at the vertex's visible normal, in proportion kR F : kT (1 - F);
@@ -52,7 +52,7 @@ inline real dielectric_scatter(__global const lsqt_dev_layer *l, const ms_vtx *x
 {
     const real e = x->e, vm = dot(x->v, x->m);
     if (!(vm > R(0.0))) return R(0.0);
-    real fr = fresnel_dielectric4(e, (real4)(vm)).x;
+    real fr = fresnel_dielectricv(e, (realv)(vm)).s0;
     real pr = l->p[2] * fr, tot = pr + l->p[3] * (R(1.0) - fr);
     if (u * tot < pr) {
         *r = normalize(R(2.0) * vm * x->m - x->v);
@@ -65,9 +65,9 @@ inline real dielectric_scatter(__global const lsqt_dev_layer *l, const ms_vtx *x
     return tot;
 }
 
-inline real4 dielectric_single4(__global const lsqt_dev_layer *l, const ms_vtx *x, dir4 u, real4 lam_u, real4 lg_u)
+inline realv dielectric_singlev(__global const lsqt_dev_layer *l, const ms_vtx *x, dirv u, realv lam_u, realv lg_u)
 {
-    return dielectric_phase4(l, x, u) * ms_single_escape4(x, u.z > R(0.0), lam_u, lg_u);
+    return dielectric_phasev(l, x, u) * ms_single_escapev(x, u.z > R(0.0), lam_u, lg_u);
 }
 
 /* The frame of wo's side: z flipped below, and the relative index seen from there. */
@@ -77,13 +77,13 @@ inline real dielectric_index(__global const lsqt_dev_layer *l, real side)
     return side > R(0.0) ? l->p[1] : R(1.0) / l->p[1];
 }
 
-inline real4 dielectric_eval4(__global const lsqt_dev_layer *l, real3 wo, dir4 wi)
+inline realv dielectric_evalv(__global const lsqt_dev_layer *l, real3 wo, dirv wi)
 {
     const real s = ms_side(wo), alpha = l->p[0];
     ms_vtx x = ms_vertex_single(alpha, make_real3(wo.x, wo.y, s * wo.z), dielectric_index(l, s));
     wi.z *= s;
-    real4 lam = ggx_lambda4(alpha, wi.z);
-    return dielectric_single4(l, &x, wi, lam, lgamma(R(1.0) + lam));
+    realv lam = ggx_lambdav(alpha, wi.z);
+    return dielectric_singlev(l, &x, wi, lam, lgamma(R(1.0) + lam));
 }
 
 /* Density of dielectric_sample's directions: both branches (a reflection may point into
@@ -102,10 +102,10 @@ inline real dielectric_pdf(__global const lsqt_dev_layer *l, real3 wo, real3 wi)
         real3 m = q * (rsqrt(n2) * (q.z < R(0.0) ? R(-1.0) : R(1.0)));
         real vm = dot(v, m), um = dot(u, m);
         if (!(vm > R(0.0)) || (branch && !(um < R(0.0)))) continue;
-        real fr = fresnel_dielectric4(e, (real4)(vm)).x;
+        real fr = fresnel_dielectricv(e, (realv)(vm)).s0;
         real pr = l->p[2] * fr, pt = l->p[3] * (R(1.0) - fr);
         if (!(pr + pt > R(0.0))) continue;
-        real d = ggx_d4(alpha, (real4)(m.x), (real4)(m.y), (real4)(m.z)).x * vm * inv_area;
+        real d = ggx_dv(alpha, (realv)(m.x), (realv)(m.y), (realv)(m.z)).s0 * vm * inv_area;
         pdf += branch ? pt / (pr + pt) * d * e * e * fabs(um) / n2 : pr / (pr + pt) * d * R(0.25) / vm;
     }
     return pdf;
@@ -125,5 +125,5 @@ inline real dielectric_sample(__global const lsqt_dev_layer *l, real3 wo, real u
     *wi = make_real3(r.x, r.y, s * r.z);
     if (!(w > R(0.0)) || (cross ? !(r.z < R(0.0)) : !(r.z > R(0.0)))) return R(0.0);
     real lam = ggx_lambda(alpha, r.z);
-    return w * ms_single_escape4(&x, (mask4)(cross ? 0 : -1), (real4)(lam), (real4)(lgamma(R(1.0) + lam))).x;
+    return w * ms_single_escapev(&x, (maskv)(cross ? 0 : -1), (realv)(lam), (realv)(lgamma(R(1.0) + lam))).s0;
 }

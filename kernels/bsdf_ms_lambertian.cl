@@ -5,10 +5,10 @@
 
 /* Phase function of the vertex's facet (normal x->m) towards u: fR max(0, u.m) / pi
  * to this side, fT max(0, -u.m) / pi to the other. */
-inline real4 mslambert_phase4(__global const lsqt_dev_layer *l, const ms_vtx *x, dir4 u)
+inline realv mslambert_phasev(__global const lsqt_dev_layer *l, const ms_vtx *x, dirv u)
 {
-    real4 um = u.x * x->m.x + u.y * x->m.y + u.z * x->m.z;
-    return select(l->p[2] * fmax(-um, (real4)(R(0.0))), l->p[1] * fmax(um, (real4)(R(0.0))), u.z > R(0.0)) *
+    realv um = u.x * x->m.x + u.y * x->m.y + u.z * x->m.z;
+    return select(l->p[2] * fmax(-um, (realv)(R(0.0))), l->p[1] * fmax(um, (realv)(R(0.0))), u.z > R(0.0)) *
            LSQT_INV_PI;
 }
 

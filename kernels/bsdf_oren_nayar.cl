@@ -9,19 +9,19 @@
 inline real oren_nayar_a(real s) { return R(1.0) - R(0.5) * s * s / (s * s + R(0.33)); }
 inline real oren_nayar_b(real s) { return R(0.45) * s * s / (s * s + R(0.09)); }
 
-/* The bracket [A + B ...] for four directions on wo's side. */
-inline real4 oren_nayar_bracket4(__global const lsqt_dev_layer *l, real3 wo, dir4 wi)
+/* The bracket [A + B ...] for LSQT_VW directions on wo's side. */
+inline realv oren_nayar_bracketv(__global const lsqt_dev_layer *l, real3 wo, dirv wi)
 {
     const real s = l->p[1];
-    real4 t = fmax(wo.x * wi.x + wo.y * wi.y, (real4)(R(0.0)));
-    real4 mx = fmax(fabs(wi.z), (real4)(fabs(wo.z)));
-    return oren_nayar_a(s) + oren_nayar_b(s) * t / fmax(mx, (real4)(R(1e-30)));
+    realv t = fmax(wo.x * wi.x + wo.y * wi.y, (realv)(R(0.0)));
+    realv mx = fmax(fabs(wi.z), (realv)(fabs(wo.z)));
+    return oren_nayar_a(s) + oren_nayar_b(s) * t / fmax(mx, (realv)(R(1e-30)));
 }
 
-inline real4 oren_nayar_eval4(__global const lsqt_dev_layer *l, real3 wo, dir4 wi)
+inline realv oren_nayar_evalv(__global const lsqt_dev_layer *l, real3 wo, dirv wi)
 {
-    real4 f = l->p[0] * fabs(wi.z) * LSQT_INV_PI * oren_nayar_bracket4(l, wo, wi);
-    return select((real4)(R(0.0)), f, wo.z * wi.z > R(0.0));
+    realv f = l->p[0] * fabs(wi.z) * LSQT_INV_PI * oren_nayar_bracketv(l, wo, wi);
+    return select((realv)(R(0.0)), f, wo.z * wi.z > R(0.0));
 }
 
 inline real oren_nayar_pdf(__global const lsqt_dev_layer *l, real3 wo, real3 wi)
@@ -36,5 +36,5 @@ inline real oren_nayar_sample(__global const lsqt_dev_layer *l, real3 wo, real u
     real3 w = sample_cosine_hemisphere(u1, u2);
     w.z *= wo.z >= R(0.0) ? R(1.0) : R(-1.0);
     *wi = w;
-    return l->p[0] * oren_nayar_bracket4(l, wo, dir4_broadcast(w)).x;
+    return l->p[0] * oren_nayar_bracketv(l, wo, dirv_broadcast(w)).s0;
 }

@@ -1,13 +1,29 @@
 /* Precision and small math shared by every kernel file. `real` is float by default and
  * double when the host builds with -DLSQT_DOUBLE=1 (only on devices with fp64). */
+/* LSQT_VW directions at a time in the next-event loops (the host passes -DLSQT_VW: 16 on
+ * CPUs, where the vector units are wide and PoCL does not vectorise these loops across
+ * work-items; 4 on GPUs, where a work-item's vector is sequential work and registers).
+ * `realv` holds LSQT_VW values (one per direction), `maskv` a comparison of two. */
+#ifndef LSQT_VW
+#define LSQT_VW 4
+#endif
+#define LSQT_CAT_(a, b) a##b
+#define LSQT_CAT(a, b) LSQT_CAT_(a, b)
+#define vloadv LSQT_CAT(vload, LSQT_VW)
+#define vstorev LSQT_CAT(vstore, LSQT_VW)
+typedef LSQT_CAT(ulong, LSQT_VW) ulongv;
+#define as_ulongv LSQT_CAT(as_ulong, LSQT_VW)
+#define convert_longv LSQT_CAT(convert_long, LSQT_VW)
+#define convert_ulongv LSQT_CAT(convert_ulong, LSQT_VW)
+
 #ifdef LSQT_DOUBLE
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 typedef double real;
 typedef double2 real2;
 typedef double3 real3;
 typedef double4 real4;
-typedef long4 mask4; /* what comparing two real4 gives */
-#define convert_real4 convert_double4
+typedef LSQT_CAT(double, LSQT_VW) realv;
+typedef LSQT_CAT(long, LSQT_VW) maskv;
 #define R(x) (x)
 #define convert_real convert_double
 #else
@@ -15,8 +31,8 @@ typedef float real;
 typedef float2 real2;
 typedef float3 real3;
 typedef float4 real4;
-typedef int4 mask4;
-#define convert_real4 convert_float4
+typedef LSQT_CAT(float, LSQT_VW) realv;
+typedef LSQT_CAT(int, LSQT_VW) maskv;
 #define R(x) (x##f)
 #define convert_real convert_float
 #endif
@@ -31,15 +47,15 @@ typedef int4 mask4;
 
 inline real3 make_real3(real x, real y, real z) { return (real3)(x, y, z); }
 
-/* Four directions at once, as three coordinate vectors: next-event estimation evaluates
- * a model at every incident direction, so models evaluate in fours (SIMD on CPUs). */
+/* LSQT_VW directions at once, as three coordinate vectors: next-event estimation evaluates
+ * a model at every incident direction, so models evaluate LSQT_VW at a time (SIMD on CPUs). */
 typedef struct {
-    real4 x, y, z;
-} dir4;
+    realv x, y, z;
+} dirv;
 
-inline dir4 dir4_broadcast(real3 d)
+inline dirv dirv_broadcast(real3 d)
 {
-    dir4 r = {(real4)(d.x), (real4)(d.y), (real4)(d.z)};
+    dirv r = {(realv)(d.x), (realv)(d.y), (realv)(d.z)};
     return r;
 }
 
@@ -47,31 +63,32 @@ inline real sqr(real x) { return x * x; }
 
 /* sqrt that never returns NaN for round-off negatives */
 inline real safe_sqrt(real x) { return sqrt(fmax(x, R(0.0))); }
-inline real4 safe_sqrt4(real4 x) { return sqrt(fmax(x, (real4)(R(0.0)))); }
+inline realv safe_sqrtv(realv x) { return sqrt(fmax(x, (realv)(R(0.0)))); }
 
-/* Point-estimate directions per slice (the host passes -DLSQT_NWI=n), padded to fours. */
+/* Point-estimate directions per slice (the host passes -DLSQT_NWI=n), padded to a
+ * multiple of LSQT_VW. */
 #ifndef LSQT_NWI
 #define LSQT_NWI 1
 #endif
-#define LSQT_NWI_PAD LSQT_PAD4(LSQT_NWI)
+#define LSQT_NWI_PAD LSQT_PAD(LSQT_NWI, LSQT_VW)
 /* The directions of one block of a grouped session (the RRSS pilot: one walk serves the
  * scene->slice_group candidate blocks of a slice, each LSQT_GROUP_PAD long within the
  * LSQT_NWI = slice_group x LSQT_GROUP_PAD directions); a plain session is one block. */
 #ifndef LSQT_GROUP_NWI
 #define LSQT_GROUP_NWI LSQT_NWI
 #endif
-#define LSQT_GROUP_PAD LSQT_PAD4(LSQT_GROUP_NWI)
+#define LSQT_GROUP_PAD LSQT_PAD(LSQT_GROUP_NWI, LSQT_VW)
 
-/* lgamma(x) for x >= 1, four at once, without the library's general (and, on PoCL,
+/* lgamma(x) for x >= 1, LSQT_VW at once, without the library's general (and, on PoCL,
  * scalar) lgamma: the Stirling series to 1/x^7 for x >= 8, error below 3e-11, after
  * lgamma(x) = lgamma(x + 6) - log(x (x+1) ... (x+5)) for smaller x. */
-inline real4 lgamma_ge1_4(real4 x)
+inline realv lgamma_ge1_v(realv x)
 {
-    mask4 small = x < R(8.0);
-    real4 p = x * (x + R(1.0)) * (x + R(2.0)) * (x + R(3.0)) * (x + R(4.0)) * (x + R(5.0));
-    real4 y = select(x, x + R(6.0), small);
-    real4 r = R(1.0) / y, r2 = r * r;
-    real4 series = r * (R(1.0) / R(12.0) - r2 * (R(1.0) / R(360.0) - r2 * (R(1.0) / R(1260.0) - r2 * (R(1.0) / R(1680.0)))));
-    real4 lg = (y - R(0.5)) * log(y) - y + R(0.91893853320467274178) + series;
-    return lg - select((real4)(R(0.0)), log(p), small);
+    maskv small = x < R(8.0);
+    realv p = x * (x + R(1.0)) * (x + R(2.0)) * (x + R(3.0)) * (x + R(4.0)) * (x + R(5.0));
+    realv y = select(x, x + R(6.0), small);
+    realv r = R(1.0) / y, r2 = r * r;
+    realv series = r * (R(1.0) / R(12.0) - r2 * (R(1.0) / R(360.0) - r2 * (R(1.0) / R(1260.0) - r2 * (R(1.0) / R(1680.0)))));
+    realv lg = (y - R(0.5)) * log(y) - y + R(0.91893853320467274178) + series;
+    return lg - select((realv)(R(0.0)), log(p), small);
 }

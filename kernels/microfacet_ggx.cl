@@ -4,25 +4,25 @@
  * as in Heitz 2018 ("Sampling the GGX distribution of visible normals"). Directions are
  * unit vectors in the layer frame (z the macro normal), on the side of +z. */
 
-/* Lambda(w) = (-1 + sqrt(1 + alpha^2 tan^2 theta)) / 2, four directions at once (z = cos). */
-inline real4 ggx_lambda4(real alpha, real4 z)
+/* Lambda(w) = (-1 + sqrt(1 + alpha^2 tan^2 theta)) / 2, LSQT_VW directions at once (z = cos). */
+inline realv ggx_lambdav(real alpha, realv z)
 {
-    real4 z2 = fmax(z * z, (real4)(R(1e-30)));
-    real4 t2 = fmax(R(1.0) - z2, (real4)(R(0.0))) / z2; /* tan^2 */
+    realv z2 = fmax(z * z, (realv)(R(1e-30)));
+    realv t2 = fmax(R(1.0) - z2, (realv)(R(0.0))) / z2; /* tan^2 */
     return R(0.5) * (sqrt(R(1.0) + alpha * alpha * t2) - R(1.0));
 }
 
-inline real ggx_lambda(real alpha, real z) { return ggx_lambda4(alpha, (real4)(z)).x; }
+inline real ggx_lambda(real alpha, real z) { return ggx_lambdav(alpha, (realv)(z)).s0; }
 
 /* D(h) = alpha^2 / (pi ((alpha^2 - 1) cos^2 + 1)^2) for a unit normal h on the upper side,
  * written as alpha^2 / (pi (alpha^2 hz^2 + hx^2 + hy^2)^2): the same for unit h, but with
  * no cancellation, so a smooth surface (alpha 1e-4, alpha^2 below float's epsilon) keeps
  * its finite peak 1 / (pi alpha^2) instead of dividing by a rounded 0. */
-inline real4 ggx_d4(real alpha, real4 hx, real4 hy, real4 hz)
+inline realv ggx_dv(real alpha, realv hx, realv hy, realv hz)
 {
     real a2 = alpha * alpha;
-    real4 k = a2 * hz * hz + hx * hx + hy * hy;
-    return select((real4)(R(0.0)), a2 * LSQT_INV_PI / (k * k), hz > R(0.0));
+    realv k = a2 * hz * hz + hx * hx + hy * hy;
+    return select((realv)(R(0.0)), a2 * LSQT_INV_PI / (k * k), hz > R(0.0));
 }
 
 /* A visible normal for wo (wo.z > 0), density D_wo(h) = G1(wo) max(0, wo.h) D(h) / wo.z
@@ -113,21 +113,21 @@ inline ms_vtx ms_vertex_single(real alpha, real3 v, real e)
 /* Escape of the single-scattered light, averaged over the first hit's height:
  * (1 + Lv) / (1 + Lv + Lu) to this side, (1 + Lv) B(1 + Lv, 1 + Lu) to the other
  * (lg_u = lgamma(1 + Lu), from the per-direction table). */
-inline real4 ms_single_escape4(const ms_vtx *x, mask4 up, real4 lam_u, real4 lg_u)
+inline realv ms_single_escapev(const ms_vtx *x, maskv up, realv lam_u, realv lg_u)
 {
-    real4 a = R(1.0) + x->lam_v, r = a / (a + lam_u);
+    realv a = R(1.0) + x->lam_v, r = a / (a + lam_u);
     if (!all(up)) /* the Beta function only where some light goes through */
-        r = select(a * exp(x->lg_v + lg_u - lgamma_ge1_4(R(2.0) + x->lam_v + lam_u)), r, up);
+        r = select(a * exp(x->lg_v + lg_u - lgamma_ge1_v(R(2.0) + x->lam_v + lam_u)), r, up);
     return r;
 }
 
 /* Half vector of wo and u for reflection (k = 1) or refraction (k = relative index),
- * oriented up: q = v + k u, m = q / |q|; returns |q|^2. Four directions at once. */
-inline real4 ms_half4(real3 v, dir4 u, real4 k, dir4 *m)
+ * oriented up: q = v + k u, m = q / |q|; returns |q|^2. LSQT_VW directions at once. */
+inline realv ms_halfv(real3 v, dirv u, realv k, dirv *m)
 {
-    real4 qx = v.x + k * u.x, qy = v.y + k * u.y, qz = v.z + k * u.z;
-    real4 n2 = fmax(qx * qx + qy * qy + qz * qz, (real4)(R(1e-30)));
-    real4 inv = rsqrt(n2) * select((real4)(R(1.0)), (real4)(R(-1.0)), qz < R(0.0));
+    realv qx = v.x + k * u.x, qy = v.y + k * u.y, qz = v.z + k * u.z;
+    realv n2 = fmax(qx * qx + qy * qy + qz * qz, (realv)(R(1e-30)));
+    realv inv = rsqrt(n2) * select((realv)(R(1.0)), (realv)(R(-1.0)), qz < R(0.0));
     m->x = qx * inv, m->y = qy * inv, m->z = qz * inv;
     return n2;
 }

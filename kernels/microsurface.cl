@@ -26,43 +26,43 @@ typedef struct {
 } ms_sink;
 
 /* Directions are in `real`: --double is double end to end (the host normalises them). */
-inline dir4 load_dir4(__global const real *wi, int k)
+inline dirv load_dirv(__global const real *wi, int k)
 {
-    dir4 d = {vload4(0, wi + k), vload4(0, wi + LSQT_NWI_PAD + k), vload4(0, wi + 2 * LSQT_NWI_PAD + k)};
+    dirv d = {vloadv(0, wi + k), vloadv(0, wi + LSQT_NWI_PAD + k), vloadv(0, wi + 2 * LSQT_NWI_PAD + k)};
     return d;
 }
 
-/* sum += w * T * EXPR over every block of four directions that light may leave by;
+/* sum += w * T * EXPR over every block of LSQT_VW directions that light may leave by;
  * u (this side's frame), lam and lg are in scope for EXPR. Lanes with T = 0 add nothing
  * even where EXPR is not finite (the zero vectors that pad the directions). */
 #define MS_NEE_LOOP(EXPR)                                                        \
     if (k->count) (*k->count)++;                                                 \
-    for (int b = 0; b < LSQT_NWI_PAD; b += 4) {                                  \
-        real4 t = vload4(0, k->tab + b);                                         \
+    for (int b = 0; b < LSQT_NWI_PAD; b += LSQT_VW) {                            \
+        realv t = vloadv(0, k->tab + b);                                         \
         if (!any(t > R(0.0))) continue;                                          \
-        dir4 u = load_dir4(k->wi, b);                                            \
+        dirv u = load_dirv(k->wi, b);                                            \
         u.z *= side;                                                             \
-        real4 lam = vload4(0, k->tab + LSQT_NWI_PAD + b);                        \
-        real4 lg = vload4(0, k->tab + 2 * LSQT_NWI_PAD + b);                     \
+        realv lam = vloadv(0, k->tab + LSQT_NWI_PAD + b);                        \
+        realv lg = vloadv(0, k->tab + 2 * LSQT_NWI_PAD + b);                     \
         (void)lg;                                                                \
-        real4 v = select((real4)(R(0.0)), (w * t) * (EXPR), t > R(0.0));         \
-        vstore4(vload4(0, k->sum + b) + v, 0, k->sum + b);                       \
+        realv v = select((realv)(R(0.0)), (w * t) * (EXPR), t > R(0.0));         \
+        vstorev(vloadv(0, k->sum + b) + v, 0, k->sum + b);                       \
     }
 
 /* A walk vertex: the facet's phase function times G1 = C1^Lambda(u) to this side,
  * (1 - C1)^Lambda(u) to the other. */
 inline void ms_nee_vertex(__global const lsqt_dev_layer *l, const ms_vtx *x, real side, real w, const ms_sink *k)
 {
-#define MS_G1 exp(lam * select((real4)(x->log_cbar), (real4)(x->log_c), u.z > R(0.0)))
+#define MS_G1 exp(lam * select((realv)(x->log_cbar), (realv)(x->log_c), u.z > R(0.0)))
     switch (l->kind) {
 #ifdef LSQT_HAS_BSDF_MS_CONDUCTIVE
-    case LSQT_BSDF_MS_CONDUCTIVE: MS_NEE_LOOP(conductor_phase4(l, x, u) * MS_G1) break;
+    case LSQT_BSDF_MS_CONDUCTIVE: MS_NEE_LOOP(conductor_phasev(l, x, u) * MS_G1) break;
 #endif
 #ifdef LSQT_HAS_BSDF_MS_DIELECTRIC
-    case LSQT_BSDF_MS_DIELECTRIC: MS_NEE_LOOP(dielectric_phase4(l, x, u) * MS_G1) break;
+    case LSQT_BSDF_MS_DIELECTRIC: MS_NEE_LOOP(dielectric_phasev(l, x, u) * MS_G1) break;
 #endif
 #ifdef LSQT_HAS_BSDF_MS_LAMBERTIAN
-    case LSQT_BSDF_MS_LAMBERTIAN: MS_NEE_LOOP(mslambert_phase4(l, x, u) * MS_G1) break;
+    case LSQT_BSDF_MS_LAMBERTIAN: MS_NEE_LOOP(mslambert_phasev(l, x, u) * MS_G1) break;
 #endif
     default: break;
     }
@@ -74,10 +74,10 @@ inline void ms_nee_single(__global const lsqt_dev_layer *l, const ms_vtx *x, rea
 {
     switch (l->kind) {
 #ifdef LSQT_HAS_BSDF_MS_CONDUCTIVE
-    case LSQT_BSDF_MS_CONDUCTIVE: MS_NEE_LOOP(conductor_single4(l, x, u, lam)) break;
+    case LSQT_BSDF_MS_CONDUCTIVE: MS_NEE_LOOP(conductor_singlev(l, x, u, lam)) break;
 #endif
 #ifdef LSQT_HAS_BSDF_MS_DIELECTRIC
-    case LSQT_BSDF_MS_DIELECTRIC: MS_NEE_LOOP(dielectric_single4(l, x, u, lam, lg)) break;
+    case LSQT_BSDF_MS_DIELECTRIC: MS_NEE_LOOP(dielectric_singlev(l, x, u, lam, lg)) break;
 #endif
     default: break;
     }
@@ -85,11 +85,11 @@ inline void ms_nee_single(__global const lsqt_dev_layer *l, const ms_vtx *x, rea
 
 /* The first vertex of a walk on Lambertian facets: its height is independent of its
  * facet, so the chance of escaping is replaced by its mean over the first hit's height,
- * ms_single_escape4 (the same expectation, less noise, most at grazing u). */
+ * ms_single_escapev (the same expectation, less noise, most at grazing u). */
 inline void ms_nee_first(__global const lsqt_dev_layer *l, const ms_vtx *x, real side, real w, const ms_sink *k)
 {
 #ifdef LSQT_HAS_BSDF_MS_LAMBERTIAN
-    MS_NEE_LOOP(mslambert_phase4(l, x, u) * ms_single_escape4(x, u.z > R(0.0), lam, lg))
+    MS_NEE_LOOP(mslambert_phasev(l, x, u) * ms_single_escapev(x, u.z > R(0.0), lam, lg))
 #endif
 }
 

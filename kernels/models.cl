@@ -2,33 +2,33 @@
  * uses are compiled in (the host passes -DLSQT_HAS_<MODEL>=1), so a scene pays for
  * nothing it does not contain. */
 
-/* Evaluation takes four directions at once (next-event estimation's inner loop); the
- * single-direction form used by the test harness is lane x of the same code. For the
+/* Evaluation takes LSQT_VW directions at once (next-event estimation's inner loop); the
+ * single-direction form used by the test harness is lane 0 of the same code. For the
  * microsurfaces it is the analytic single-scattering term (conductor, dielectric; 0 for
  * Lambertian facets): their full value is the walks' (microsurface.cl), which the path
  * loop runs itself. */
-inline real4 bsdf_eval4(__global const lsqt_dev_layer *l, real3 wo, dir4 wi)
+inline realv bsdf_evalv(__global const lsqt_dev_layer *l, real3 wo, dirv wi)
 {
     switch (l->kind) {
 #ifdef LSQT_HAS_BSDF_LAMBERTIAN
-    case LSQT_BSDF_LAMBERTIAN: return lambertian_eval4(l, wo, wi);
+    case LSQT_BSDF_LAMBERTIAN: return lambertian_evalv(l, wo, wi);
 #endif
 #ifdef LSQT_HAS_BSDF_MS_CONDUCTIVE
-    case LSQT_BSDF_MS_CONDUCTIVE: return conductor_eval4(l, wo, wi);
+    case LSQT_BSDF_MS_CONDUCTIVE: return conductor_evalv(l, wo, wi);
 #endif
 #ifdef LSQT_HAS_BSDF_MS_DIELECTRIC
-    case LSQT_BSDF_MS_DIELECTRIC: return dielectric_eval4(l, wo, wi);
+    case LSQT_BSDF_MS_DIELECTRIC: return dielectric_evalv(l, wo, wi);
 #endif
 #ifdef LSQT_HAS_BSDF_OREN_NAYAR
-    case LSQT_BSDF_OREN_NAYAR: return oren_nayar_eval4(l, wo, wi);
+    case LSQT_BSDF_OREN_NAYAR: return oren_nayar_evalv(l, wo, wi);
 #endif
-    default: return (real4)(R(0.0));
+    default: return (realv)(R(0.0));
     }
 }
 
 inline real bsdf_eval(__global const lsqt_dev_layer *l, real3 wo, real3 wi)
 {
-    return bsdf_eval4(l, wo, dir4_broadcast(wi)).x;
+    return bsdf_evalv(l, wo, dirv_broadcast(wi)).s0;
 }
 
 /* Samples wi given wo; returns the weight f / pdf, 0 when the path is absorbed. */
@@ -90,29 +90,29 @@ inline phase_vtx phase_vertex(__global const lsqt_dev_medium *m, real3 wo, rng_t
     return v;
 }
 
-inline real4 phase_eval4(__global const lsqt_dev_medium *m, const phase_vtx *v, real3 wo, dir4 wi)
+inline realv phase_evalv(__global const lsqt_dev_medium *m, const phase_vtx *v, real3 wo, dirv wi)
 {
     (void)v;
     switch (m->phase_kind) {
 #ifdef LSQT_HAS_PHASE_HG
-    case LSQT_PHASE_HG: return hg_eval4(m->pp[0], wo, wi);
+    case LSQT_PHASE_HG: return hg_evalv(m->pp[0], wo, wi);
 #endif
 #ifdef LSQT_HAS_PHASE_HG2
-    case LSQT_PHASE_HG2: return hg2_eval4(m, wo, wi);
+    case LSQT_PHASE_HG2: return hg2_evalv(m, wo, wi);
 #endif
 #ifdef LSQT_HAS_PHASE_RAYLEIGH
-    case LSQT_PHASE_RAYLEIGH: return rayleigh_eval4(m, wo, wi);
+    case LSQT_PHASE_RAYLEIGH: return rayleigh_evalv(m, wo, wi);
 #endif
 #ifdef LSQT_HAS_PHASE_SGGX
-    case LSQT_PHASE_SGGX: return m->pp[2] > R(0.5) ? sggx_diffuse_eval4(v->m, wi) : sggx_specular_eval4(m, wo, wi);
+    case LSQT_PHASE_SGGX: return m->pp[2] > R(0.5) ? sggx_diffuse_evalv(v->m, wi) : sggx_specular_evalv(m, wo, wi);
 #endif
-    default: return (real4)(R(0.0));
+    default: return (realv)(R(0.0));
     }
 }
 
 inline real phase_eval(__global const lsqt_dev_medium *m, const phase_vtx *v, real3 wo, real3 wi)
 {
-    return phase_eval4(m, v, wo, dir4_broadcast(wi)).x;
+    return phase_evalv(m, v, wo, dirv_broadcast(wi)).s0;
 }
 
 /* Density of phase_sample's directions: the phase function itself for the exact

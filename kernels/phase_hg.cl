@@ -6,16 +6,16 @@
  * nothing at the peak, so it is written (1 - |g|)^2 + 2 |g| q with q = 1 -+ cos t taken
  * from the vectors, q = |wo +- wi|^2 / 2, exact to rounding near the peak. */
 
-inline real4 hg_eval4(real g, real3 wo, dir4 wi)
+inline realv hg_evalv(real g, real3 wo, dirv wi)
 {
     const real ag = fabs(g), s = g >= R(0.0) ? R(1.0) : R(-1.0);
-    real4 qx = wo.x + s * wi.x, qy = wo.y + s * wi.y, qz = wo.z + s * wi.z;
-    real4 q = R(0.5) * (qx * qx + qy * qy + qz * qz); /* 1 - cos t towards the peak */
-    real4 denom = (R(1.0) - ag) * (R(1.0) - ag) + R(2.0) * ag * q;
+    realv qx = wo.x + s * wi.x, qy = wo.y + s * wi.y, qz = wo.z + s * wi.z;
+    realv q = R(0.5) * (qx * qx + qy * qy + qz * qz); /* 1 - cos t towards the peak */
+    realv denom = (R(1.0) - ag) * (R(1.0) - ag) + R(2.0) * ag * q;
     return LSQT_INV_4PI * ((R(1.0) - ag) * (R(1.0) + ag)) / (denom * sqrt(denom));
 }
 
-inline real hg_pdf(real g, real3 wo, real3 wi) { return hg_eval4(g, wo, dir4_broadcast(wi)).x; }
+inline real hg_pdf(real g, real3 wo, real3 wi) { return hg_evalv(g, wo, dirv_broadcast(wi)).s0; }
 
 /* Samples wi exactly proportional to the phase function (weight 1): the inverse CDF of
  * the standard form, cos t = (1 + g^2 - s^2) / (2 g), s = (1 - g^2) / (1 - g + 2 g u),
@@ -39,10 +39,10 @@ inline real3 hg_sample(real g, real3 wo, real u1, real u2)
 
 /* Two lobes: (1 - b) HG(g0) + b HG(g1); pp = {g0, g1, b}. The sampler picks lobe 1 with
  * probability b, so the weight is exactly 1. */
-inline real4 hg2_eval4(__global const lsqt_dev_medium *m, real3 wo, dir4 wi)
+inline realv hg2_evalv(__global const lsqt_dev_medium *m, real3 wo, dirv wi)
 {
     const real b = m->pp[2];
-    return (R(1.0) - b) * hg_eval4(m->pp[0], wo, wi) + b * hg_eval4(m->pp[1], wo, wi);
+    return (R(1.0) - b) * hg_evalv(m->pp[0], wo, wi) + b * hg_evalv(m->pp[1], wo, wi);
 }
 
 inline real3 hg2_sample(__global const lsqt_dev_medium *m, real3 wo, real u0, real u1, real u2)

@@ -3,10 +3,10 @@
  * normalised over the sphere for every gamma in [-1/3, 1] (rho in [-1, 1]); gamma = 1 is
  * isotropic, gamma = -1/3 (rho = -1) is pure cos^2. pp = {gamma}. cos t = -dot(wo, wi)
  * as for HG. */
-inline real4 rayleigh_eval4(__global const lsqt_dev_medium *m, real3 wo, dir4 wi)
+inline realv rayleigh_evalv(__global const lsqt_dev_medium *m, real3 wo, dirv wi)
 {
     const real gam = m->pp[0];
-    real4 c = wo.x * wi.x + wo.y * wi.y + wo.z * wi.z;
+    realv c = wo.x * wi.x + wo.y * wi.y + wo.z * wi.z;
     return (R(3.0) / (R(16.0) * LSQT_PI)) * ((R(1.0) + R(3.0) * gam) + (R(1.0) - gam) * c * c) / (R(1.0) + R(2.0) * gam);
 }
 

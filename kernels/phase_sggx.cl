@@ -14,12 +14,12 @@ inline real sggx_sigma(real sxx, real szz, real3 w)
     return sqrt(sxx * (w.x * w.x + w.y * w.y) + szz * w.z * w.z);
 }
 
-inline real4 sggx_d4(real sxx, real szz, real4 mx, real4 my, real4 mz)
+inline realv sggx_dv(real sxx, real szz, realv mx, realv my, realv mz)
 {
-    real4 q = (mx * mx + my * my) / sxx + mz * mz / szz; /* sqrt|S| = sxx sqrt(szz) */
+    realv q = (mx * mx + my * my) / sxx + mz * mz / szz; /* sqrt|S| = sxx sqrt(szz) */
     /* A unit m has q >= min(1/sxx, 1/szz); m = 0 (the half vector of wi = -wo, which has
      * no direction) would divide by 0: it takes the largest D, a finite value. */
-    q = fmax(q, (real4)(fmin(R(1.0) / sxx, R(1.0) / szz)));
+    q = fmax(q, (realv)(fmin(R(1.0) / sxx, R(1.0) / szz)));
     return R(1.0) / (((LSQT_PI * sxx) * sqrt(szz)) * q * q);
 }
 
@@ -39,19 +39,19 @@ inline real3 sggx_sample_vndf(real sxx, real szz, real3 w, real u1, real u2)
     return normalize(make_real3(sp * p.x, sp * p.y, sn * p.z));
 }
 
-inline real4 sggx_specular_eval4(__global const lsqt_dev_medium *m, real3 wo, dir4 wi)
+inline realv sggx_specular_evalv(__global const lsqt_dev_medium *m, real3 wo, dirv wi)
 {
     const real sxx = m->pp[0], szz = m->pp[1];
-    real4 hx = wo.x + wi.x, hy = wo.y + wi.y, hz = wo.z + wi.z;
-    real4 inv = rsqrt(fmax(hx * hx + hy * hy + hz * hz, (real4)(R(1e-30))));
-    return sggx_d4(sxx, szz, hx * inv, hy * inv, hz * inv) / (R(4.0) * sggx_sigma(sxx, szz, wo));
+    realv hx = wo.x + wi.x, hy = wo.y + wi.y, hz = wo.z + wi.z;
+    realv inv = rsqrt(fmax(hx * hx + hy * hy + hz * hz, (realv)(R(1e-30))));
+    return sggx_dv(sxx, szz, hx * inv, hy * inv, hz * inv) / (R(4.0) * sggx_sigma(sxx, szz, wo));
 }
 
 /* Diffuse flakes: the value towards wi given the vertex's visible normal m (one sample
  * serves every direction of the point estimate, and the path's next direction). */
-inline real4 sggx_diffuse_eval4(real3 m, dir4 wi)
+inline realv sggx_diffuse_evalv(real3 m, dirv wi)
 {
-    return fmax(wi.x * m.x + wi.y * m.y + wi.z * m.z, (real4)(R(0.0))) * LSQT_INV_PI;
+    return fmax(wi.x * m.x + wi.y * m.y + wi.z * m.z, (realv)(R(0.0))) * LSQT_INV_PI;
 }
 
 /* Specular: reflect wo about a visible normal (weight 1). Diffuse: a cosine lobe about

@@ -16,49 +16,49 @@
 #define LSQT_TWO64 R(18446744073709551616.0)
 
 typedef struct {
-    ulong4 lo, hi;
-} fix4;
+    ulongv lo, hi;
+} fixv;
 
 typedef struct {
     ulong lo, hi;
 } fix1;
 
-/* Four values at once, each rounded to the nearest unit (a float sum x + 0.5 that ties
+/* LSQT_VW values at once, each rounded to the nearest unit (a float sum x + 0.5 that ties
  * may round up once more: at most one unit, 1e-7 relative, and the same every time);
  * non-finite or negative lanes raise a flag and count as 0. */
-inline fix4 to_fixed4(real4 v, volatile __global uint *flags)
+inline fixv to_fixedv(realv v, volatile __global uint *flags)
 {
-    mask4 bad = isnan(v) | isinf(v) | (v < R(0.0));
+    maskv bad = isnan(v) | isinf(v) | (v < R(0.0));
     if (any(bad)) {
         atomic_or(flags, LSQT_FLAG_NONFINITE);
-        v = select(v, (real4)(R(0.0)), bad);
+        v = select(v, (realv)(R(0.0)), bad);
     }
     if (any(v > LSQT_FIX_MAX_VALUE)) {
         atomic_or(flags, LSQT_FLAG_OVERFLOW);
         v = fmin(v, LSQT_FIX_MAX_VALUE);
     }
-    real4 x = v * (real)LSQT_FIX_SCALE;
-    fix4 r;
+    realv x = v * (real)LSQT_FIX_SCALE;
+    fixv r;
     /* Almost every value is below 2^63 units (8e6): one signed conversion per lane (on
      * x86 the unsigned one branches). Larger ones are whole numbers of units and split
      * into words exactly: the scalings are powers of two and the remainder holds only low
      * bits of x. */
     if (all(x < R(0.5) * LSQT_TWO64)) {
-        r.lo = as_ulong4(convert_long4(x + R(0.5))); /* to nearest (rte costs 20 % here) */
-        r.hi = (ulong4)(0);
+        r.lo = as_ulongv(convert_longv(x + R(0.5))); /* to nearest (rte costs 20 % here) */
+        r.hi = (ulongv)(0);
     } else {
-        real4 h = floor(x / LSQT_TWO64);
-        r.hi = convert_ulong4(h);
-        r.lo = convert_ulong4(x - h * LSQT_TWO64);
+        realv h = floor(x / LSQT_TWO64);
+        r.hi = convert_ulongv(h);
+        r.lo = convert_ulongv(x - h * LSQT_TWO64);
     }
     return r;
 }
 
-/* One value: lane x of the same conversion. */
+/* One value: lane 0 of the same conversion. */
 inline fix1 to_fixed(real v, volatile __global uint *flags)
 {
-    fix4 q = to_fixed4((real4)(v), flags);
-    fix1 r = {q.lo.x, q.hi.x};
+    fixv q = to_fixedv((realv)(v), flags);
+    fix1 r = {q.lo.s0, q.hi.s0};
     return r;
 }
 

@@ -58,14 +58,14 @@ inline int nee_visible(real tau_up, real tau_down, int up, int down)
 }
 
 /* Transmittance towards directions z, 0 where leaving that way is not allowed. */
-inline real4 nee_transmittance4(real4 z, real tau_up, real tau_down, int up, int down)
+inline realv nee_transmittancev(realv z, real tau_up, real tau_down, int up, int down)
 {
-    real4 t = (real4)(R(1.0));
+    realv t = (realv)(R(1.0));
     if (tau_up > R(0.0) || tau_down > R(0.0))
-        t = exp(-select((real4)(tau_down), (real4)(tau_up), z > R(0.0)) / fabs(z));
-    mask4 ok = ((z > R(0.0)) & (mask4)(up && tau_up < LSQT_NEE_TAU_MAX ? -1 : 0)) |
-               ((z < R(0.0)) & (mask4)(down && tau_down < LSQT_NEE_TAU_MAX ? -1 : 0));
-    return select((real4)(R(0.0)), t, ok);
+        t = exp(-select((realv)(tau_down), (realv)(tau_up), z > R(0.0)) / fabs(z));
+    maskv ok = ((z > R(0.0)) & (maskv)(up && tau_up < LSQT_NEE_TAU_MAX ? -1 : 0)) |
+               ((z < R(0.0)) & (maskv)(down && tau_down < LSQT_NEE_TAU_MAX ? -1 : 0));
+    return select((realv)(R(0.0)), t, ok);
 }
 
 /* Per launch, per slice and layer: the direction table (the work that does not depend on
@@ -86,17 +86,17 @@ __kernel void lsqt_prepare(__constant lsqt_dev_scene *scene, __global const lsqt
                     l->kind == LSQT_BSDF_MS_CONDUCTIVE;
         real lam = micro ? ggx_lambda(l->p[0], z) : R(0.0);
         __global real *t = tab + ((size_t)slice * n + li) * LSQT_TAB_STRIDE;
-        t[k] = nee_transmittance4((real4)(z), tau_up, tau_down, up, down).x;
+        t[k] = nee_transmittancev((realv)(z), tau_up, tau_down, up, down).s0;
         t[LSQT_NWI_PAD + k] = lam;
         t[2 * LSQT_NWI_PAD + k] = lgamma(R(1.0) + lam);
     }
 }
 
-/* Adds w * f * t to the path's sums of directions k..k+3 (t = 0: nothing, even where f is
+/* Adds w * f * t to the path's sums of directions k..k+LSQT_VW-1 (t = 0: nothing, even where f is
  * not finite, as for the zero vectors that pad the directions). */
-inline void nee_add4(const walk_ctx *c, int k, real4 f, real4 t)
+inline void nee_addv(const walk_ctx *c, int k, realv f, realv t)
 {
-    vstore4(vload4(0, c->sum + k) + select((real4)(R(0.0)), f * t, t > R(0.0)), 0, c->sum + k);
+    vstorev(vloadv(0, c->sum + k) + select((realv)(R(0.0)), f * t, t > R(0.0)), 0, c->sum + k);
 }
 
 /* Converts the path's sums to fixed point and adds them to the work-item's (then clears
@@ -105,18 +105,18 @@ inline void nee_add4(const walk_ctx *c, int k, real4 f, real4 t)
  * work-group's 128-bit sum, where it counts the same. */
 inline void nee_flush(const walk_ctx *c)
 {
-    for (int k = 0; k < LSQT_NWI_PAD; k += 4) {
-        real4 v = vload4(0, c->sum + k);
+    for (int k = 0; k < LSQT_NWI_PAD; k += LSQT_VW) {
+        realv v = vloadv(0, c->sum + k);
         if (!any(v != R(0.0))) continue;
-        vstore4((real4)(R(0.0)), 0, c->sum + k);
-        fix4 q = to_fixed4(v, c->flags);
-        ulong4 old = vload4(0, c->nee + k), sum = old + q.lo;
-        vstore4(sum, 0, c->nee + k);
+        vstorev((realv)(R(0.0)), 0, c->sum + k);
+        fixv q = to_fixedv(v, c->flags);
+        ulongv old = vloadv(0, c->nee + k), sum = old + q.lo;
+        vstorev(sum, 0, c->nee + k);
         if (any(q.hi != 0) || any(sum < old)) {
-            ulong4 h = q.hi + select((ulong4)(0), (ulong4)(1), sum < old);
-            ulong hs[4];
-            vstore4(h, 0, hs);
-            for (int i = 0; i < 4; i++)
+            ulongv h = q.hi + select((ulongv)(0), (ulongv)(1), sum < old);
+            ulong hs[LSQT_VW];
+            vstorev(h, 0, hs);
+            for (int i = 0; i < LSQT_VW; i++)
                 if (hs[i]) local_add128(c->acc + LSQT_ACC_WORDS * (k + i), 0, hs[i], c->flags);
         }
     }
@@ -149,8 +149,8 @@ inline real layer_vertex(const walk_ctx *c, int li, real3 d, real w, rng_t *rng,
 #endif
     if (visible) c->work[WORK_NEE]++;
     if (visible)
-        for (int k = 0; k < LSQT_NWI_PAD; k += 4)
-            nee_add4(c, k, w * bsdf_eval4(l, -d, load_dir4(c->wi, k)), vload4(0, tab + k));
+        for (int k = 0; k < LSQT_NWI_PAD; k += LSQT_VW)
+            nee_addv(c, k, w * bsdf_evalv(l, -d, load_dirv(c->wi, k)), vloadv(0, tab + k));
     return bsdf_sample(l, -d, rng, wi);
 }
 
@@ -164,9 +164,9 @@ inline void nee_medium(const walk_ctx *c, int mi, real h, real3 d, real w, const
     real tau_down = m->tau_below + m->mut * h;
     if (!c->nee_on || !nee_visible(tau_up, tau_down, up, down)) return;
     c->work[WORK_NEE]++;
-    for (int k = 0; k < LSQT_NWI_PAD; k += 4) {
-        dir4 wi = load_dir4(c->wi, k);
-        nee_add4(c, k, w * phase_eval4(m, pv, -d, wi), nee_transmittance4(wi.z, tau_up, tau_down, up, down));
+    for (int k = 0; k < LSQT_NWI_PAD; k += LSQT_VW) {
+        dirv wi = load_dirv(c->wi, k);
+        nee_addv(c, k, w * phase_evalv(m, pv, -d, wi), nee_transmittancev(wi.z, tau_up, tau_down, up, down));
     }
 }
 

@@ -183,9 +183,10 @@ static void k_eval(cl_mem bl, const double wo[3], const float *dirs, size_t n, f
 }
 
 /* Directions of a stochastic evaluation: n (<= NWI) unit vectors as x[pad], y[pad],
- * z[pad] (zero padded, pad = NWI rounded to 4: zero vectors add nothing) and the layer's
- * direction table from lsqt_prepare for a one-layer scene. */
-#define PAD LSQT_PAD4(NWI)
+ * z[pad] (zero padded, pad = NWI rounded to 4, the kernels' LSQT_VW when the harness does
+ * not set it: zero vectors add nothing) and the layer's direction table from
+ * lsqt_prepare for a one-layer scene. */
+#define PAD LSQT_PAD(NWI, 4)
 typedef struct {
     cl_mem wi, tab;
 } ms_dirs;
@@ -840,8 +841,8 @@ static const char *vndf_src =
     "{\n"
     "    int i = (int)get_global_id(0);\n"
     "    ms_vtx x = ms_vertex(l->p[0], make_real3(vx, vy, vz), R(0.5), ms_index(l, R(1.0)), R(0.5), R(0.5));\n"
-    "    dir4 d = dir4_broadcast(make_real3(u[3 * i], u[3 * i + 1], u[3 * i + 2]));\n"
-    "    real4 f = l->kind == LSQT_BSDF_MS_DIELECTRIC ? dielectric_phase4(l, &x, d) : conductor_phase4(l, &x, d);\n"
+    "    dirv d = dirv_broadcast(make_real3(u[3 * i], u[3 * i + 1], u[3 * i + 2]));\n"
+    "    realv f = l->kind == LSQT_BSDF_MS_DIELECTRIC ? dielectric_phasev(l, &x, d) : conductor_phasev(l, &x, d);\n"
     "    out[2 * i] = (float)f.x;\n"
     "    out[2 * i + 1] = (float)x.inv_area;\n"
     "}\n";

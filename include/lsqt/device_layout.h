@@ -23,7 +23,7 @@ typedef uint32_t lsqt_u32;
 
 /* Incident directions go to the device as three coordinate arrays (x, y, z) per slice,
  * each padded to a multiple of 4 with zero vectors, which contribute nothing. */
-#define LSQT_PAD4(n) (((n) + 3) / 4 * 4)
+#define LSQT_PAD(n, w) (((n) + (w) - 1) / (w) * (w))
 
 /* Tallies are 128-bit unsigned fixed point, value * 2^LSQT_FIX_BITS rounded, stored as
  * two 64-bit words, low first: a unit of 2^-40 resolves 1e-12 of a unit weight, and

@@ -22,6 +22,7 @@ typedef struct lsqt_session {
     size_t local_size; /* work-group size of the walk */
     int n_slices, n_wi;
     int slice_group;   /* launch slices per simulated slice (1; rx for the RRSS pilot) */
+    int vw;            /* directions per vector in the next-event loops (LSQT_VW; pads n_wi) */
     int use_double;
     size_t n_nee, n_scalars, n_hist; /* tally counts (lsqt_u128 each) */
 } lsqt_session;
@@ -35,7 +36,7 @@ int lsqt_session_open(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a,
 
 /* The same, where every slice_group consecutive slices of ST are one simulated slice
  * whose walks serve all their direction sets at once (the RRSS pilot: the kernels are
- * built for slice_group x PAD4(n_wi) directions; each slice gets the walks' R, T, work
+ * built for slice_group x PAD(n_wi, vw) directions; each slice gets the walks' R, T, work
  * and histogram). */
 int lsqt_session_open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st,
                               int slice_group, const char *extra_options, size_t local_size, int verbose,
