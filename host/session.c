@@ -17,7 +17,14 @@ static cl_mem make_buffer(lsqt_context *cx, cl_mem_flags fl, size_t size, void *
  * floats; at 4, Substr's next-event work took 1.6x the time), 4 on a GPU, where a
  * work-item's vector is sequential work and registers. Per-direction values do not
  * depend on it; the vector maths of some builtins may round differently per width. */
-static int vector_width(const lsqt_context *cx) { return cx->dev.is_cpu ? 16 : 4; }
+static int vector_width(const lsqt_context *cx, char *err, size_t errcap)
+{
+    const char *env = getenv("LSQT_VECTOR_WIDTH"); /* for tuning a device, and the tests */
+    if (!env || !*env) return cx->dev.is_cpu ? 16 : 4;
+    if (!strcmp(env, "2") || !strcmp(env, "4") || !strcmp(env, "8") || !strcmp(env, "16")) return atoi(env);
+    snprintf(err, errcap, "LSQT_VECTOR_WIDTH is '%s': expected 2, 4, 8 or 16", env);
+    return 0;
+}
 
 /* A grouped session's kernels see each simulated slice's slice_group blocks of n_wi
  * directions as one set of slice_group x PAD(n_wi, vw) (the padding inside is zero). */
@@ -189,7 +196,8 @@ int lsqt_session_open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_asse
         return 1;
     }
     char opt[1024];
-    s->vw = vector_width(cx);
+    s->vw = vector_width(cx, err, errcap);
+    if (!s->vw) return 1;
     if (build_options(cx, a, st, s->slice_group, s->vw, opt, sizeof opt, err, errcap)) return 1;
     if (extra_options && strlen(opt) + strlen(extra_options) + 2 < sizeof opt) {
         strcat(opt, " ");

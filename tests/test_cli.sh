@@ -242,6 +242,16 @@ expect 0 "" -- "$BIN" --list-devices
 "$BIN" -q -R -t 1 -p 5000 -wo 4 -wi 16 --wi-spread -o t1.raw --lss t1.lss S.lsqt && cmp -s t1.raw once.raw \
   && cmp -s t1.lss once.lss && ok || bad "-t 1 gives another RAW or LSS"
 
+# The next-event loops' vector width (16 on CPUs, 4 on GPUs; LSQT_VECTOR_WIDTH overrides
+# it) changes nothing in the result: the GPU's width run on this CPU gives the same bytes
+# for a medium, a rough dielectric coat and a Lambertian floor with 21 directions (padded
+# to 24 or 32), RRSS pilot included. A width that is not 2, 4, 8 or 16 is refused.
+"$BIN" -q -R -p 3000 -wo 4 -wi 21 -o vw16.raw --lss vw16.lss "$EX/tutorial/Dusty.lsqt" &&
+  LSQT_VECTOR_WIDTH=4 "$BIN" -q -R -p 3000 -wo 4 -wi 21 -o vw4.raw --lss vw4.lss "$EX/tutorial/Dusty.lsqt" &&
+  cmp -s vw16.raw vw4.raw && cmp -s vw16.lss vw4.lss && ok || bad "vector widths 16 and 4 give different RAW or LSS"
+expect 1 "LSQT_VECTOR_WIDTH is '3': expected 2, 4, 8 or 16" -- env LSQT_VECTOR_WIDTH=3 "$BIN" -R -p 100 -o vw3.raw L.lsqt
+[ ! -e vw3.raw ] && ok || bad "a refused vector width wrote a RAW"
+
 # Ctrl-C: the current launch finishes, LSS and RAW are written, exit status is non-zero.
 # The signal is sent as soon as the run reports its kernel build, before any launch: an
 # early Ctrl-C must not be lost (the handler comes first) nor kill the run.
