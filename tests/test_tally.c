@@ -82,9 +82,10 @@ static void test_variant(const char *extra)
     printf("tallies %s\n", *extra ? extra : "(64-bit atomics where the device has them)");
     enum { N = 4096 };
     static float v[N];
-    /* Contributions across the range, each rounded once: 1e-12 (1.1 units) to 1.7e13. */
-    const float span[] = {1e-12f, 3e-9f, 0.1f, 1.0f, 12345.678f, 8388607.5f, 1e12f, 1.7e13f, 2.5e-7f, 7e5f};
-    for (int i = 0; i < N; i++) v[i] = span[i % 10];
+    /* Contributions across the range, each rounded once: 1e-12 (1.1 units) to 1.7e13;
+     * 1.25e7 is between 2^63 and 2^64 units, where a signed conversion overflows. */
+    const float span[] = {1e-12f, 3e-9f, 0.1f, 1.0f, 12345.678f, 8388607.5f, 1.25e7f, 1e12f, 1.7e13f, 2.5e-7f, 7e5f};
+    for (int i = 0; i < N; i++) v[i] = span[i % 11];
     check_sum(prog, "mixed 1e-12 .. 1.7e13", v, N, 64);
     /* Just below 2^63 units each: the low 64-bit word wraps on every other add, and the
      * local 32-bit words carry at every level. */
