@@ -12,6 +12,11 @@
 #define vloadv LSQT_CAT(vload, LSQT_VW)
 #define vstorev LSQT_CAT(vstore, LSQT_VW)
 typedef LSQT_CAT(ulong, LSQT_VW) ulongv;
+/* The block of LSQT_VW values at p + k (k a multiple of LSQT_VW) of a private array
+ * declared as vectors, so aligned: one vector load or store. Through vloadv/vstorev,
+ * PoCL stores 16 lanes as four 4-lane pieces, and the next load of the block waits for
+ * them (a store-forwarding stall on every next-event block). */
+#define VBLOCK(type, p, k) (*(type *)((p) + (k)))
 #define as_ulongv LSQT_CAT(as_ulong, LSQT_VW)
 #define convert_longv LSQT_CAT(convert_long, LSQT_VW)
 #define convert_ulongv LSQT_CAT(convert_ulong, LSQT_VW)

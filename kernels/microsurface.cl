@@ -46,7 +46,7 @@ inline dirv load_dirv(__global const real *wi, int k)
         realv lg = vloadv(0, k->tab + 2 * LSQT_NWI_PAD + b);                     \
         (void)lg;                                                                \
         realv v = select((realv)(R(0.0)), (w * t) * (EXPR), t > R(0.0));         \
-        vstorev(vloadv(0, k->sum + b) + v, 0, k->sum + b);                       \
+        VBLOCK(realv, k->sum, b) += v;                                           \
     }
 
 /* A walk vertex: the facet's phase function times G1 = C1^Lambda(u) to this side,

@@ -96,7 +96,7 @@ __kernel void lsqt_prepare(__constant lsqt_dev_scene *scene, __global const lsqt
  * not finite, as for the zero vectors that pad the directions). */
 inline void nee_addv(const walk_ctx *c, int k, realv f, realv t)
 {
-    vstorev(vloadv(0, c->sum + k) + select((realv)(R(0.0)), f * t, t > R(0.0)), 0, c->sum + k);
+    VBLOCK(realv, c->sum, k) += select((realv)(R(0.0)), f * t, t > R(0.0));
 }
 
 /* Converts the path's sums to fixed point and adds them to the work-item's (then clears
@@ -106,12 +106,12 @@ inline void nee_addv(const walk_ctx *c, int k, realv f, realv t)
 inline void nee_flush(const walk_ctx *c)
 {
     for (int k = 0; k < LSQT_NWI_PAD; k += LSQT_VW) {
-        realv v = vloadv(0, c->sum + k);
+        realv v = VBLOCK(realv, c->sum, k);
         if (!any(v != R(0.0))) continue;
-        vstorev((realv)(R(0.0)), 0, c->sum + k);
+        VBLOCK(realv, c->sum, k) = (realv)(R(0.0));
         fixv q = to_fixedv(v, c->flags);
-        ulongv old = vloadv(0, c->nee + k), sum = old + q.lo;
-        vstorev(sum, 0, c->nee + k);
+        ulongv old = VBLOCK(ulongv, c->nee, k), sum = old + q.lo;
+        VBLOCK(ulongv, c->nee, k) = sum;
         if (any(q.hi != 0) || any(sum < old)) {
             ulongv h = q.hi + select((ulongv)(0), (ulongv)(1), sum < old);
             ulong hs[LSQT_VW];
@@ -324,8 +324,10 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
     for (int k = lid; k < LSQT_ACC_WORDS * ACC_N; k += lsz) acc[k] = 0;
     barrier(CLK_LOCAL_MEM_FENCE);
 
-    ulong nee_priv[LSQT_NWI_PAD], work[WORK_N] = {0, 0, 0};
-    real path_sum[LSQT_NWI_PAD];
+    ulongv nee_v[LSQT_NWI_PAD / LSQT_VW]; /* vectors, for aligned blocks (VBLOCK) */
+    realv sum_v[LSQT_NWI_PAD / LSQT_VW];
+    ulong *nee_priv = (ulong *)nee_v, work[WORK_N] = {0, 0, 0};
+    real *path_sum = (real *)sum_v;
     for (int k = 0; k < LSQT_NWI_PAD; k++) nee_priv[k] = 0, path_sum[k] = R(0.0);
     walk_ctx c = {scene, media, layers, wi_dirs + 3 * LSQT_NWI_PAD * slice,
                   tab + (size_t)slice * scene->n_layers * LSQT_TAB_STRIDE, path_sum, nee_priv, work, acc, flags, 1, 0};
