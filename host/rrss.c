@@ -95,6 +95,16 @@ static void candidate_density(const float *dirs, int m, double *p)
     }
 }
 
+/* Candidate i's k nearest others into out[0..k), in nbr_cmp's order (row: m scratch). */
+static void nearest(const float *dirs, int m, int i, int k, nbr *row, nbr *out)
+{
+    int c = 0;
+    for (int j = 0; j < m; j++)
+        if (j != i) row[c].dot = dot3f(dirs + 4 * i, dirs + 4 * j), row[c++].j = j;
+    nbr_first_k(row, c, k);
+    memcpy(out, row, (size_t)k * sizeof *row);
+}
+
 /* The cosine of the redundancy disc's radius, sqrt(1 / (pi q n)), for n enabled
  * candidates (-2 when the disc is the whole sphere): it falls as n falls. */
 static double disc_cos(double q, int enabled)
@@ -143,31 +153,25 @@ int lsqt_rrss_select(const float *dirs, const double *f, int m, int n, int spher
         free(q), free(pe), free(list), free(row);
         return -1;
     }
-    for (int i = 0; i < m; i++) {
-        int c = 0;
-        for (int j = 0; j < m; j++)
-            if (j != i) row[c].dot = dot3f(dirs + 4 * i, dirs + 4 * j), row[c++].j = j;
-        nbr_first_k(row, c, kn);
-        memcpy(list + (size_t)i * kn, row, (size_t)kn * sizeof *row);
-    }
+    for (int i = 0; i < m; i++) nearest(dirs, m, i, kn, row, list + (size_t)i * kn);
     /* Disable the most redundant candidate until n remain (ties: the lowest index). A disc
      * only grows as candidates are disabled, so each candidate keeps how many of its
-     * ordered neighbours lie in it (with their count and q sum, added in the same order as
-     * a fresh scan adds them) and the count of enabled candidates at which the next one
-     * enters: no cosine per candidate per step. */
-    int *t_in = calloc((size_t)m, sizeof *t_in), *len = malloc((size_t)m * sizeof *len);
-    int *next = malloc((size_t)m * sizeof *next);
-    double *a_in = calloc((size_t)m, sizeof *a_in), *qs_in = calloc((size_t)m, sizeof *qs_in);
+     * ordered neighbours lie in it (t_in, with their q sum added in the same order as a
+     * fresh scan adds it) and the count of enabled candidates at which the next one
+     * enters: no cosine per candidate per step. A candidate's list is its kept kn, or
+     * once its disc grows past them, its own kmax (ordered again). */
+    int *t_in = calloc((size_t)m, sizeof *t_in), *next = malloc((size_t)m * sizeof *next);
+    double *qs_in = calloc((size_t)m, sizeof *qs_in);
     nbr **lst = malloc((size_t)m * sizeof *lst);
-    unsigned char *wide = calloc((size_t)m, 1); /* 1: ordered again up to NBR_MAX; 2: scanned in full */
-    if (!t_in || !len || !next || !a_in || !qs_in || !lst || !wide) {
-        free(t_in), free(len), free(next), free(a_in), free(qs_in), free(lst), free(wide);
+    unsigned char *full = calloc((size_t)m, 1); /* 1: the disc reaches past kmax: scanned in full */
+    if (!t_in || !next || !qs_in || !lst || !full) {
+        free(t_in), free(next), free(qs_in), free(lst), free(full);
         free(q), free(pe), free(list), free(row);
         return -1;
     }
     for (int i = 0; i < m; i++) {
         keep[i] = 1;
-        lst[i] = list + (size_t)i * kn, len[i] = kn;
+        lst[i] = list + (size_t)i * kn;
         next[i] = kn > 0 ? enter_count(lst[i][0].dot, q[i], n + 1, m) : n;
     }
     int status = fallback;
@@ -176,31 +180,26 @@ int lsqt_rrss_select(const float *dirs, const double *f, int m, int n, int spher
         double worst_r = -1.0;
         for (int i = 0; i < m; i++) {
             if (!keep[i]) continue;
-            while (wide[i] < 2 && next[i] >= enabled) { /* the next ordered neighbour enters */
-                const nbr *l = lst[i] + t_in[i];
-                a_in[i] += 1, qs_in[i] += q[l->j], t_in[i]++;
-                if (t_in[i] == len[i] && len[i] < kmax) { /* past the kept ones: the first kmax, in order */
+            while (!full[i] && next[i] >= enabled) { /* the next ordered neighbour enters */
+                qs_in[i] += q[lst[i][t_in[i]].j], t_in[i]++;
+                if (t_in[i] == kn && kn < kmax) { /* past the kept ones: the first kmax, in order */
                     nbr *ext = malloc((size_t)kmax * sizeof *ext);
                     if (!ext) {
                         status = -1;
                         goto out;
                     }
-                    int cn = 0;
-                    for (int j = 0; j < m; j++)
-                        if (j != i) row[cn].dot = dot3f(dirs + 4 * i, dirs + 4 * j), row[cn++].j = j;
-                    nbr_first_k(row, cn, kmax);
-                    memcpy(ext, row, (size_t)kmax * sizeof *ext); /* its first kn are the kept ones */
-                    lst[i] = ext, len[i] = kmax, wide[i] = 1;
+                    nearest(dirs, m, i, kmax, row, ext); /* its first kn are the kept ones */
+                    lst[i] = ext;
                 }
-                if (t_in[i] == len[i]) {
-                    if (len[i] < m - 1) wide[i] = 2; /* the disc reaches past the ordered ones */
+                if (t_in[i] == kmax) {
+                    full[i] = kmax < m - 1; /* the disc reaches past the ordered ones */
                     next[i] = n;
                 } else {
                     next[i] = enter_count(lst[i][t_in[i]].dot, q[i], n + 1, enabled);
                 }
             }
-            double e = 0, a = a_in[i], qs = qs_in[i];
-            if (wide[i] == 2) { /* all of them, in index order */
+            double e = 0, a = t_in[i], qs = qs_in[i];
+            if (full[i]) { /* all of them, in index order */
                 const double c = disc_cos(q[i], enabled);
                 e = a = qs = 0;
                 for (int j = 0; j < m; j++)
@@ -217,7 +216,7 @@ int lsqt_rrss_select(const float *dirs, const double *f, int m, int n, int spher
 out:
     for (int i = 0; i < m; i++)
         if (lst[i] != list + (size_t)i * kn) free(lst[i]);
-    free(t_in), free(len), free(next), free(a_in), free(qs_in), free(lst), free(wide);
+    free(t_in), free(next), free(qs_in), free(lst), free(full);
     free(list), free(row);
     free(q), free(pe);
     return status;
