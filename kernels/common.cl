@@ -12,12 +12,15 @@
 #define vloadv LSQT_CAT(vload, LSQT_VW)
 #define vstorev LSQT_CAT(vstore, LSQT_VW)
 typedef LSQT_CAT(ulong, LSQT_VW) ulongv;
+typedef LSQT_CAT(uint, LSQT_VW) uintv;
 /* The block of LSQT_VW values at p + k (k a multiple of LSQT_VW) of a private array
  * declared as vectors, so aligned: one vector load or store. Through vloadv/vstorev,
  * PoCL stores 16 lanes as four 4-lane pieces, and the next load of the block waits for
  * them (a store-forwarding stall on every next-event block). */
 #define VBLOCK(type, p, k) (*(type *)((p) + (k)))
 #define as_ulongv LSQT_CAT(as_ulong, LSQT_VW)
+#define as_uintv LSQT_CAT(as_uint, LSQT_VW)
+#define as_floatv LSQT_CAT(as_float, LSQT_VW)
 #define convert_longv LSQT_CAT(convert_long, LSQT_VW)
 #define convert_ulongv LSQT_CAT(convert_ulong, LSQT_VW)
 
@@ -51,6 +54,47 @@ typedef LSQT_CAT(int, LSQT_VW) maskv;
 #define LSQT_RR_WEIGHT R(0.25)
 
 inline real3 make_real3(real x, real y, real z) { return (real3)(x, y, z); }
+
+/* any() and all() of a comparison of LSQT_VW lanes (lanes -1 or 0), by OR / AND of
+ * halves: PoCL's builtins test lane after lane with a branch each (a fifth of the path
+ * sums' conversion). */
+#define LSQT_OR_HALVES(m) ((m).lo | (m).hi)
+#define LSQT_AND_HALVES(m) ((m).lo & (m).hi)
+#if LSQT_VW == 16
+#define anyv(m) (LSQT_OR_HALVES(LSQT_OR_HALVES(LSQT_OR_HALVES(LSQT_OR_HALVES(m)))) < 0)
+#define allv(m) (LSQT_AND_HALVES(LSQT_AND_HALVES(LSQT_AND_HALVES(LSQT_AND_HALVES(m)))) < 0)
+#elif LSQT_VW == 8
+#define anyv(m) (LSQT_OR_HALVES(LSQT_OR_HALVES(LSQT_OR_HALVES(m))) < 0)
+#define allv(m) (LSQT_AND_HALVES(LSQT_AND_HALVES(LSQT_AND_HALVES(m))) < 0)
+#elif LSQT_VW == 4
+#define anyv(m) (LSQT_OR_HALVES(LSQT_OR_HALVES(m)) < 0)
+#define allv(m) (LSQT_AND_HALVES(LSQT_AND_HALVES(m)) < 0)
+#elif LSQT_VW == 2
+#define anyv(m) (LSQT_OR_HALVES(m) < 0)
+#define allv(m) (LSQT_AND_HALVES(m) < 0)
+#else
+#error "LSQT_VW must be 2, 4, 8 or 16"
+#endif
+
+/* x^(-3/2) for 0 < x < 2^126, LSQT_VW at once. In float: 1/sqrt(x) from the exponent-
+ * halving integer guess (Lomont's constant, error below 3.5 %) and three Newton steps,
+ * which square the error (1.8e-3, 4.6e-6, 3e-11: below float's own rounding), cubed: no
+ * division or square root. Those were most of a medium vertex's next-event loop (the
+ * CPU's divider takes 10 to 12 cycles per 16 lanes), and PoCL's native_rsqrt is
+ * 1 / sqrt. In double: exact. */
+inline realv inv_pow15v(realv x)
+{
+#ifdef LSQT_DOUBLE
+    return R(1.0) / (x * sqrt(x));
+#else
+    const realv hx = R(0.5) * x;
+    realv r = as_floatv((uintv)(0x5f375a86u) - (as_uintv(x) >> 1));
+    r = r * (R(1.5) - hx * r * r);
+    r = r * (R(1.5) - hx * r * r);
+    r = r * (R(1.5) - hx * r * r);
+    return r * r * r;
+#endif
+}
 
 /* LSQT_VW directions at once, as three coordinate vectors: next-event estimation evaluates
  * a model at every incident direction, so models evaluate LSQT_VW at a time (SIMD on CPUs). */

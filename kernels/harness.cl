@@ -11,6 +11,29 @@ __kernel void harness_philox(__global const uint *ctr, __global const uint *key,
     out[4 * i] = r.x; out[4 * i + 1] = r.y; out[4 * i + 2] = r.z; out[4 * i + 3] = r.w;
 }
 
+/* The first n 32-bit draws of one path's stream (rng_init and rng_next_u32, as the walk
+ * draws them); one work-item. */
+__kernel void harness_rng_stream(uint seed_lo, uint seed_hi, uint slice, ulong path, uint purpose, int n,
+                                 __global uint *out)
+{
+    rng_t rng = rng_init(seed_lo, seed_hi, slice, path, purpose);
+    for (int i = 0; i < n; i++) out[i] = rng_next_u32(&rng);
+}
+
+/* The kernels' own elementary functions at given arguments, one per work-item:
+ * out[4i] = neg_log_unit(xl[i]), out[4i + 1, 2] = azimuth_cs(xa[i]),
+ * out[4i + 3] = inv_pow15v(xp[i]). */
+__kernel void harness_fast_math(__global const float *xl, __global const float *xa, __global const float *xp,
+                                __global float *out)
+{
+    const int i = (int)get_global_id(0);
+    real2 cs = azimuth_cs(xa[i]);
+    out[4 * i] = (float)neg_log_unit(xl[i]);
+    out[4 * i + 1] = (float)cs.x;
+    out[4 * i + 2] = (float)cs.y;
+    out[4 * i + 3] = (float)inv_pow15v((realv)(xp[i])).s0;
+}
+
 /* Samples one direction per work-item from a layer's BSDF (layer 0 of `layers`) or a
  * medium's phase function (medium 0 of `media`) for fixed wo; out = (x, y, z, weight). */
 __kernel void harness_sample(__global const lsqt_dev_layer *layers,
@@ -40,6 +63,22 @@ __kernel void harness_eval(__global const lsqt_dev_layer *layers,
     out[2 * i + 1] = (float)(use_phase ? phase_pdf(media, wo, d) : bsdf_pdf(layers, wo, d));
 }
 
+/* The conversion of one block of LSQT_VW path sums, as the end of a path makes it
+ * (to_fixedv): work-item i converts v[i VW .. (i + 1) VW) into out (lo, hi per value),
+ * with its own flags word. */
+__kernel void harness_tally_block(__global const float *v, __global ulong *out, volatile __global uint *flags)
+{
+    const int i = (int)get_global_id(0);
+    realv x;
+    real *xs = (real *)&x;
+    for (int j = 0; j < LSQT_VW; j++) xs[j] = (real)v[i * LSQT_VW + j];
+    fixv q = to_fixedv(x, flags + i);
+    ulong lo[LSQT_VW], hi[LSQT_VW];
+    vstorev(q.lo, 0, lo);
+    vstorev(q.hi, 0, hi);
+    for (int j = 0; j < LSQT_VW; j++) out[2 * (i * LSQT_VW + j)] = lo[j], out[2 * (i * LSQT_VW + j) + 1] = hi[j];
+}
+
 /* Tallies: every work-item adds its value into the work-group's 128-bit accumulator (in
  * local memory, as the walk's) and straight into global tally 0; the group's sum then
  * goes to global tally 1. out: two tallies of two 64-bit words. */
@@ -60,8 +99,8 @@ __kernel void harness_tally(__global const float *v, __global ulong *out, volati
 }
 
 /* Stochastic evaluation of a microsurface (layer 0) for fixed wo towards the LSQT_NWI
- * directions wi (x[pad], y[pad], z[pad]), with the direction table tab that lsqt_prepare
- * makes for a one-layer scene: each work-item averages `reps` vertex evaluations (each
+ * directions wi (x[pad], y[pad], z[pad]), with the slice's direction tables tab that
+ * lsqt_prepare makes for a one-layer scene (its layer's after the media's row): each work-item averages `reps` vertex evaluations (each
  * iter_count walks plus the analytic single scattering, exactly as the path loop does)
  * and writes its means, out[item * LSQT_NWI_PAD + k]; the spread across work-items gives
  * the noise. */
@@ -74,7 +113,7 @@ __kernel void harness_ms_eval(__global const lsqt_dev_layer *layers, float wox, 
     real3 wo = normalize(make_real3(wox, woy, woz));
     real sum[LSQT_NWI_PAD];
     for (int k = 0; k < LSQT_NWI_PAD; k++) sum[k] = R(0.0);
-    ms_sink sink = {sum, wi, tab};
+    ms_sink sink = {sum, wi, tab + LSQT_NWI_PAD};
     for (int r = 0; r < reps; r++) {
         real3 o;
         ms_vertex_walks(layers, -wo, &rng, R(1.0) / (real)reps, 1, &sink, &o);

@@ -116,7 +116,7 @@ inline ms_vtx ms_vertex_single(real alpha, real3 v, real e)
 inline realv ms_single_escapev(const ms_vtx *x, maskv up, realv lam_u, realv lg_u)
 {
     realv a = R(1.0) + x->lam_v, r = a / (a + lam_u);
-    if (!all(up)) /* the Beta function only where some light goes through */
+    if (!allv(up)) /* the Beta function only where some light goes through */
         r = select(a * exp(x->lg_v + lg_u - lgamma_ge1_v(R(2.0) + x->lam_v + lam_u)), r, up);
     return r;
 }

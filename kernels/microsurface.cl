@@ -39,7 +39,7 @@ inline dirv load_dirv(__global const real *wi, int k)
     if (k->count) (*k->count)++;                                                 \
     for (int b = 0; b < LSQT_NWI_PAD; b += LSQT_VW) {                            \
         realv t = vloadv(0, k->tab + b);                                         \
-        if (!any(t > R(0.0))) continue;                                          \
+        if (!anyv(t > R(0.0))) continue;                                          \
         dirv u = load_dirv(k->wi, b);                                            \
         u.z *= side;                                                             \
         realv lam = vloadv(0, k->tab + LSQT_NWI_PAD + b);                        \

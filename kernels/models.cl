@@ -127,16 +127,17 @@ inline real phase_pdf(__global const lsqt_dev_medium *m, real3 wo, real3 wi)
 /* Samples wi given wo; returns the weight p / pdf (1: every sampler here is exact). */
 inline real phase_sample(__global const lsqt_dev_medium *m, const phase_vtx *v, real3 wo, rng_t *rng, real3 *wi)
 {
-    /* Every phase function draws three (u0 picks HG2's lobe): HG2 with b = 0 is then HG
-     * sample for sample (test_phases). */
-    real u0 = rng_uniform(rng), u1 = rng_uniform(rng), u2 = rng_uniform(rng);
-    (void)u0, (void)v;
+    /* Every phase function draws two (HG2 picks its lobe by splitting u1, so with b = 0
+     * it is HG sample for sample: test_phases); with the free flight's, a scattering
+     * event takes one Philox block of four draws less a quarter. */
+    real u1 = rng_uniform(rng), u2 = rng_uniform(rng);
+    (void)v;
     switch (m->phase_kind) {
 #ifdef LSQT_HAS_PHASE_HG
     case LSQT_PHASE_HG: *wi = hg_sample(m->pp[0], wo, u1, u2); return R(1.0);
 #endif
 #ifdef LSQT_HAS_PHASE_HG2
-    case LSQT_PHASE_HG2: *wi = hg2_sample(m, wo, u0, u1, u2); return R(1.0);
+    case LSQT_PHASE_HG2: *wi = hg2_sample(m, wo, u1, u2); return R(1.0);
 #endif
 #ifdef LSQT_HAS_PHASE_RAYLEIGH
     case LSQT_PHASE_RAYLEIGH: *wi = rayleigh_sample(m, wo, u1, u2); return R(1.0);

@@ -12,7 +12,7 @@ inline realv hg_evalv(real g, real3 wo, dirv wi)
     realv qx = wo.x + s * wi.x, qy = wo.y + s * wi.y, qz = wo.z + s * wi.z;
     realv q = R(0.5) * (qx * qx + qy * qy + qz * qz); /* 1 - cos t towards the peak */
     realv denom = (R(1.0) - ag) * (R(1.0) - ag) + R(2.0) * ag * q;
-    return LSQT_INV_4PI * ((R(1.0) - ag) * (R(1.0) + ag)) / (denom * sqrt(denom));
+    return LSQT_INV_4PI * ((R(1.0) - ag) * (R(1.0) + ag)) * inv_pow15v(denom);
 }
 
 inline real hg_pdf(real g, real3 wo, real3 wi) { return hg_evalv(g, wo, dirv_broadcast(wi)).s0; }
@@ -38,14 +38,17 @@ inline real3 hg_sample(real g, real3 wo, real u1, real u2)
 }
 
 /* Two lobes: (1 - b) HG(g0) + b HG(g1); pp = {g0, g1, b}. The sampler picks lobe 1 with
- * probability b, so the weight is exactly 1. */
+ * probability b, so the weight is exactly 1: lobe 1 when u1 < b, and u1 rescaled to the
+ * chosen part of [0, 1) is again uniform, for the lobe's own sample. */
 inline realv hg2_evalv(__global const lsqt_dev_medium *m, real3 wo, dirv wi)
 {
     const real b = m->pp[2];
     return (R(1.0) - b) * hg_evalv(m->pp[0], wo, wi) + b * hg_evalv(m->pp[1], wo, wi);
 }
 
-inline real3 hg2_sample(__global const lsqt_dev_medium *m, real3 wo, real u0, real u1, real u2)
+inline real3 hg2_sample(__global const lsqt_dev_medium *m, real3 wo, real u1, real u2)
 {
-    return hg_sample(u0 < m->pp[2] ? m->pp[1] : m->pp[0], wo, u1, u2);
+    const real b = m->pp[2];
+    if (u1 < b) return hg_sample(m->pp[1], wo, u1 / b, u2);
+    return hg_sample(m->pp[0], wo, fmin((u1 - b) / (R(1.0) - b), R(1.0)), u2);
 }

@@ -28,9 +28,10 @@ inline uint4 philox4x32_10(uint4 c, uint2 k) { return philox4x32_rounds(c, k, 10
  * high 16 bits | purpose << 16, slice). A path is therefore a pure function of
  * (seed, slice, path index, purpose). */
 typedef struct {
-    uint4 ctr;
+    uint4 ctr;  /* the counter of the block after `next` */
     uint2 key;
-    uint4 buf;
+    uint4 buf;  /* the block being drawn from */
+    uint4 next; /* the block after it, made ahead */
     int used;
 } rng_t;
 
@@ -44,14 +45,22 @@ inline rng_t rng_init(uint seed_lo, uint seed_hi, uint slice, ulong path, uint p
     r.key = (uint2)(seed_lo, seed_hi);
     r.ctr = (uint4)(0u, (uint)path, ((uint)(path >> 32) & 0xFFFFu) | (purpose << 16), slice);
     r.buf = (uint4)(0u);
+    r.next = philox4x32_10(r.ctr, r.key);
+    r.ctr.x++;
     r.used = 4;
     return r;
 }
 
+/* The draws come block after block as before; the block after the current one is made
+ * when the current one starts, not when it is first needed: nothing waits on it then,
+ * so its 10 rounds of multiplies overlap the scattering event that uses the current
+ * block, instead of heading its chain of dependent work (a path makes one block more
+ * than it uses). */
 inline uint rng_next_u32(rng_t *r)
 {
     if (r->used == 4) {
-        r->buf = philox4x32_10(r->ctr, r->key);
+        r->buf = r->next;
+        r->next = philox4x32_10(r->ctr, r->key);
         r->ctr.x++;
         r->used = 0;
     }

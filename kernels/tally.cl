@@ -32,17 +32,17 @@ inline fixv to_fixedv(realv v, volatile __global uint *flags)
     /* The common case first, by two comparisons (NaN fails both): every lane non-negative
      * and below 2^63 units (8.4e6), where the general form below does the same. The path
      * sums' conversion was a fifth of a slab run. */
-    if (all((v >= R(0.0)) & (v < R(0.5) * LSQT_TWO64 / (real)LSQT_FIX_SCALE))) {
+    if (allv((v >= R(0.0)) & (v < R(0.5) * LSQT_TWO64 / (real)LSQT_FIX_SCALE))) {
         r.lo = as_ulongv(convert_longv(v * (real)LSQT_FIX_SCALE + R(0.5)));
         r.hi = (ulongv)(0);
         return r;
     }
     maskv bad = isnan(v) | isinf(v) | (v < R(0.0));
-    if (any(bad)) {
+    if (anyv(bad)) {
         atomic_or(flags, LSQT_FLAG_NONFINITE);
         v = select(v, (realv)(R(0.0)), bad);
     }
-    if (any(v > LSQT_FIX_MAX_VALUE)) {
+    if (anyv(v > LSQT_FIX_MAX_VALUE)) {
         atomic_or(flags, LSQT_FLAG_OVERFLOW);
         v = fmin(v, LSQT_FIX_MAX_VALUE);
     }
@@ -51,7 +51,7 @@ inline fixv to_fixedv(realv v, volatile __global uint *flags)
      * x86 the unsigned one branches). Larger ones are whole numbers of units and split
      * into words exactly: the scalings are powers of two and the remainder holds only low
      * bits of x. */
-    if (all(x < R(0.5) * LSQT_TWO64)) {
+    if (allv(x < R(0.5) * LSQT_TWO64)) {
         r.lo = as_ulongv(convert_longv(x + R(0.5))); /* to nearest (rte costs 20 % here) */
         r.hi = (ulongv)(0);
     } else {

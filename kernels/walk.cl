@@ -23,7 +23,7 @@ typedef struct {
     __global const lsqt_dev_medium *media;
     __global const lsqt_dev_layer *layers;
     __global const real *wi;           /* this slice's directions: x[pad], y[pad], z[pad] */
-    __global const real *tab;          /* this slice's per-layer direction tables (lsqt_prepare) */
+    __global const real *tab;          /* this slice's direction tables (lsqt_prepare) */
     real *sum;                         /* the current path's point estimates */
     ulong *nee;                        /* this work-item's point-estimate sums, low words */
     ulong *work;                       /* this work-item's work counters (LSQT_T_LAYER_EVENTS ...) */
@@ -41,10 +41,12 @@ inline void acc_add(const walk_ctx *c, int k, real v)
     }
 }
 
-/* A layer's direction table: T[pad] (transmittance of the media light crosses leaving
- * that way, 0 where it may not leave), Lambda[pad] and lgamma(1 + Lambda)[pad] of the
- * layer's microfacets. */
+/* A slice's direction tables: 1/|z|[pad] of its directions (for the media's
+ * transmittance), then each layer's: T[pad] (transmittance of the media light crosses
+ * leaving that way, 0 where it may not leave), Lambda[pad] and lgamma(1 + Lambda)[pad]
+ * of the layer's microfacets. */
 #define LSQT_TAB_STRIDE (3 * LSQT_NWI_PAD)
+#define LSQT_SLICE_TAB(n_layers) (LSQT_NWI_PAD + (n_layers) * LSQT_TAB_STRIDE)
 
 /* A contribution below 2^-41 rounds to 0 in fixed point. Weights are at most 1 and
  * values at most 2^44 (a larger one fails the run), so light that must cross more than
@@ -57,12 +59,13 @@ inline int nee_visible(real tau_up, real tau_down, int up, int down)
     return (up && tau_up < LSQT_NEE_TAU_MAX) || (down && tau_down < LSQT_NEE_TAU_MAX);
 }
 
-/* Transmittance towards directions z, 0 where leaving that way is not allowed. */
-inline realv nee_transmittancev(realv z, real tau_up, real tau_down, int up, int down)
+/* Transmittance towards directions z (inv_az = 1 / |z|, from the slice's table), 0 where
+ * leaving that way is not allowed. */
+inline realv nee_transmittancev(realv z, realv inv_az, real tau_up, real tau_down, int up, int down)
 {
     realv t = (realv)(R(1.0));
     if (tau_up > R(0.0) || tau_down > R(0.0))
-        t = exp(-select((realv)(tau_down), (realv)(tau_up), z > R(0.0)) / fabs(z));
+        t = exp(-select((realv)(tau_down), (realv)(tau_up), z > R(0.0)) * inv_az);
     maskv ok = ((z > R(0.0)) & (maskv)(up && tau_up < LSQT_NEE_TAU_MAX ? -1 : 0)) |
                ((z < R(0.0)) & (maskv)(down && tau_down < LSQT_NEE_TAU_MAX ? -1 : 0));
     return select((realv)(R(0.0)), t, ok);
@@ -75,7 +78,9 @@ __kernel void lsqt_prepare(__constant lsqt_dev_scene *scene, __global const lsqt
                            __global real *tab)
 {
     const int k = (int)get_global_id(0), slice = (int)get_global_id(1), n = scene->n_layers;
-    const real z = wi_dirs[(3 * slice + 2) * LSQT_NWI_PAD + k];
+    const real z = wi_dirs[(3 * slice + 2) * LSQT_NWI_PAD + k], inv_az = R(1.0) / fabs(z);
+    __global real *st = tab + (size_t)slice * LSQT_SLICE_TAB(n);
+    st[k] = inv_az;
     for (int li = 0; li < n; li++) {
         __global const lsqt_dev_layer *l = &layers[li];
         __global const lsqt_dev_medium *above = &media[li], *below = &media[li + 1];
@@ -85,8 +90,8 @@ __kernel void lsqt_prepare(__constant lsqt_dev_scene *scene, __global const lsqt
         int micro = l->kind == LSQT_BSDF_MS_LAMBERTIAN || l->kind == LSQT_BSDF_MS_DIELECTRIC ||
                     l->kind == LSQT_BSDF_MS_CONDUCTIVE;
         real lam = micro ? ggx_lambda(l->p[0], z) : R(0.0);
-        __global real *t = tab + ((size_t)slice * n + li) * LSQT_TAB_STRIDE;
-        t[k] = nee_transmittancev((realv)(z), tau_up, tau_down, up, down).s0;
+        __global real *t = st + LSQT_NWI_PAD + li * LSQT_TAB_STRIDE;
+        t[k] = nee_transmittancev((realv)(z), (realv)(inv_az), tau_up, tau_down, up, down).s0;
         t[LSQT_NWI_PAD + k] = lam;
         t[2 * LSQT_NWI_PAD + k] = lgamma(R(1.0) + lam);
     }
@@ -107,12 +112,12 @@ inline void nee_flush(const walk_ctx *c)
 {
     for (int k = 0; k < LSQT_NWI_PAD; k += LSQT_VW) {
         realv v = VBLOCK(realv, c->sum, k);
-        if (!any(v != R(0.0))) continue;
+        if (!anyv(v != R(0.0))) continue;
         VBLOCK(realv, c->sum, k) = (realv)(R(0.0));
         fixv q = to_fixedv(v, c->flags);
         ulongv old = VBLOCK(ulongv, c->nee, k), sum = old + q.lo;
         VBLOCK(ulongv, c->nee, k) = sum;
-        if (any(q.hi != 0) || any(sum < old)) {
+        if (anyv((q.hi != 0) | (sum < old))) {
             ulongv h = q.hi + select((ulongv)(0), (ulongv)(1), sum < old);
             ulong hs[LSQT_VW];
             vstorev(h, 0, hs);
@@ -139,7 +144,7 @@ inline real layer_vertex(const walk_ctx *c, int li, real3 d, real w, rng_t *rng,
     real tau_up = above->tau_above + above->mut * above->thickness;
     real tau_down = below->tau_below + below->mut * below->thickness;
     const int visible = c->nee_on && nee_visible(tau_up, tau_down, up, down);
-    __global const real *tab = c->tab + li * LSQT_TAB_STRIDE;
+    __global const real *tab = c->tab + LSQT_NWI_PAD + li * LSQT_TAB_STRIDE;
     c->work[WORK_LAYER]++;
 #if defined(LSQT_HAS_BSDF_MS_LAMBERTIAN) || defined(LSQT_HAS_BSDF_MS_DIELECTRIC) || defined(LSQT_HAS_BSDF_MS_CONDUCTIVE)
     if (layer_is_micro(l)) {
@@ -164,9 +169,15 @@ inline void nee_medium(const walk_ctx *c, int mi, real h, real3 d, real w, const
     real tau_down = m->tau_below + m->mut * h;
     if (!c->nee_on || !nee_visible(tau_up, tau_down, up, down)) return;
     c->work[WORK_NEE]++;
+    /* The pointers in locals: on a CPU, PoCL's private and global memory are one address
+     * space, so the compiler cannot tell the sums' stores from the context's fields and
+     * would load them again at every block. */
+    __global const real *dirs = c->wi, *inv_az = c->tab;
+    real *sum = c->sum;
     for (int k = 0; k < LSQT_NWI_PAD; k += LSQT_VW) {
-        dirv wi = load_dirv(c->wi, k);
-        nee_addv(c, k, w * phase_evalv(m, pv, -d, wi), nee_transmittancev(wi.z, tau_up, tau_down, up, down));
+        dirv wi = load_dirv(dirs, k);
+        realv t = nee_transmittancev(wi.z, vloadv(0, inv_az + k), tau_up, tau_down, up, down);
+        VBLOCK(realv, sum, k) += select((realv)(R(0.0)), w * phase_evalv(m, pv, -d, wi) * t, t > R(0.0));
     }
 }
 
@@ -249,7 +260,7 @@ inline void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulong *hi
         /* Inside interior medium `medium` at height h, travelling along d. */
         __global const lsqt_dev_medium *m = &c->media[medium];
         if (m->mut > R(0.0)) {
-            real s = -log(R(1.0) - rng_uniform(rng)) / (real)m->mut;
+            real s = neg_log_unit(R(1.0) - rng_uniform(rng)) / (real)m->mut;
             /* s < the distance to the boundary ahead, without dividing by d.z (a
              * horizontal d scatters below the top; a NaN one goes on to a layer and
              * leaves) */
@@ -289,7 +300,7 @@ __kernel void lsqt_exits(__constant lsqt_dev_scene *scene, __global const lsqt_d
     /* no point estimates, so no sums (they would fill a CPU worker's stack: a work-group
      * of 256 at the pilot's 4 x 300 directions is 3.7 MB) */
     ulong work[WORK_N] = {0, 0, 0};
-    walk_ctx c = {scene, media, layers, wi_dirs + 3 * LSQT_NWI_PAD * slice, tab + (size_t)slice * scene->n_layers * LSQT_TAB_STRIDE,
+    walk_ctx c = {scene, media, layers, wi_dirs + 3 * LSQT_NWI_PAD * slice, tab + (size_t)slice * LSQT_SLICE_TAB(scene->n_layers),
                   0, 0, work, acc, flags, 0, out + 4 * ((size_t)slice * n + i)};
     if (i >= n) return;
     real3 wo = make_real3(wo_dirs[4 * v], wo_dirs[4 * v + 1], wo_dirs[4 * v + 2]);
@@ -330,7 +341,7 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
     real *path_sum = (real *)sum_v;
     for (int k = 0; k < LSQT_NWI_PAD; k++) nee_priv[k] = 0, path_sum[k] = R(0.0);
     walk_ctx c = {scene, media, layers, wi_dirs + 3 * LSQT_NWI_PAD * slice,
-                  tab + (size_t)slice * scene->n_layers * LSQT_TAB_STRIDE, path_sum, nee_priv, work, acc, flags, 1, 0};
+                  tab + (size_t)slice * LSQT_SLICE_TAB(scene->n_layers), path_sum, nee_priv, work, acc, flags, 1, 0};
     const uint g = (uint)max(scene->slice_group, 1), v = slice * g; /* v: the first state slice */
     real3 wo = make_real3(wo_dirs[4 * v], wo_dirs[4 * v + 1], wo_dirs[4 * v + 2]);
     for (ulong p = begin + (ulong)lid; p < end; p += (ulong)lsz) {

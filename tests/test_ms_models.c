@@ -184,7 +184,7 @@ static void k_eval(cl_mem bl, const double wo[3], const float *dirs, size_t n, f
 
 /* Directions of a stochastic evaluation: n (<= NWI) unit vectors as x[pad], y[pad],
  * z[pad] (zero padded, pad = NWI rounded to 4, the kernels' LSQT_VW when the harness does
- * not set it: zero vectors add nothing) and the layer's direction table from
+ * not set it: zero vectors add nothing) and the slice's direction tables from
  * lsqt_prepare for a one-layer scene. */
 #define PAD LSQT_PAD(NWI, 4)
 typedef struct {
@@ -204,7 +204,7 @@ static ms_dirs ms_dirs_make(cl_mem bl, const double (*d)[3], int n)
     memset(med, 0, sizeof med);
     med[0].eta = med[1].eta = 1;
     cl_mem bs = mem(sizeof sc, &sc), bm = mem(sizeof med, med);
-    ms_dirs r = {mem(sizeof soa, soa), mem(3 * PAD * sizeof(float), NULL)};
+    ms_dirs r = {mem(sizeof soa, soa), mem(4 * PAD * sizeof(float), NULL)}; /* walk.cl's LSQT_SLICE_TAB(1) */
     cl_kernel k = clCreateKernel(prog, "lsqt_prepare", NULL);
     const size_t sz[] = {sizeof bs, sizeof bm, sizeof bl, sizeof r.wi, sizeof r.tab};
     const void *val[] = {&bs, &bm, &bl, &r.wi, &r.tab};

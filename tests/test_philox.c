@@ -23,6 +23,58 @@ static int words_after(const char *obj, const char *key, uint32_t *out, int n)
     return 0;
 }
 
+/* Philox4x32 written from the paper (Salmon et al. 2011), independent of the kernel's:
+ * checked against the same known answers, then the reference for the draw stream. */
+static void philox_ref(const uint32_t in[4], const uint32_t key[2], int rounds, uint32_t out[4])
+{
+    uint32_t c[4] = {in[0], in[1], in[2], in[3]}, k0 = key[0], k1 = key[1];
+    for (int r = 0; r < rounds; r++) {
+        uint64_t p0 = (uint64_t)0xD2511F53u * c[0], p1 = (uint64_t)0xCD9E8D57u * c[2];
+        uint32_t n[4] = {(uint32_t)(p1 >> 32) ^ c[1] ^ k0, (uint32_t)p1, (uint32_t)(p0 >> 32) ^ c[3] ^ k1,
+                         (uint32_t)p0};
+        memcpy(c, n, sizeof c);
+        k0 += 0x9E3779B9u, k1 += 0xBB67AE85u;
+    }
+    memcpy(out, c, sizeof c);
+}
+
+/* SPEC section 6: draw j of a path is word j mod 4 of Philox4x32-10 with key = seed and
+ * counter = (j / 4, path index low 32 bits, high 16 bits | purpose << 16, slice), so a
+ * path is a pure function of (seed, slice, path index, purpose). */
+static void check_stream(cl_program prog)
+{
+    enum { N = 23 }; /* six blocks, the last one in part */
+    const uint32_t seed[2] = {0x12345678u, 0x9abcdef0u}, slice = 7u, purpose = 1u;
+    const uint64_t path = 0x0000beef00c0ffeeull;
+    cl_int e = CL_SUCCESS;
+    cl_kernel k = clCreateKernel(prog, "harness_rng_stream", &e);
+    cl_mem bo = clCreateBuffer(fixture_cx.ctx, CL_MEM_WRITE_ONLY, N * sizeof(uint32_t), NULL, &e);
+    cl_ulong p = path;
+    cl_int n = N;
+    clSetKernelArg(k, 0, sizeof seed[0], &seed[0]);
+    clSetKernelArg(k, 1, sizeof seed[1], &seed[1]);
+    clSetKernelArg(k, 2, sizeof slice, &slice);
+    clSetKernelArg(k, 3, sizeof p, &p);
+    clSetKernelArg(k, 4, sizeof purpose, &purpose);
+    clSetKernelArg(k, 5, sizeof n, &n);
+    clSetKernelArg(k, 6, sizeof bo, &bo);
+    uint32_t got[N];
+    size_t one = 1;
+    e = clEnqueueNDRangeKernel(fixture_cx.queue, k, 1, NULL, &one, NULL, 0, NULL, NULL);
+    if (e == CL_SUCCESS) e = clEnqueueReadBuffer(fixture_cx.queue, bo, CL_TRUE, 0, sizeof got, got, 0, NULL, NULL);
+    CHECK(e == CL_SUCCESS, "harness_rng_stream failed: %d", (int)e);
+    for (int j = 0; j < N && e == CL_SUCCESS; j++) {
+        const uint32_t ctr[4] = {(uint32_t)(j / 4), (uint32_t)path, (uint32_t)(path >> 32 & 0xFFFFu) | purpose << 16,
+                                 slice};
+        uint32_t block[4];
+        philox_ref(ctr, seed, 10, block);
+        CHECK(got[j] == block[j % 4], "draw %d: %08x, expected %08x (block %d word %d)", j, got[j], block[j % 4], j / 4,
+              j % 4);
+    }
+    clReleaseMemObject(bo);
+    clReleaseKernel(k);
+}
+
 int main(void)
 {
     size_t len = 0;
@@ -67,6 +119,12 @@ int main(void)
         for (int w = 0; w < 4; w++)
             CHECK(got[4 * i + w] == expect[4 * i + w], "vector %d (%d rounds) word %d: %08x, expected %08x", i,
                   rounds[i], w, got[4 * i + w], expect[4 * i + w]);
+    for (int i = 0; i < n; i++) {
+        uint32_t ref[4];
+        philox_ref(ctr + 4 * i, key + 2 * i, rounds[i], ref);
+        CHECK(memcmp(ref, expect + 4 * i, sizeof ref) == 0, "the test's own Philox misses vector %d", i);
+    }
+    check_stream(prog);
     clReleaseMemObject(bc);
     clReleaseMemObject(bk);
     clReleaseMemObject(br);

@@ -109,6 +109,64 @@ static void test_variant(const char *extra)
     clReleaseProgram(prog);
 }
 
+/* The block conversion at the end of every path (to_fixedv, LSQT_VW values at once, 4 as
+ * on a GPU and 16 as on a CPU): one lane special, every other 0.5, for each lane. Each
+ * lane must be converted on its own: a NaN or a negative one is 0 and raises the
+ * non-finite flag, one above 2^63 units takes the exact general path, one above the range
+ * is clamped and raises the overflow flag; the other lanes stay exact. */
+static void test_blocks(int vw)
+{
+    char opt[64];
+    snprintf(opt, sizeof opt, "-DLSQT_VW=%d", vw);
+    cl_program prog = build(opt);
+    if (!prog) return;
+    const float special[] = {NAN, -1.0f, 1.25e7f, 1e12f, 2e13f};
+    const unsigned want_flag[] = {LSQT_FLAG_NONFINITE, LSQT_FLAG_NONFINITE, 0, 0, LSQT_FLAG_OVERFLOW};
+    const float want_value[] = {0.0f, 0.0f, 1.25e7f, 1e12f, 17592186044416.0f};
+    enum { NS = 5, MAXW = 16 };
+    const size_t items = (size_t)NS * (size_t)vw;
+    float v[NS * MAXW * MAXW];
+    uint64_t out[2 * NS * MAXW * MAXW];
+    cl_uint flags[NS * MAXW];
+    for (size_t i = 0; i < items; i++)
+        for (int j = 0; j < vw; j++) v[i * (size_t)vw + (size_t)j] = j == (int)(i % (size_t)vw) ? special[i / (size_t)vw] : 0.5f;
+    memset(flags, 0, sizeof flags);
+    cl_int e = CL_SUCCESS;
+    cl_kernel k = clCreateKernel(prog, "harness_tally_block", &e);
+    cl_mem bv = clCreateBuffer(fixture_cx.ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, items * (size_t)vw * sizeof *v, v, &e);
+    cl_mem bo = clCreateBuffer(fixture_cx.ctx, CL_MEM_WRITE_ONLY, items * (size_t)vw * 2 * sizeof *out, NULL, &e);
+    cl_mem bf = clCreateBuffer(fixture_cx.ctx, CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR, items * sizeof *flags, flags, &e);
+    clSetKernelArg(k, 0, sizeof bv, &bv);
+    clSetKernelArg(k, 1, sizeof bo, &bo);
+    clSetKernelArg(k, 2, sizeof bf, &bf);
+    if (e == CL_SUCCESS) e = clEnqueueNDRangeKernel(fixture_cx.queue, k, 1, NULL, &items, NULL, 0, NULL, NULL);
+    if (e == CL_SUCCESS)
+        e = clEnqueueReadBuffer(fixture_cx.queue, bo, CL_TRUE, 0, items * (size_t)vw * 2 * sizeof *out, out, 0, NULL, NULL);
+    if (e == CL_SUCCESS) e = clEnqueueReadBuffer(fixture_cx.queue, bf, CL_TRUE, 0, items * sizeof *flags, flags, 0, NULL, NULL);
+    CHECK(e == CL_SUCCESS, "harness_tally_block: %s (%d)", lsqt_cl_error_name(e), (int)e);
+    int bad = 0;
+    for (size_t i = 0; i < items && e == CL_SUCCESS; i++) {
+        const int s = (int)(i / (size_t)vw), lane = (int)(i % (size_t)vw);
+        int ok = flags[i] == want_flag[s];
+        bad += !ok;
+        CHECK(ok, "width %d, %g in lane %d: flags %u, want %u", vw, special[s], lane, flags[i], want_flag[s]);
+        for (int j = 0; j < vw; j++) {
+            lsqt_u128 want = ref_units(j == lane ? want_value[s] : 0.5f);
+            const uint64_t *g = out + 2 * (i * (size_t)vw + (size_t)j);
+            ok = g[0] == want.lo && g[1] == want.hi;
+            bad += !ok;
+            CHECK(ok, "width %d, %g in lane %d: lane %d is %016llx%016llx units", vw, special[s], lane, j,
+                  (unsigned long long)g[1], (unsigned long long)g[0]);
+        }
+    }
+    printf("block conversion, width %d: %d lanes x %d special values, %d wrong\n", vw, vw, NS, bad);
+    clReleaseMemObject(bv);
+    clReleaseMemObject(bo);
+    clReleaseMemObject(bf);
+    clReleaseKernel(k);
+    clReleaseProgram(prog);
+}
+
 /* Host side: a tally as a number, and the flags that fail a run. */
 static void test_host(void)
 {
@@ -171,6 +229,8 @@ int main(void)
     CHECK(ref_units(ldexpf(1.5f, -40)).lo == 2 && ref_units(17592186044416.0f).hi == (1ull << 20), "ref_units");
     test_variant("");
     test_variant("-DLSQT_NO_INT64_ATOMICS=1");
+    test_blocks(4);
+    test_blocks(16);
     lsqt_context_release(&fixture_cx);
     return check_finish("test_tally");
 }
