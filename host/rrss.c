@@ -95,12 +95,32 @@ static void candidate_density(const float *dirs, int m, double *p)
     }
 }
 
-/* Candidate i's k nearest others into out[0..k), in nbr_cmp's order (row: m scratch). */
-static void nearest(const float *dirs, int m, int i, int k, nbr *row, nbr *out)
+/* Candidate i's k nearest others into out[0..k), in nbr_cmp's order. xyz: the candidates'
+ * coordinates as doubles, x[m], y[m], z[m] (the dot products of the floats, term for term
+ * as dot3f adds them, in a loop the compiler vectorises); dots, row: m scratch. For the
+ * kept lists (k <= NBR_KEEP) by insertion into the sorted first k as the others are
+ * scanned: after the first few, most fall behind the k-th and cost one comparison (the
+ * quickselect over all m was a tenth of a Substr run). Later indices go behind equal
+ * dot products, as nbr_cmp orders them. */
+static void nearest(const double *xyz, int m, int i, int k, double *dots, nbr *row, nbr *out)
 {
+    const double *x = xyz, *y = xyz + m, *z = xyz + 2 * (size_t)m, xi = x[i], yi = y[i], zi = z[i];
+    for (int j = 0; j < m; j++) dots[j] = xi * x[j] + yi * y[j] + zi * z[j];
+    if (k <= NBR_KEEP) {
+        int have = 0;
+        for (int j = 0; j < m; j++) {
+            if (j == i) continue;
+            nbr v = {dots[j], j};
+            if (have == k && !nbr_before(&v, &out[k - 1])) continue;
+            int t = have < k ? have++ : k - 1;
+            for (; t > 0 && nbr_before(&v, &out[t - 1]); t--) out[t] = out[t - 1];
+            out[t] = v;
+        }
+        return;
+    }
     int c = 0;
     for (int j = 0; j < m; j++)
-        if (j != i) row[c].dot = dot3f(dirs + 4 * i, dirs + 4 * j), row[c++].j = j;
+        if (j != i) row[c].dot = dots[j], row[c++].j = j;
     nbr_first_k(row, c, k);
     memcpy(out, row, (size_t)k * sizeof *row);
 }
@@ -149,11 +169,14 @@ int lsqt_rrss_select(const float *dirs, const double *f, int m, int n, int spher
      * those is scanned in full). */
     const int kmax = m - 1 < NBR_MAX ? m - 1 : NBR_MAX, kn = kmax < NBR_KEEP ? kmax : NBR_KEEP;
     nbr *list = malloc((size_t)m * (size_t)(kn > 0 ? kn : 1) * sizeof *list), *row = malloc((size_t)m * sizeof *row);
-    if (!list || !row) {
-        free(q), free(pe), free(list), free(row);
+    double *xyz = malloc(3 * (size_t)m * sizeof *xyz), *dots = malloc((size_t)m * sizeof *dots);
+    if (!list || !row || !xyz || !dots) {
+        free(q), free(pe), free(list), free(row), free(xyz), free(dots);
         return -1;
     }
-    for (int i = 0; i < m; i++) nearest(dirs, m, i, kn, row, list + (size_t)i * kn);
+    for (int i = 0; i < m; i++)
+        for (int c = 0; c < 3; c++) xyz[(size_t)c * m + i] = dirs[4 * i + c];
+    for (int i = 0; i < m; i++) nearest(xyz, m, i, kn, dots, row, list + (size_t)i * kn);
     /* Disable the most redundant candidate until n remain (ties: the lowest index). A disc
      * only grows as candidates are disabled, so each candidate keeps how many of its
      * ordered neighbours lie in it (t_in, with their q sum added in the same order as a
@@ -166,7 +189,7 @@ int lsqt_rrss_select(const float *dirs, const double *f, int m, int n, int spher
     unsigned char *full = calloc((size_t)m, 1); /* 1: the disc reaches past kmax: scanned in full */
     if (!t_in || !next || !qs_in || !lst || !full) {
         free(t_in), free(next), free(qs_in), free(lst), free(full);
-        free(q), free(pe), free(list), free(row);
+        free(q), free(pe), free(list), free(row), free(xyz), free(dots);
         return -1;
     }
     for (int i = 0; i < m; i++) {
@@ -188,7 +211,7 @@ int lsqt_rrss_select(const float *dirs, const double *f, int m, int n, int spher
                         status = -1;
                         goto out;
                     }
-                    nearest(dirs, m, i, kmax, row, ext); /* its first kn are the kept ones */
+                    nearest(xyz, m, i, kmax, dots, row, ext); /* its first kn are the kept ones */
                     lst[i] = ext;
                 }
                 if (t_in[i] == kmax) {
@@ -217,7 +240,7 @@ out:
     for (int i = 0; i < m; i++)
         if (lst[i] != list + (size_t)i * kn) free(lst[i]);
     free(t_in), free(next), free(qs_in), free(lst), free(full);
-    free(list), free(row);
+    free(list), free(row), free(xyz), free(dots);
     free(q), free(pe);
     return status;
 }

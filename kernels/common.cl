@@ -76,24 +76,33 @@ inline real3 make_real3(real x, real y, real z) { return (real3)(x, y, z); }
 #error "LSQT_VW must be 2, 4, 8 or 16"
 #endif
 
-/* x^(-3/2) for 0 < x < 2^126, LSQT_VW at once. In float: 1/sqrt(x) from the exponent-
- * halving integer guess (Lomont's constant, error below 3.5 %) and three Newton steps,
- * which square the error (1.8e-3, 4.6e-6, 3e-11: below float's own rounding), cubed: no
- * division or square root. Those were most of a medium vertex's next-event loop (the
- * CPU's divider takes 10 to 12 cycles per 16 lanes), and PoCL's native_rsqrt is
- * 1 / sqrt. In double: exact. */
-inline realv inv_pow15v(realv x)
+/* 1/sqrt(x) for 0 < x < 2^126, LSQT_VW at once. In float: the exponent-halving integer
+ * guess (Lomont's constant, error below 3.5 %) and three Newton steps, which square the
+ * error (1.8e-3, 4.6e-6, 3e-11: below float's own rounding; test_fast_math), without
+ * the CPU's divider (10 to 12 cycles per 16 lanes): PoCL's rsqrt and native_rsqrt are
+ * 1 / sqrt. (Used where the divider bounds the loop, the medium's next-event loop; in
+ * the microfacet models' loops it and a Newton reciprocal measured no faster.) In
+ * double: the library's. */
+inline realv rsqrt_fastv(realv x)
 {
 #ifdef LSQT_DOUBLE
-    return R(1.0) / (x * sqrt(x));
+    return rsqrt(x);
 #else
     const realv hx = R(0.5) * x;
     realv r = as_floatv((uintv)(0x5f375a86u) - (as_uintv(x) >> 1));
     r = r * (R(1.5) - hx * r * r);
     r = r * (R(1.5) - hx * r * r);
     r = r * (R(1.5) - hx * r * r);
-    return r * r * r;
+    return r;
 #endif
+}
+
+/* x^(-3/2) for 0 < x < 2^84: the Henyey-Greenstein value without a division or square
+ * root, which were most of a medium vertex's next-event loop. */
+inline realv inv_pow15v(realv x)
+{
+    realv r = rsqrt_fastv(x);
+    return r * r * r;
 }
 
 /* LSQT_VW directions at once, as three coordinate vectors: next-event estimation evaluates
