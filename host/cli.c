@@ -115,6 +115,9 @@ void lsqt_cli_help(FILE *f)
           "Outputs: a regular file is replaced atomically (through a symlink, its target is);\n"
           "a device, FIFO or socket is written in place (-o /dev/null discards). An LSS path\n"
           "that is not a regular file is never read: use -R to write a fresh state into it.\n"
+          "Environment: LSQT_VECTOR_WIDTH=2|4|8|16 sets how many directions next-event\n"
+          "estimation evaluates at once (default 16 on a CPU, 4 on a GPU; the result does\n"
+          "not depend on it); PoCL reads its own (POCL_CACHE_DIR, POCL_CPU_MAX_CU_NUM, ...).\n"
           "Exit status: 0 success, 1 failure, 2 bad input or flags, 3 no usable OpenCL device.\n",
           f);
 }

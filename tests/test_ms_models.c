@@ -58,6 +58,7 @@
 #include <time.h>
 
 #include "cl_fixture.h"
+#include "quantile_bins.h"
 #include "stats.h"
 #include "lsqt/util.h"
 #include "quadrature.h"
@@ -250,17 +251,6 @@ typedef struct {
     double mu[2][NMU + 1], ph[2][NPHI + 1];
 } grid_t;
 
-static int find_bin(const double *edges, int n, double x)
-{
-    int lo = 0, hi = n; /* edges[lo] <= x < edges[hi] */
-    while (hi - lo > 1) {
-        int mid = (lo + hi) / 2;
-        if (x >= edges[mid]) lo = mid;
-        else hi = mid;
-    }
-    return lo;
-}
-
 static void coords(const grid_t *g, const float *d, int *h, double *mu, double *phi)
 {
     double z = g->side * d[2];
@@ -281,47 +271,6 @@ static int cell_of(const grid_t *g, const float *d)
     return (h * NMU + find_bin(g->mu[h], NMU, mu)) * NPHI + find_bin(g->ph[h], NPHI, phi);
 }
 
-typedef struct {
-    double x, w;
-} xw;
-
-static int xw_cmp(const void *a, const void *b)
-{
-    double d = ((const xw *)a)->x - ((const xw *)b)->x;
-    return d < 0 ? -1 : d > 0;
-}
-
-/* Breakpoints on [lo, hi] at the quantiles of (1 - MIX) uniform + MIX the weighted
- * pilot values (uniform alone when there are none). */
-static void breakpoints(xw *v, int n, double lo, double hi, int nb, double *edges)
-{
-    double tot = 0;
-    for (int i = 0; i < n; i++) tot += v[i].w;
-    qsort(v, (size_t)n, sizeof *v, xw_cmp);
-    double *cum = malloc(((size_t)n + 1) * sizeof *cum);
-    cum[0] = 0;
-    for (int i = 0; i < n; i++) cum[i + 1] = cum[i] + v[i].w;
-    const double mix = tot > 0 ? MIX : 0;
-    edges[0] = lo, edges[nb] = hi;
-    for (int k = 1; k < nb; k++) {
-        double target = (double)k / nb, a = lo, b = hi;
-        for (int it = 0; it < 60; it++) {
-            double x = 0.5 * (a + b);
-            int l = 0, r = n; /* values below x: v[0..l) */
-            while (l < r) {
-                int m = (l + r) / 2;
-                if (v[m].x < x) l = m + 1;
-                else r = m;
-            }
-            double g = (1 - mix) * (x - lo) / (hi - lo) + (tot > 0 ? mix * cum[l] / tot : 0);
-            if (g < target) a = x;
-            else b = x;
-        }
-        edges[k] = 0.5 * (a + b);
-    }
-    free(cum);
-}
-
 static void grid_from_pilot(grid_t *g, const float *s, int n)
 {
     xw *v = malloc((size_t)n * sizeof *v);
@@ -333,7 +282,7 @@ static void grid_from_pilot(grid_t *g, const float *s, int n)
             coords(g, s + 4 * i, &hh, &mu, &phi);
             if (hh == h && s[4 * i + 3] > 0) v[m].x = mu, v[m++].w = s[4 * i + 3];
         }
-        breakpoints(v, m, 0.0, 1.0, NMU, g->mu[h]);
+        breakpoints(v, m, 0.0, 1.0, NMU, MIX, g->mu[h]);
         m = 0;
         for (int i = 0; i < n; i++) {
             int hh;
@@ -341,7 +290,7 @@ static void grid_from_pilot(grid_t *g, const float *s, int n)
             coords(g, s + 4 * i, &hh, &mu, &phi);
             if (hh == h && s[4 * i + 3] > 0) v[m].x = phi, v[m++].w = s[4 * i + 3];
         }
-        breakpoints(v, m, 0.0, 2 * PI, NPHI, g->ph[h]);
+        breakpoints(v, m, 0.0, 2 * PI, NPHI, MIX, g->ph[h]);
     }
     free(v);
 }
@@ -1014,12 +963,12 @@ static void test_vndf(cl_program vp)
                                    (alphas[ia] * s[4 * i + 2]);
                         p[i].x = t / (1 + t), p[i].w = 1;
                     }
-                    breakpoints(p, (int)m, 0.0, 1.0, NMU, xs);
+                    breakpoints(p, (int)m, 0.0, 1.0, NMU, MIX, xs);
                     for (size_t i = 0; i < m; i++) {
                         double ph = atan2(s[4 * i + 1], s[4 * i]);
                         p[i].x = ph < 0 ? ph + 2 * PI : ph, p[i].w = 1;
                     }
-                    breakpoints(p, (int)m, 0.0, 2 * PI, NPHI, ps);
+                    breakpoints(p, (int)m, 0.0, 2 * PI, NPHI, MIX, ps);
                     free(p);
                 }
             }

@@ -82,6 +82,7 @@
 #include <time.h>
 
 #include "cl_fixture.h"
+#include "quantile_bins.h"
 #include "nee_albedo.h"
 #include "quadrature.h"
 #include "stats.h"
@@ -367,17 +368,6 @@ static void grid_dir(const grid_t *g, double mu, double phi, double d[3])
     for (int i = 0; i < 3; i++) d[i] = mu * g->axis[i] + s * (c * g->u[i] + sn * g->v[i]);
 }
 
-static int find_bin(const double *edges, int n, double x)
-{
-    int lo = 0, hi = n;
-    while (hi - lo > 1) {
-        int mid = (lo + hi) / 2;
-        if (x >= edges[mid]) lo = mid;
-        else hi = mid;
-    }
-    return lo;
-}
-
 /* The bin of a direction, -1 outside the grid's mu range. */
 static int cell_of(const grid_t *g, const float *d)
 {
@@ -402,47 +392,6 @@ static double skew_c(const grid_t *g, const double *pmu, int n, const float *d)
         else hi = mid;
     }
     return n > 0 ? (double)lo / n : 0.5;
-}
-
-typedef struct {
-    double x, w;
-} xw;
-
-static int xw_cmp(const void *a, const void *b)
-{
-    double d = ((const xw *)a)->x - ((const xw *)b)->x;
-    return d < 0 ? -1 : d > 0;
-}
-
-/* Breakpoints on [lo, hi] at the quantiles of (1 - MIX) uniform + MIX the weighted pilot
- * values (as test_ms_models). */
-static void breakpoints(xw *v, int n, double lo, double hi, int nb, double *edges)
-{
-    double tot = 0;
-    for (int i = 0; i < n; i++) tot += v[i].w;
-    qsort(v, (size_t)n, sizeof *v, xw_cmp);
-    double *cum = malloc(((size_t)n + 1) * sizeof *cum);
-    cum[0] = 0;
-    for (int i = 0; i < n; i++) cum[i + 1] = cum[i] + v[i].w;
-    const double mix = tot > 0 ? MIX : 0;
-    edges[0] = lo, edges[nb] = hi;
-    for (int k = 1; k < nb; k++) {
-        double target = (double)k / nb, a = lo, b = hi;
-        for (int it = 0; it < 60; it++) {
-            double x = 0.5 * (a + b);
-            int l = 0, r = n;
-            while (l < r) {
-                int m = (l + r) / 2;
-                if (v[m].x < x) l = m + 1;
-                else r = m;
-            }
-            double gg = (1 - mix) * (x - lo) / (hi - lo) + (tot > 0 ? mix * cum[l] / tot : 0);
-            if (gg < target) a = x;
-            else b = x;
-        }
-        edges[k] = 0.5 * (a + b);
-    }
-    free(cum);
 }
 
 static int dbl_cmp(const void *a, const void *b)
@@ -484,14 +433,14 @@ static void grid_make(grid_t *g, const gof_case *gc, const float *s, int n)
         grid_coords(g, s + 4 * i, &mu, &phi);
         if (s[4 * i + 3] > 0 && mu >= g->lo) v[k].x = mu, v[k++].w = s[4 * i + 3];
     }
-    breakpoints(v, k, g->lo, g->hi, NMU, g->mu);
+    breakpoints(v, k, g->lo, g->hi, NMU, MIX, g->mu);
     k = 0;
     for (int i = 0; i < n; i++) {
         double mu, phi;
         grid_coords(g, s + 4 * i, &mu, &phi);
         if (s[4 * i + 3] > 0 && mu >= g->lo) v[k].x = phi, v[k++].w = s[4 * i + 3];
     }
-    breakpoints(v, k, 0.0, 2 * PI, NPHI, g->ph);
+    breakpoints(v, k, 0.0, 2 * PI, NPHI, MIX, g->ph);
     for (int i = 0; i < gc->nfm; i++) force_edge(g->mu, NMU, gc->fmu[i]);
     for (int i = 0; i < gc->nfp; i++) force_edge(g->ph, NPHI, gc->fph[i]);
     free(v);
