@@ -34,6 +34,15 @@ __kernel void harness_fast_math(__global const float *xl, __global const float *
     out[4 * i + 3] = (float)inv_pow15v((realv)(xp[i])).s0;
 }
 
+/* The exit histogram's bin (walk.cl's hist_bin) of direction i, leaving upward where
+ * its z >= 0. */
+__kernel void harness_hist_bin(__global const float *d, __global int *out)
+{
+    const int i = (int)get_global_id(0);
+    real3 v = make_real3(d[3 * i], d[3 * i + 1], d[3 * i + 2]);
+    out[i] = hist_bin(v, v.z >= R(0.0));
+}
+
 /* Samples one direction per work-item from a layer's BSDF (layer 0 of `layers`) or a
  * medium's phase function (medium 0 of `media`) for fixed wo; out = (x, y, z, weight). */
 __kernel void harness_sample(__global const lsqt_dev_layer *layers,
