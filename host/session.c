@@ -121,7 +121,7 @@ static int upload(lsqt_session *s, const lsqt_assembly *a, const lsqt_state *st,
     s->layers = make_buffer(cx, ro, (size_t)n * layer_size, (void *)layers_up, &e);
     s->wo = make_buffer(cx, ro, n_wo * dir_size, wo_up, &e);
     s->wi = make_buffer(cx, ro, wi_bytes, wi_up, &e);
-    const size_t tab_size = (size_t)st->n_slices * ((size_t)n * 3 + 1) * pad * dir_size; /* LSQT_SLICE_TAB */
+    const size_t tab_size = (size_t)st->n_slices * ((size_t)n * LSQT_LAYER_TAB_ROWS + LSQT_MEDIA_TAB_ROWS) * pad * dir_size; /* LSQT_SLICE_TAB */
     s->tab = make_buffer(cx, rw, tab_size, NULL, &e);
     s->nee = make_buffer(cx, rw, s->n_nee * sizeof *st->nee, st->nee, &e);
     s->scalars = make_buffer(cx, rw, s->n_scalars * sizeof *st->scalars, st->scalars, &e);

@@ -105,6 +105,31 @@ inline realv inv_pow15v(realv x)
     return r * r * r;
 }
 
+/* 2^x for x <= 0, LSQT_VW at once, exactly 0 below 2^-125 (any contribution that small
+ * is 0 in the fixed-point tallies, LSQT_NEE_TAU_MAX). In float: x = n + f with n an
+ * integer (by the round-to-nearest of adding 1.5 2^23) and |f| <= 1/2, 2^f by a degree-5
+ * polynomial fitted for relative error (7.5e-8, 2.3e-7 with float's roundings;
+ * test_fast_math), and n added to the exponent bits. PoCL's exp is longer (range checks
+ * for both signs). In double: the library's. */
+inline realv exp2_negv(realv x)
+{
+#ifdef LSQT_DOUBLE
+    return exp2(x);
+#else
+    const maskv tiny = x < R(-125.0);
+    const realv xc = fmax(x, R(-125.0)), big = (realv)(R(12582912.0)); /* 1.5 2^23 */
+    const realv t = xc + big, f = xc - (t - big);
+    realv p = R(0.00132764715);
+    p = p * f + R(0.00967554133);
+    p = p * f + R(0.0555071327);
+    p = p * f + R(0.240221197);
+    p = p * f + R(0.693146967);
+    p = p * f + R(1.00000007);
+    const uintv scaled = as_uintv(p) + ((as_uintv(t) - as_uintv(big)) << 23);
+    return select(as_floatv(scaled), (realv)(R(0.0)), tiny);
+#endif
+}
+
 /* LSQT_VW directions at once, as three coordinate vectors: next-event estimation evaluates
  * a model at every incident direction, so models evaluate LSQT_VW at a time (SIMD on CPUs). */
 typedef struct {

@@ -21,17 +21,18 @@ __kernel void harness_rng_stream(uint seed_lo, uint seed_hi, uint slice, ulong p
 }
 
 /* The kernels' own elementary functions at given arguments, one per work-item:
- * out[4i] = neg_log_unit(xl[i]), out[4i + 1, 2] = azimuth_cs(xa[i]),
- * out[4i + 3] = inv_pow15v(xp[i]). */
+ * out[5i] = neg_log_unit(xl[i]), out[5i + 1, 2] = azimuth_cs(xa[i]),
+ * out[5i + 3] = inv_pow15v(xp[i]), out[5i + 4] = exp2_negv(xe[i]). */
 __kernel void harness_fast_math(__global const float *xl, __global const float *xa, __global const float *xp,
-                                __global float *out)
+                                __global const float *xe, __global float *out)
 {
     const int i = (int)get_global_id(0);
     real2 cs = azimuth_cs(xa[i]);
-    out[4 * i] = (float)neg_log_unit(xl[i]);
-    out[4 * i + 1] = (float)cs.x;
-    out[4 * i + 2] = (float)cs.y;
-    out[4 * i + 3] = (float)inv_pow15v((realv)(xp[i])).s0;
+    out[5 * i] = (float)neg_log_unit(xl[i]);
+    out[5 * i + 1] = (float)cs.x;
+    out[5 * i + 2] = (float)cs.y;
+    out[5 * i + 3] = (float)inv_pow15v((realv)(xp[i])).s0;
+    out[5 * i + 4] = (float)exp2_negv((realv)(xe[i])).s0;
 }
 
 /* The exit histogram's bin (walk.cl's hist_bin) of direction i, leaving upward where
@@ -122,7 +123,7 @@ __kernel void harness_ms_eval(__global const lsqt_dev_layer *layers, float wox, 
     real3 wo = normalize(make_real3(wox, woy, woz));
     real sum[LSQT_NWI_PAD];
     for (int k = 0; k < LSQT_NWI_PAD; k++) sum[k] = R(0.0);
-    ms_sink sink = {sum, wi, tab + LSQT_NWI_PAD};
+    ms_sink sink = {sum, wi, tab + LSQT_LAYER_TAB(0)};
     for (int r = 0; r < reps; r++) {
         real3 o;
         ms_vertex_walks(layers, -wo, &rng, R(1.0) / (real)reps, 1, &sink, &o);

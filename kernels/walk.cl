@@ -41,12 +41,17 @@ inline void acc_add(const walk_ctx *c, int k, real v)
     }
 }
 
-/* A slice's direction tables: 1/|z|[pad] of its directions (for the media's
- * transmittance), then each layer's: T[pad] (transmittance of the media light crosses
- * leaving that way, 0 where it may not leave), Lambda[pad] and lgamma(1 + Lambda)[pad]
- * of the layer's microfacets. */
-#define LSQT_TAB_STRIDE (3 * LSQT_NWI_PAD)
-#define LSQT_SLICE_TAB(n_layers) (LSQT_NWI_PAD + (n_layers) * LSQT_TAB_STRIDE)
+/* A slice's direction tables: for the media's transmittance, up[pad] = log2(e) / z where
+ * z > 0, 0 where z < 0, and down[pad] = log2(e) / -z where z < 0, 0 where z > 0 (so a
+ * vertex's transmittance towards direction k is 2^-(tau_up up[k] + tau_down down[k]), with
+ * no select or division in the loop), both 1e30 where z = 0 (padding: transmittance 0,
+ * as light cannot leave horizontally); then each layer's: T[pad] (transmittance of the media
+ * light crosses leaving that way, 0 where it may not leave), Lambda[pad] and
+ * lgamma(1 + Lambda)[pad] of the layer's microfacets. */
+#define LSQT_TAB_STRIDE (LSQT_LAYER_TAB_ROWS * LSQT_NWI_PAD)
+#define LSQT_LAYER_TAB(li) (LSQT_MEDIA_TAB_ROWS * LSQT_NWI_PAD + (li) * LSQT_TAB_STRIDE)
+#define LSQT_SLICE_TAB(n_layers) LSQT_LAYER_TAB(n_layers)
+#define LSQT_LOG2E R(1.44269504088896340736)
 
 /* A contribution below 2^-41 rounds to 0 in fixed point. Weights are at most 1 and
  * values at most 2^44 (a larger one fails the run), so light that must cross more than
@@ -80,7 +85,8 @@ __kernel void lsqt_prepare(__constant lsqt_dev_scene *scene, __global const lsqt
     const int k = (int)get_global_id(0), slice = (int)get_global_id(1), n = scene->n_layers;
     const real z = wi_dirs[(3 * slice + 2) * LSQT_NWI_PAD + k], inv_az = R(1.0) / fabs(z);
     __global real *st = tab + (size_t)slice * LSQT_SLICE_TAB(n);
-    st[k] = inv_az;
+    st[k] = z > R(0.0) ? LSQT_LOG2E * inv_az : z < R(0.0) ? R(0.0) : R(1e30);
+    st[LSQT_NWI_PAD + k] = z < R(0.0) ? LSQT_LOG2E * inv_az : z > R(0.0) ? R(0.0) : R(1e30);
     for (int li = 0; li < n; li++) {
         __global const lsqt_dev_layer *l = &layers[li];
         __global const lsqt_dev_medium *above = &media[li], *below = &media[li + 1];
@@ -90,7 +96,7 @@ __kernel void lsqt_prepare(__constant lsqt_dev_scene *scene, __global const lsqt
         int micro = l->kind == LSQT_BSDF_MS_LAMBERTIAN || l->kind == LSQT_BSDF_MS_DIELECTRIC ||
                     l->kind == LSQT_BSDF_MS_CONDUCTIVE;
         real lam = micro ? ggx_lambda(l->p[0], z) : R(0.0);
-        __global real *t = st + LSQT_NWI_PAD + li * LSQT_TAB_STRIDE;
+        __global real *t = st + LSQT_LAYER_TAB(li);
         t[k] = nee_transmittancev((realv)(z), (realv)(inv_az), tau_up, tau_down, up, down).s0;
         t[LSQT_NWI_PAD + k] = lam;
         t[2 * LSQT_NWI_PAD + k] = lgamma(R(1.0) + lam);
@@ -144,7 +150,7 @@ inline real layer_vertex(const walk_ctx *c, int li, real3 d, real w, rng_t *rng,
     real tau_up = above->tau_above + above->mut * above->thickness;
     real tau_down = below->tau_below + below->mut * below->thickness;
     const int visible = c->nee_on && nee_visible(tau_up, tau_down, up, down);
-    __global const real *tab = c->tab + LSQT_NWI_PAD + li * LSQT_TAB_STRIDE;
+    __global const real *tab = c->tab + LSQT_LAYER_TAB(li);
     c->work[WORK_LAYER]++;
 #if defined(LSQT_HAS_BSDF_MS_LAMBERTIAN) || defined(LSQT_HAS_BSDF_MS_DIELECTRIC) || defined(LSQT_HAS_BSDF_MS_CONDUCTIVE)
     if (layer_is_micro(l)) {
@@ -172,11 +178,15 @@ inline void nee_medium(const walk_ctx *c, int mi, real h, real3 d, real w, const
     /* The pointers in locals: on a CPU, PoCL's private and global memory are one address
      * space, so the compiler cannot tell the sums' stores from the context's fields and
      * would load them again at every block. */
-    __global const real *dirs = c->wi, *inv_az = c->tab;
+    __global const real *dirs = c->wi, *a_up = c->tab, *a_down = c->tab + LSQT_NWI_PAD;
     real *sum = c->sum;
+    /* A side light may not leave by, or too deep to count, is as good as infinitely deep
+     * (2^-huge is 0; 1e30 times a 0 of the tables is still 0, never NaN). */
+    const real tu = up && tau_up < LSQT_NEE_TAU_MAX ? tau_up : R(1e30);
+    const real td = down && tau_down < LSQT_NEE_TAU_MAX ? tau_down : R(1e30);
     for (int k = 0; k < LSQT_NWI_PAD; k += LSQT_VW) {
         dirv wi = load_dirv(dirs, k);
-        realv t = nee_transmittancev(wi.z, vloadv(0, inv_az + k), tau_up, tau_down, up, down);
+        realv t = exp2_negv(-(tu * vloadv(0, a_up + k) + td * vloadv(0, a_down + k)));
         VBLOCK(realv, sum, k) += select((realv)(R(0.0)), w * phase_evalv(m, pv, -d, wi) * t, t > R(0.0));
     }
 }

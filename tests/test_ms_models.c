@@ -205,7 +205,7 @@ static ms_dirs ms_dirs_make(cl_mem bl, const double (*d)[3], int n)
     memset(med, 0, sizeof med);
     med[0].eta = med[1].eta = 1;
     cl_mem bs = mem(sizeof sc, &sc), bm = mem(sizeof med, med);
-    ms_dirs r = {mem(sizeof soa, soa), mem(4 * PAD * sizeof(float), NULL)}; /* walk.cl's LSQT_SLICE_TAB(1) */
+    ms_dirs r = {mem(sizeof soa, soa), mem((LSQT_MEDIA_TAB_ROWS + LSQT_LAYER_TAB_ROWS) * PAD * sizeof(float), NULL)}; /* walk.cl's LSQT_SLICE_TAB(1) */
     cl_kernel k = clCreateKernel(prog, "lsqt_prepare", NULL);
     const size_t sz[] = {sizeof bs, sizeof bm, sizeof bl, sizeof r.wi, sizeof r.tab};
     const void *val[] = {&bs, &bm, &bl, &r.wi, &r.tab};

@@ -25,6 +25,12 @@ typedef uint32_t lsqt_u32;
  * each padded to a multiple of 4 with zero vectors, which contribute nothing. */
 #define LSQT_PAD(n, w) (((n) + (w) - 1) / (w) * (w))
 
+/* Rows (each padded to the directions' width) of a slice's direction tables
+ * (walk.cl's lsqt_prepare): LSQT_MEDIA_TAB_ROWS for the media's transmittance, then
+ * LSQT_LAYER_TAB_ROWS per layer. */
+#define LSQT_MEDIA_TAB_ROWS 2
+#define LSQT_LAYER_TAB_ROWS 3
+
 /* Tallies are 128-bit unsigned fixed point, value * 2^LSQT_FIX_BITS rounded, stored as
  * two 64-bit words, low first: a unit of 2^-40 resolves 1e-12 of a unit weight, and
  * 2^88 holds 1e10 contributions of 1e12 (kernels/tally.cl). */
