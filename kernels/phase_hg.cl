@@ -10,8 +10,9 @@ inline realv hg_evalv(real g, real3 wo, dirv wi)
 {
     const real ag = fabs(g), s = g >= R(0.0) ? R(1.0) : R(-1.0);
     realv qx = wo.x + s * wi.x, qy = wo.y + s * wi.y, qz = wo.z + s * wi.z;
-    realv q = R(0.5) * (qx * qx + qy * qy + qz * qz); /* 1 - cos t towards the peak */
-    realv denom = (R(1.0) - ag) * (R(1.0) - ag) + R(2.0) * ag * q;
+    /* 2 |g| q with q = 1 - cos t towards the peak, |wo +- wi|^2 / 2: the halving and
+     * doubling are exact, so they are left out (one multiply fewer per 16 directions) */
+    realv denom = (R(1.0) - ag) * (R(1.0) - ag) + ag * (qx * qx + qy * qy + qz * qz);
     return LSQT_INV_4PI * ((R(1.0) - ag) * (R(1.0) + ag)) * inv_pow15v(denom);
 }
 
