@@ -113,13 +113,25 @@ inline void nee_addv(const walk_ctx *c, int k, realv f, realv t)
 /* Converts the path's sums to fixed point and adds them to the work-item's (then clears
  * them). A work-item keeps only the low 64-bit words; a high word (a sum above 2^63
  * units, 8e6, or a carry out of the low word) is rare and goes straight to the
- * work-group's 128-bit sum, where it counts the same. */
+ * work-group's 128-bit sum, where it counts the same.
+ * The common case by one test per block: every lane in [0, 2^15) is below 2^55 units,
+ * and a work-item adds at most LSQT_CHUNK (2^8) paths' sums to its low words before
+ * they go to the work-group's, so no carry can leave them; the general conversion of
+ * such lanes is the same (to_fixedv). A block of zeros takes it too: testing for one
+ * cost as much as converting it. */
+#define LSQT_FLUSH_FAST_MAX R(32768.0)
+#if LSQT_CHUNK > 256
+#error "nee_flush's carry-free case assumes at most 256 paths per work-item and chunk"
+#endif
 inline void nee_flush(const walk_ctx *c)
 {
     for (int k = 0; k < LSQT_NWI_PAD; k += LSQT_VW) {
         realv v = VBLOCK(realv, c->sum, k);
-        if (!anyv(v != R(0.0))) continue;
         VBLOCK(realv, c->sum, k) = (realv)(R(0.0));
+        if (allv((v >= R(0.0)) & (v < LSQT_FLUSH_FAST_MAX))) {
+            VBLOCK(ulongv, c->nee, k) += as_ulongv(convert_longv(v * (real)LSQT_FIX_SCALE + R(0.5)));
+            continue;
+        }
         fixv q = to_fixedv(v, c->flags);
         ulongv old = VBLOCK(ulongv, c->nee, k), sum = old + q.lo;
         VBLOCK(ulongv, c->nee, k) = sum;

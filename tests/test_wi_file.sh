@@ -214,4 +214,20 @@ cp L.lsqt.lss keep.lss
 expect 2 "w.txt:1: error: the zero vector" -- "$BIN" -p 100 --wi-file w.txt L.lsqt
 cmp -s keep.lss L.lsqt.lss && ok || bad "a refused continuation changed the LSS"
 
+# A path's point estimate above 2^63 fixed-point units (8.4e6), where a work-item's sums
+# need their high words: a smooth conductor's specular peak at normal incidence, single
+# scattering, weight 1, the same value on every path: f = F D / 4 = F / (4 pi alpha^2)
+# with F = ((n - 1)^2 + k^2) / ((n + 1)^2 + k^2), n = 1.5, k = 3, alpha = 5e-5
+# (1.9307321e7; float rounding 1e-6). 2000 paths sum to 4e10, 2^35 times 2^63 units.
+printf 'Medium\nLayer z=0 MicrosurfaceConductiveBrdf alpha=5e-5 use_multiple_scattering=false\nMedium eta=1.5 mua=3\n' > C.lsqt
+printf '0 0 1\n' > up.txt
+"$BIN" -q -R -p 2000 -wo 4 --wi-file up.txt -o C.raw --lss C.lss C.lsqt && python3 - C.raw <<'PY' && ok || bad "the specular peak above 2^63 units per path"
+import math, sys
+n, k, a = 1.5, 3.0, 5e-5
+f = ((n - 1) ** 2 + k * k) / ((n + 1) ** 2 + k * k) / (4 * math.pi * a * a)
+row = [float(x) for x in open(sys.argv[1]).read().split("\n")[3].split()]
+assert row[:4] == [0, 0, 0, 1], row
+assert abs(row[4] / f - 1) < 1e-6, (row[4], f)
+PY
+
 finish test_wi_file
