@@ -45,6 +45,7 @@ static int build_options(lsqt_context *cx, const lsqt_assembly *a, const lsqt_st
     if (group > 1) n += (size_t)snprintf(opt + n, cap - n, " -DLSQT_GROUP_NWI=%d", st->n_wi);
     if (lsqt_device_check(&cx->dev, st->use_double, err, errcap)) return 1;
     if (st->use_double) n += (size_t)snprintf(opt + n, cap - n, " -DLSQT_DOUBLE=1");
+    if (cx->dev.is_cpu) n += (size_t)snprintf(opt + n, cap - n, " -DLSQT_RNG_WIDE=1"); /* philox.cl */
     if (!cx->dev.has_int64_atomics) snprintf(opt + n, cap - n, " -DLSQT_NO_INT64_ATOMICS=1");
     return 0;
 }

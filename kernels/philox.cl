@@ -27,6 +27,77 @@ inline uint4 philox4x32_10(uint4 c, uint2 k) { return philox4x32_rounds(c, k, 10
 /* The stream of one path: key = seed, counter = (draw block, path index low, path index
  * high 16 bits | purpose << 16, slice). A path is therefore a pure function of
  * (seed, slice, path index, purpose). */
+#define RNG_PURPOSE_WALK 0u
+#define RNG_PURPOSE_CANDIDATES 1u /* RRSS: the analog walks whose exits are candidate directions */
+/* LSQT_RNG_BELOW (device_layout.h) is OR'ed into either for the slices from below. */
+
+/* The counter of a path's first block (SPEC section 6). */
+inline uint4 rng_counter(uint slice, ulong path, uint purpose)
+{
+    return (uint4)(0u, (uint)path, ((uint)(path >> 32) & 0xFFFFu) | (purpose << 16), slice);
+}
+
+#ifdef LSQT_RNG_WIDE
+/* A CPU's form (the host passes -DLSQT_RNG_WIDE=1): four blocks at once, counters
+ * ctr.x ... ctr.x + 3, as four 4-lane vectors (one lane per block), so each round's
+ * multiplies are two vector multiplies for four blocks; out[4 b + j] is word j of block b,
+ * the order of the one-block form's draws. On a GPU a work-item's vectors are sequential
+ * work and its 32-word buffers would be registers, so it keeps the one-block form. */
+inline void philox4x32_10_x4(uint4 ctr, uint2 key, uint *out)
+{
+    uint4 c0 = (uint4)(ctr.x) + (uint4)(0u, 1u, 2u, 3u), c1 = (uint4)(ctr.y), c2 = (uint4)(ctr.z), c3 = (uint4)(ctr.w);
+    uint k0 = key.x, k1 = key.y;
+    for (int r = 0; r < 10; r++) {
+        ulong4 p0 = (ulong4)(PHILOX_M0) * convert_ulong4(c0), p1 = (ulong4)(PHILOX_M1) * convert_ulong4(c2);
+        uint4 n0 = convert_uint4(p1 >> 32) ^ c1 ^ (uint4)(k0), n2 = convert_uint4(p0 >> 32) ^ c3 ^ (uint4)(k1);
+        c1 = convert_uint4(p1), c3 = convert_uint4(p0), c0 = n0, c2 = n2;
+        k0 += PHILOX_W0, k1 += PHILOX_W1; /* the key of the next round */
+    }
+    vstore4((uint4)(c0.x, c1.x, c2.x, c3.x), 0, out);
+    vstore4((uint4)(c0.y, c1.y, c2.y, c3.y), 1, out);
+    vstore4((uint4)(c0.z, c1.z, c2.z, c3.z), 2, out);
+    vstore4((uint4)(c0.w, c1.w, c2.w, c3.w), 3, out);
+}
+
+typedef struct {
+    uint4 ctr;     /* the counter of the first block not yet made */
+    uint2 key;
+    uint buf[16];  /* the four blocks being drawn from */
+    uint next[16]; /* the four after them, made ahead once the path has used its first four */
+    int used, ahead;
+} rng_t;
+
+inline rng_t rng_init(uint seed_lo, uint seed_hi, uint slice, ulong path, uint purpose)
+{
+    rng_t r;
+    r.key = (uint2)(seed_lo, seed_hi);
+    r.ctr = rng_counter(slice, path, purpose);
+    philox4x32_10_x4(r.ctr, r.key, r.buf);
+    r.ctr.x += 4u;
+    r.used = 0, r.ahead = 0;
+    return r;
+}
+
+/* Most paths of a thin slab use fewer than 16 draws, so the first four blocks come
+ * alone; a longer path then makes each next four when it starts on the current ones, so
+ * their rounds overlap its scattering events instead of heading one's chain. */
+__attribute__((noinline)) void rng_refill(rng_t *r)
+{
+    if (r->ahead)
+        for (int i = 0; i < 16; i++) r->buf[i] = r->next[i];
+    else
+        philox4x32_10_x4(r->ctr, r->key, r->buf), r->ctr.x += 4u;
+    philox4x32_10_x4(r->ctr, r->key, r->next);
+    r->ctr.x += 4u;
+    r->used = 0, r->ahead = 1;
+}
+
+__attribute__((always_inline)) inline uint rng_next_u32(rng_t *r)
+{
+    if (r->used == 16) rng_refill(r);
+    return r->buf[r->used++];
+}
+#else
 typedef struct {
     uint4 ctr;  /* the counter of the block after `next` */
     uint2 key;
@@ -35,15 +106,11 @@ typedef struct {
     int used;
 } rng_t;
 
-#define RNG_PURPOSE_WALK 0u
-#define RNG_PURPOSE_CANDIDATES 1u /* RRSS: the analog walks whose exits are candidate directions */
-/* LSQT_RNG_BELOW (device_layout.h) is OR'ed into either for the slices from below. */
-
 inline rng_t rng_init(uint seed_lo, uint seed_hi, uint slice, ulong path, uint purpose)
 {
     rng_t r;
     r.key = (uint2)(seed_lo, seed_hi);
-    r.ctr = (uint4)(0u, (uint)path, ((uint)(path >> 32) & 0xFFFFu) | (purpose << 16), slice);
+    r.ctr = rng_counter(slice, path, purpose);
     r.buf = (uint4)(0u);
     r.next = philox4x32_10(r.ctr, r.key);
     r.ctr.x++;
@@ -68,6 +135,7 @@ inline uint rng_next_u32(rng_t *r)
     r->used++;
     return v;
 }
+#endif
 
 /* Uniform in [0, 1). */
 inline real rng_uniform(rng_t *r)

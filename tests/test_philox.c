@@ -40,10 +40,13 @@ static void philox_ref(const uint32_t in[4], const uint32_t key[2], int rounds, 
 
 /* SPEC section 6: draw j of a path is word j mod 4 of Philox4x32-10 with key = seed and
  * counter = (j / 4, path index low 32 bits, high 16 bits | purpose << 16, slice), so a
- * path is a pure function of (seed, slice, path index, purpose). */
-static void check_stream(cl_program prog)
+ * path is a pure function of (seed, slice, path index, purpose). Both forms of the
+ * stream: one block at a time (GPUs) and the CPUs' four at a time (LSQT_RNG_WIDE), whose
+ * first four blocks come alone, the next four too, and later ones made ahead: 71 draws
+ * are 18 blocks, the last one in part. */
+static void check_stream(cl_program prog, const char *form)
 {
-    enum { N = 23 }; /* six blocks, the last one in part */
+    enum { N = 71 };
     const uint32_t seed[2] = {0x12345678u, 0x9abcdef0u}, slice = 7u, purpose = 1u;
     const uint64_t path = 0x0000beef00c0ffeeull;
     cl_int e = CL_SUCCESS;
@@ -68,8 +71,8 @@ static void check_stream(cl_program prog)
                                  slice};
         uint32_t block[4];
         philox_ref(ctr, seed, 10, block);
-        CHECK(got[j] == block[j % 4], "draw %d: %08x, expected %08x (block %d word %d)", j, got[j], block[j % 4], j / 4,
-              j % 4);
+        CHECK(got[j] == block[j % 4], "%s: draw %d: %08x, expected %08x (block %d word %d)", form, j, got[j],
+              block[j % 4], j / 4, j % 4);
     }
     clReleaseMemObject(bo);
     clReleaseKernel(k);
@@ -124,7 +127,11 @@ int main(void)
         philox_ref(ctr + 4 * i, key + 2 * i, rounds[i], ref);
         CHECK(memcmp(ref, expect + 4 * i, sizeof ref) == 0, "the test's own Philox misses vector %d", i);
     }
-    check_stream(prog);
+    check_stream(prog, "one block at a time");
+    cl_program wide = lsqt_program_build(&fixture_cx, "-cl-std=CL1.2 -DLSQT_RNG_WIDE=1", &log, err, sizeof err);
+    CHECK(wide != NULL, "%s\n%s", err, log ? log : "");
+    free(log);
+    if (wide) check_stream(wide, "four blocks at a time"), clReleaseProgram(wide);
     clReleaseMemObject(bc);
     clReleaseMemObject(bk);
     clReleaseMemObject(br);
