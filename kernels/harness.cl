@@ -110,10 +110,10 @@ __kernel void harness_tally(__global const float *v, __global ulong *out, volati
 
 /* Stochastic evaluation of a microsurface (layer 0) for fixed wo towards the LSQT_NWI
  * directions wi (x[pad], y[pad], z[pad]), with the slice's direction tables tab that
- * lsqt_prepare makes for a one-layer scene (its layer's after the media's row): each work-item averages `reps` vertex evaluations (each
- * iter_count walks plus the analytic single scattering, exactly as the path loop does)
- * and writes its means, out[item * LSQT_NWI_PAD + k]; the spread across work-items gives
- * the noise. */
+ * lsqt_prepare makes for a one-layer scene (its layer's after the media's rows): each
+ * work-item averages `reps` vertex evaluations (each iter_count walks plus the analytic
+ * single scattering, exactly as the path loop does) and writes its means,
+ * out[item * LSQT_NWI_PAD + k]; the spread across work-items gives the noise. */
 __kernel void harness_ms_eval(__global const lsqt_dev_layer *layers, float wox, float woy, float woz,
                               __global const real *wi, __global const real *tab, uint seed, int reps,
                               __global float *out)

@@ -103,11 +103,11 @@ __kernel void lsqt_prepare(__constant lsqt_dev_scene *scene, __global const lsqt
     }
 }
 
-/* Adds w * f * t to the path's sums of directions k..k+LSQT_VW-1 (t = 0: nothing, even where f is
+/* Adds f * t to the path's sums of directions k..k+LSQT_VW-1 (t = 0: nothing, even where f is
  * not finite, as for the zero vectors that pad the directions). */
-inline void nee_addv(const walk_ctx *c, int k, realv f, realv t)
+inline void nee_addv(real *sum, int k, realv f, realv t)
 {
-    VBLOCK(realv, c->sum, k) += select((realv)(R(0.0)), f * t, t > R(0.0));
+    VBLOCK(realv, sum, k) += select((realv)(R(0.0)), f * t, t > R(0.0));
 }
 
 /* Converts the path's sums to fixed point and adds them to the work-item's (then clears
@@ -173,7 +173,7 @@ inline real layer_vertex(const walk_ctx *c, int li, real3 d, real w, rng_t *rng,
     if (visible) c->work[WORK_NEE]++;
     if (visible)
         for (int k = 0; k < LSQT_NWI_PAD; k += LSQT_VW)
-            nee_addv(c, k, w * bsdf_evalv(l, -d, load_dirv(c->wi, k)), vloadv(0, tab + k));
+            nee_addv(c->sum, k, w * bsdf_evalv(l, -d, load_dirv(c->wi, k)), vloadv(0, tab + k));
     return bsdf_sample(l, -d, rng, wi);
 }
 
@@ -199,7 +199,7 @@ inline void nee_medium(const walk_ctx *c, int mi, real h, real3 d, real w, const
     for (int k = 0; k < LSQT_NWI_PAD; k += LSQT_VW) {
         dirv wi = load_dirv(dirs, k);
         realv t = exp2_negv(-(tu * vloadv(0, a_up + k) + td * vloadv(0, a_down + k)));
-        VBLOCK(realv, sum, k) += select((realv)(R(0.0)), w * phase_evalv(m, pv, -d, wi) * t, t > R(0.0));
+        nee_addv(sum, k, w * phase_evalv(m, pv, -d, wi), t);
     }
 }
 
