@@ -373,7 +373,7 @@ bars, its paths.
   costs more, since it evaluates rx = 4 × −wi candidates for its share of the paths (−rp 0.1:
   {rr['Substr -wi 80 -rp 0.1']['cpu_s']:.2f} CPU-s, 0.3: {rr['Substr -wi 80 -rp 0.3']['cpu_s'] if 'Substr -wi 80 -rp 0.3' in rr else float('nan'):.2f}, 0.8: {rr['Substr -wi 80 -rp 0.8']['cpu_s']:.2f}), and leaves the stored
   values' error bars as they were (the pilot's tallies are kept): what it buys is where
-  the directions go (README, "RRSS against the even spread"). −wi 300 costs
+  the directions go (docs/guide.md, "RRSS or the even spread"). −wi 300 costs
   {ratio(rr.get('Substr -wi 300 -rp 0.3'), rr.get('Substr -wi 80 -rp 0.3'), 'cpu_s'):.2f}× −wi 80 at the same per-direction error.
 
 ## Tables
