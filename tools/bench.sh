@@ -11,8 +11,10 @@
 #        tools/bench.sh lssview [lsqt-cl options...]: wall and CPU seconds of a 512x512 lssview
 #        render (PNG, the default lights) of LSS files of the tutorial (-p 1e4, default -wo/-wi
 #        unless given), the best of 3.
-#        tools/bench.sh targets [--csv PATH] [-- lsqt-cl options...]: the four speed targets
-#        of issue 13 (tools/bench_targets.py): CPU-seconds, events per CPU-second.
+#        tools/bench.sh targets [--csv PATH] [--doc] [-- lsqt-cl options...]: the four speed
+#        targets of issue 13 (tools/bench_targets.py): CPU-seconds, events per CPU-second; with
+#        --doc it rewrites docs/performance.md (tools/bench_doc.py) when every workload ran
+#        (on another device: tools/bench.sh targets --doc -- -d gpu).
 #        tools/bench.sh study [--quick] [--doc] [--seeds N] [--out DIR] [-- lsqt-cl options...]:
 #        the speed/accuracy study (tools/bench_study.py): error against a known answer
 #        and CPU time over -p, float/double, iter_count, multiple scattering, -wi, -rp;
@@ -21,7 +23,17 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 if [ "${1:-}" = targets ]; then
   shift
-  [ -x ./build/lsqt-cl ] || bash tools/build.sh
+  if [ ! -x ./build/lsqt-cl ]; then
+    # the page describes the build measured: --doc measures build/lsqt-cl as it is or not at all
+    for a in "$@"; do
+      [ "$a" = -- ] && break
+      if [ "$a" = --doc ]; then
+        echo "bench.sh targets --doc: build/lsqt-cl is missing: build it first (bash tools/build.sh)" >&2
+        exit 1
+      fi
+    done
+    bash tools/build.sh
+  fi
   exec python3 tools/bench_targets.py ./build/lsqt-cl "$@"
 fi
 if [ "${1:-}" = study ]; then

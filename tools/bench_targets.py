@@ -4,7 +4,10 @@ that fills the kernel cache), with wall and CPU seconds (user + sys of the whole
 the machine is shared), paths/s, scattering events per second and per CPU-second, and
 next-event evaluations per second, against the target.
 
-    python3 tools/bench_targets.py [LSQT_CL] [--csv PATH] [-- more lsqt-cl flags, e.g. -d gpu]
+    python3 tools/bench_targets.py [LSQT_CL] [--csv PATH] [--doc] [-- more lsqt-cl flags, e.g. -d gpu]
+
+--doc: after measuring, rewrite docs/performance.md (tools/bench_doc.py: the machine, the
+device, the commit and one table), only when every workload ran.
 
 Workloads (the original layered-sqt's CPU-seconds on this kind of machine in brackets):
   Rough   MicrosurfaceLambertianBrdf fR=0.6 alpha=2.4, defaults (-p 1e4, 12 x 80, RRSS)  [405]
@@ -27,16 +30,28 @@ import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
-WORKLOADS = [  # name, LSQT text, flags, target kind, target value
-    ("Rough", "Medium\nLayer z=0 MicrosurfaceLambertianBrdf fR=0.6 alpha=2.4\nMedium\n", [], "cpu_s", 4.0),
-    ("Substr", open(os.path.join(ROOT, "examples", "tutorial", "Substr.lsqt")).read(), ["-wi", "300", "-rp", "0.3"],
-     "cpu_s", 1.6),
-    ("Slab", "Medium\nLayer z=1 NullBsdf\nMedium mus=0.9 mua=0.1 HenyeyGreensteinPhase g=0.8\nLayer z=0 NullBsdf\n"
-     "Medium\n", ["-p", "100000"], "cpu_s", 0.3),
-    ("MCX", "Medium\nLayer z=20 MicrosurfaceDielectricBsdf alpha=1e-4 use_multiple_scattering=false\n"
-     "Medium eta=1.37 mus=10 mua=0.01 HenyeyGreensteinPhase g=0.9\n"
-     "Layer z=0 MicrosurfaceDielectricBsdf alpha=1e-4 use_multiple_scattering=false\nMedium\n", ["-p", "10000"],
-     "events_per_cpu_s", 2e7),
+SUBSTR = os.path.join("examples", "tutorial", "Substr.lsqt")
+WORKLOADS = [  # kind: the measure of the target ("cpu_s": at most, "events_per_cpu_s": at least)
+    {"name": "Rough", "label": "Rough (alpha 2.4, defaults)", "file": None, "lsqt": "rough.lsqt",
+     "about": "a rough Lambertian microsurface alone, lsqt-cl's defaults (-p 1e4, 12 slices x 80 directions, RRSS)",
+     "text": "Medium\nLayer z=0 MicrosurfaceLambertianBrdf fR=0.6 alpha=2.4\nMedium\n", "flags": [],
+     "kind": "cpu_s", "target": 4.0, "reference": "original layered-sqt 405 CPU-s"},
+    {"name": "Substr", "label": "Substr -wi 300 -rp 0.3", "file": SUBSTR, "lsqt": SUBSTR,
+     "about": "the tutorial's rough dielectric over a diffuse substrate", "text": open(os.path.join(ROOT, SUBSTR)).read(),
+     "flags": ["-wi", "300", "-rp", "0.3"], "kind": "cpu_s", "target": 1.6,
+     "reference": "original layered-sqt 160 CPU-s"},
+    {"name": "Slab", "label": "Slab -p 1e5", "file": None, "lsqt": "slab.lsqt",
+     "about": "a slab of optical thickness 1 (mus 0.9, mua 0.1, Henyey-Greenstein g 0.8) between null layers",
+     "text": "Medium\nLayer z=1 NullBsdf\nMedium mus=0.9 mua=0.1 HenyeyGreensteinPhase g=0.8\nLayer z=0 NullBsdf\n"
+             "Medium\n", "flags": ["-p", "100000"], "kind": "cpu_s", "target": 0.3,
+     "reference": "original layered-sqt 13.7 CPU-s"},
+    {"name": "MCX", "label": "MCX-like slab", "file": None, "lsqt": "mcx.lsqt",
+     "about": "a slab 20 thick (mus 10, mua 0.01, g 0.9, optical thickness 200) of index 1.37 between smooth "
+              "boundaries, about 560 events a path",
+     "text": "Medium\nLayer z=20 MicrosurfaceDielectricBsdf alpha=1e-4 use_multiple_scattering=false\n"
+             "Medium eta=1.37 mus=10 mua=0.01 HenyeyGreensteinPhase g=0.9\n"
+             "Layer z=0 MicrosurfaceDielectricBsdf alpha=1e-4 use_multiple_scattering=false\nMedium\n",
+     "flags": ["-p", "10000"], "kind": "events_per_cpu_s", "target": 2e7, "reference": "MCX-CL about 5.1e6"},
 ]
 
 
@@ -75,41 +90,73 @@ def main():
     out_csv = None
     if "--csv" in args:
         i = args.index("--csv")
+        if i + 1 >= len(args):
+            sys.exit("bench_targets.py: --csv needs a PATH")
         out_csv = args[i + 1]
         del args[i:i + 2]
+    doc = "--doc" in args
+    args = [a for a in args if a != "--doc"]
+    if len(args) > 1 or (args and args[0].startswith("-")):
+        sys.exit(f"bench_targets.py: unexpected arguments {' '.join(args)} (lsqt-cl flags go after --)")
     binary = args[0] if args else os.path.join(ROOT, "build", "lsqt-cl")
-    rows = []
+    if not (os.path.isfile(binary) and os.access(binary, os.X_OK)):
+        sys.exit(f"bench_targets.py: {binary} is missing or not executable: build lsqt-cl first (bash tools/build.sh)")
+    if doc:
+        import bench_doc  # tools/, beside this script
+    started = time.localtime()
+    rows, failed = [], []
     print(f"{'workload':8s} {'wall_s':>7s} {'cpu_s':>7s} {'paths/s':>9s} {'events/s':>9s} {'ev/cpu_s':>9s} "
-          f"{'nee/s':>9s} {'start_cold':>10s} {'start':>6s}  target")
+          f"{'nee/s':>9s} {'start_cold':>10s} {'start':>6s} {'err':>7s} {'effic':>8s}  target")
     with tempfile.TemporaryDirectory() as d:
-        for name, text, flags, kind, target in WORKLOADS:
+        for w in WORKLOADS:
+            name, text, flags, kind, target = w["name"], w["text"], w["flags"], w["kind"], w["target"]
             one = without_p(flags)
-            with tempfile.TemporaryDirectory() as cache:
-                cold_w, cold_c, _ = run(binary, text, one + ["-p", "1"], extra, d, dict(os.environ, POCL_CACHE_DIR=cache))
-            run(binary, text, flags, extra, d)  # fills the kernel cache
-            warm_w, warm_c, _ = run(binary, text, one + ["-p", "1"], extra, d)
-            wall, cpu, j = run(binary, text, flags, extra, d)
-            events = j["events_per_path"] * j["paths_added"] * len(j["slices"])
-            row = {"workload": name, "device": j["device"], "wall_s": wall, "cpu_s": cpu,
-                   "sim_s": j["seconds"], "paths_per_s": j["paths_per_second"], "events_per_s": j["events_per_second"],
-                   "events_per_cpu_s": events / cpu, "nee_per_s": j["nee_evaluations_per_second"],
-                   "startup_cold_wall_s": cold_w, "startup_cold_cpu_s": cold_c, "startup_wall_s": warm_w,
-                   "startup_cpu_s": warm_c, "target": f"{kind} {'<=' if kind == 'cpu_s' else '>='} {target:g}"}
+            try:
+                with tempfile.TemporaryDirectory() as cache:
+                    cold_w, cold_c, _ = run(binary, text, one + ["-p", "1"], extra, d,
+                                            dict(os.environ, POCL_CACHE_DIR=cache))
+                run(binary, text, flags, extra, d)  # fills the kernel cache
+                warm_w, warm_c, _ = run(binary, text, one + ["-p", "1"], extra, d)
+                wall, cpu, j = run(binary, text, flags, extra, d)
+                events = j["events_per_path"] * j["paths_added"] * len(j["slices"])
+                errs = [s["max_rel_err"] for s in j["slices"] if s.get("max_rel_err") is not None]
+                err = max(errs) if errs and max(errs) > 0 else None  # none below a full set of batches
+                row = {"workload": name, "device": j["device"], "command": " ".join(["lsqt-cl", "-R", *flags, *extra,
+                                                                                     w["lsqt"]]),
+                       "wall_s": wall, "cpu_s": cpu, "sim_s": j["seconds"], "paths_per_s": j["paths_per_second"],
+                       "events_per_s": j["events_per_second"], "events_per_cpu_s": events / cpu,
+                       "nee_per_s": j["nee_evaluations_per_second"], "startup_cold_wall_s": cold_w,
+                       "startup_cold_cpu_s": cold_c, "startup_wall_s": warm_w, "startup_cpu_s": warm_c,
+                       "max_rel_err": err, "efficiency": 1.0 / (err * err * cpu) if err and cpu > 0 else None,
+                       "target": f"{kind} {'<=' if kind == 'cpu_s' else '>='} {target:g}"}
+            except (OSError, ValueError, KeyError, TypeError, ZeroDivisionError, subprocess.CalledProcessError) as e:
+                print(f"{name:8s} FAILED: {e}", file=sys.stderr, flush=True)
+                failed.append(name)
+                continue
             met = row[kind] <= target if kind == "cpu_s" else row[kind] >= target
             row["met"] = met
             rows.append(row)
+            fmt = lambda v, spec: format(v, spec) if v is not None else "-"
             print(f"{name:8s} {wall:7.2f} {cpu:7.2f} {row['paths_per_s']:9.3g} {row['events_per_s']:9.3g} "
-                  f"{row['events_per_cpu_s']:9.3g} {row['nee_per_s']:9.3g} {cold_w:10.2f} {warm_w:6.2f}  {row['target']}: "
+                  f"{row['events_per_cpu_s']:9.3g} {row['nee_per_s']:9.3g} {cold_w:10.2f} {warm_w:6.2f} "
+                  f"{fmt(err, '7.3g')} {fmt(row['efficiency'], '8.3g')}  {row['target']}: "
                   f"{'met' if met else 'NOT met'}", flush=True)
-    print(f"device: {rows[0]['device']}; start_cold / start: wall seconds of a 1-path run with an empty / a filled "
-          f"kernel cache (context, build, tables, launches)")
-    if out_csv:
+    if rows:
+        print(f"device: {rows[0]['device']}; start_cold / start: wall seconds of a 1-path run with an empty / a "
+              f"filled kernel cache (context, build, tables, launches); err: largest relative standard error of "
+              f"the BSDF values over the slices; effic: 1 / (err^2 * cpu_s)")
+    if out_csv and rows:
         with open(out_csv, "w", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
-            w.writeheader()
-            w.writerows(rows)
+            wr = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
+            wr.writeheader()
+            wr.writerows(rows)
+    if failed:
+        print(f"bench_targets.py: {len(failed)} of {len(WORKLOADS)} workloads failed ({', '.join(failed)})"
+              + ("; docs/performance.md not written" if doc else ""), file=sys.stderr)
+        return 1
+    if doc:
+        print(f"wrote {bench_doc.write_atomic(bench_doc.render(rows, WORKLOADS, extra, started, binary))}")
     return 0
-
 
 if __name__ == "__main__":
     sys.exit(main())
