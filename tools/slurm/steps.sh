@@ -9,10 +9,24 @@
 # the same candidates); merging the whole pilot chooses the directions once, whatever the
 # split; the refine shards then run the rest. Without RRSS (or when continuing a run) the
 # first stage does all the paths and the refine shards have nothing to do.
-# The LSS is FILE.lss, or --lss PATH among the flags. LSQT_CL names the binary.
+# The LSS is FILE.lss, or --lss PATH among the flags.
+# Installed, this is PREFIX/bin/lsqt-slurm-steps. The binary: $LSQT_CL if set; else the
+# lsqt-cl beside this script (the installed layout; symlinks to the script are followed);
+# else, in the source tree (tools/slurm/steps.sh), build/lsqt-cl; else lsqt-cl on PATH.
 set -euo pipefail
-LSQT_CL=${LSQT_CL:-lsqt-cl}
-step=${1:?usage: steps.sh shard|refine K N FILE [flags] | steps.sh merge N FILE [flags]}
+self=$(readlink -f "${BASH_SOURCE[0]}")
+here=$(dirname "$self")
+if [ -z "${LSQT_CL:-}" ]; then
+  if [ -x "$here/lsqt-cl" ]; then
+    LSQT_CL=$here/lsqt-cl
+  elif [ "${self##*/}" = steps.sh ] && [ -x "$here/../../build/lsqt-cl" ]; then
+    LSQT_CL=$(readlink -f "$here/../../build/lsqt-cl")
+  else
+    LSQT_CL=lsqt-cl
+  fi
+fi
+me=${0##*/}
+step=${1:?usage: $me shard|refine K N FILE [flags] | $me merge N FILE [flags]}
 shift
 if [ "$step" = merge ]; then
   n=$1 file=$2
@@ -38,6 +52,10 @@ for ((i = 0; i < ${#args[@]}; i++)); do
     *) shard_flags+=("$a") ;;
   esac
 done
+command -v "$LSQT_CL" >/dev/null || {
+  echo "$me: lsqt-cl not found ('$LSQT_CL'): set LSQT_CL or put lsqt-cl on PATH" >&2
+  exit 2
+}
 base=${lss%.lss}
 case "$step" in
   shard) exec "$LSQT_CL" "${shard_flags[@]}" --shard "$k/$n" "$file" ;;
@@ -50,5 +68,5 @@ case "$step" in
     "$LSQT_CL" merge "$lss" "${inputs[@]}" "${parts[@]}" "${merge_flags[@]}"
     rm -f "${parts[@]}" # merged into the LSS: keeping them would invite a double count
     ;;
-  *) echo "steps.sh: unknown step '$step'" >&2; exit 2 ;;
+  *) echo "$me: unknown step '$step'" >&2; exit 2 ;;
 esac

@@ -11,14 +11,18 @@
 #
 # --wait (first argument only) waits until D has ended and exits non-zero unless every step
 # succeeded. Environment:
-#   LSQT_CL       the lsqt-cl binary (default: lsqt-cl on PATH), at the same path on the
-#                 compute nodes; jobs get the whole environment (--export=ALL).
+#   LSQT_CL       the lsqt-cl binary, at the same path on the compute nodes; jobs get the
+#                 whole environment (--export=ALL). Default: the lsqt-cl beside this script
+#                 (installed: PREFIX/bin), else in the source tree build/lsqt-cl, else
+#                 lsqt-cl on PATH.
 #   SBATCH_OPTS   extra sbatch options for all four jobs, split at blanks (no quoting), e.g.
 #                 "-p short --time=02:00:00 --signal=B:USR1@300".
 #   SBATCH_ARRAY_OPTS  extra options for the shard and refine arrays only, e.g. "--gres=gpu:1"
 #                 (the merges need no GPU).
 #   LSQT_SLURM_POLL  seconds between squeue polls with --wait (default 10).
-#   LSQT_STEPS    the steps script (default: steps.sh next to this file).
+#   LSQT_STEPS    the steps script (default: lsqt-slurm-steps next to this file, installed
+#                 in PREFIX/bin; else steps.sh, the source tree). Symlinks to this file
+#                 are followed.
 # Logs and each step's exit status go to FILE.slurm/ (STEP-JOBID[_TASK].log and .rc).
 set -euo pipefail
 
@@ -44,11 +48,25 @@ command -v sbatch >/dev/null || die "sbatch not found (is SLURM installed, SLURM
 # Absolute paths: a job may start in another folder, on another machine with the same mounts.
 abspath() { echo "$(cd "$(dirname "$1")" && pwd -P)/$(basename "$1")"; }
 file=$(abspath "$file")
-here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd -P)
-steps=${LSQT_STEPS:-$here/steps.sh}
+self=$(readlink -f "${BASH_SOURCE[0]}")
+here=$(dirname "$self")
+if [ -z "${LSQT_STEPS:-}" ]; then
+  steps=$here/lsqt-slurm-steps
+  [ -f "$steps" ] || steps=$here/steps.sh
+  [ -f "$steps" ] || die "no steps script (lsqt-slurm-steps or steps.sh) beside $self"
+else
+  steps=$LSQT_STEPS
+fi
 [ -f "$steps" ] || die "no steps script: $steps"
 steps=$(abspath "$steps")
 # Resolved here, so that a missing binary fails now and not in N queued jobs.
+if [ -z "${LSQT_CL:-}" ]; then
+  if [ -x "$here/lsqt-cl" ]; then
+    LSQT_CL=$here/lsqt-cl
+  elif [ "${self##*/}" = submit.sh ] && [ -x "$here/../../build/lsqt-cl" ]; then
+    LSQT_CL=$here/../../build/lsqt-cl
+  fi
+fi
 if [[ ${LSQT_CL:-lsqt-cl} == */* ]]; then
   LSQT_CL=$(abspath "$LSQT_CL")
 else
