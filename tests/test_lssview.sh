@@ -1,7 +1,14 @@
 #!/usr/bin/env bash
-# lssview: the Lambertian sphere (EXR, linear, one light) follows the cosine law at 20
-# sample pixels and at every covered pixel (no spikes or holes) within 1 %; fR = 0 gives a
-# black sphere; a sharp rough dielectric coat (alpha 0.05) has its highlight where the
+# lssview: the Lambertian sphere (EXR, linear, one light or the default three) follows the
+# cosine law at 20 sample pixels and at every pixel (no spikes or holes) within 1 %, the
+# rim beyond the last slice (θo_max, from `lsqt-cl info --json`) included: it is held
+# from the last slice, so the default picture (PNG) has no magenta pixel, and the summary
+# line names the held rim and its pixel count; --strict makes exactly the rim pixels
+# (θo > θo_max, counted here from the geometry) magenta, the rest still on the cosine law;
+# on a non-Lambertian stack (a rough dielectric) every rim pixel equals the last slice's
+# estimates interpolated as lssview.cpp documents (recomputed here from `info --bsdf`),
+# its --error colour too, and differs from what the first slice would give; fR = 0 gives
+# a black sphere; a sharp rough dielectric coat (alpha 0.05) has its highlight where the
 # half vector of light and camera is the normal, within 2 pixels; --error on 4x the paths
 # (the same LSS continued) shows about half the relative error (within 15 %); the
 # defaults (IN.lss.png, 512x512 PNG), --image-dim and --image-mul; and truncated, damaged,
@@ -19,11 +26,12 @@ trap 'rm -rf "$T"' EXIT
 cd "$T"
 
 # check.py MODE IMAGE ARGS...: reads IMAGE through image_dump; the sphere geometry of
-# lssview.cpp (radius 0.45 of the width, orthographic, view +z).
+# lssview.cpp (radius 0.45 of the width, orthographic, view +z). THMAX: θo of the last
+# slice, radians; a pixel is on the rim when its centre's θo is beyond it.
 cat > check.py <<'PY'
-import math, random, struct, subprocess, sys
+import json, math, random, struct, subprocess, sys
 mode, img = sys.argv[1], sys.argv[2]
-a = sys.argv[3:]
+a = sys.argv[3:-1]  # the last one is image_dump
 if mode == "ratio":  # ratio A B WANT TOL: A / B within TOL (relative) of WANT
     ra = float(a[0]) / float(a[1])
     print("relative error ratio %.4g (want %s within %s)" % (ra, a[2], a[3]))
@@ -39,28 +47,135 @@ def normal(i, j):
     x, y = (i + 0.5 - W / 2) / rad, (W / 2 - j - 0.5) / rad
     r2 = x * x + y * y
     return None if r2 >= 1 else (x, y, math.sqrt(1 - r2))
-sphere = [(i, j) for j in range(H) for i in range(W) if normal(i, j)]
+TH = {}
+def theta_o(i, j):
+    if (i, j) not in TH: TH[i, j] = math.acos(min(1.0, normal(i, j)[2]))
+    return TH[i, j]
+def lights(v):  # LX LY LZ E ... -> [((x, y, z) unit, E)]
+    out = []
+    for k in range(0, len(v), 4):
+        d = list(map(float, v[k:k + 3])); n = math.sqrt(sum(c * c for c in d))
+        out.append((tuple(c / n for c in d), float(v[k + 3])))
+    return out
+def dot(p, q): return sum(x * y for x, y in zip(p, q))
+sphere = [] if mode in ("size", "ratio") else [(i, j) for j in range(H) for i in range(W) if normal(i, j)]
 covered = [(i, j) for (i, j) in sphere if not magenta(pix(i, j))]
 bad = []
-if mode == "cosine" and len(covered) < 0.9 * len(sphere):
-    bad.append("only %d of %d sphere pixels covered" % (len(covered), len(sphere)))
-if mode == "cosine":  # cosine FR LX LY LZ E
-    fr, lx, ly, lz, E = map(float, a[:5])
-    n = math.sqrt(lx * lx + ly * ly + lz * lz); L = (lx / n, ly / n, lz / n)
-    def want(i, j): return fr / math.pi * max(0.0, sum(p * q for p, q in zip(normal(i, j), L))) * E
+if mode in ("cosine", "strict"):  # cosine THMAX FR L..., strict THMAX NMAG FR L...; L: LX LY LZ E
+    if mode == "strict":  # the summary line's count of magenta pixels
+        nmag = a.pop(1)
+        nmag = int(nmag) if nmag.isdigit() else -1
+    thmax, fr = float(a[0]), float(a[1])
+    Ls = lights(a[2:])
+    rim = set(p for p in sphere if theta_o(*p) > thmax)
+    # the pixels whose centre is within 1e-9 rad of θo_max may go either way (rounding)
+    edge = set(p for p in sphere if abs(TH[p] - thmax) <= 1e-9)
+    mag = set(sphere) - set(covered)
+    if not rim: bad.append("no rim pixel beyond θo %.4g: nothing tested" % thmax)
+    if mode == "cosine" and mag:
+        bad.append("%d magenta sphere pixels (%d of them on the rim), e.g. %s" % (len(mag), len(mag & rim), min(mag)))
+    if mode == "strict":
+        if (mag ^ rim) - edge:
+            bad.append("--strict: %d magenta pixels, %d rim pixels (θo > %.6g), %d differ beyond rounding" %
+                       (len(mag), len(rim), thmax, len((mag ^ rim) - edge)))
+        print("strict: %d magenta pixels, %d rim pixels from the geometry, %d at the edge" %
+              (len(mag), len(rim), len(edge)))
+        if nmag != len(mag): bad.append("the summary says %d magenta (-1: no count), the image has %d" % (nmag, len(mag)))
+    Esum = sum(E for _, E in Ls)
+    def want(i, j): return fr / math.pi * sum(max(0.0, dot(normal(i, j), L)) * E for L, E in Ls)
     rnd = random.Random(11)
     samples = rnd.sample(covered, 20)
-    worst = 0.0
+    worst = worst_rim = 0.0
     for (i, j) in samples:
         v, w = pix(i, j)[0], want(i, j)
-        if abs(v - w) > 0.01 * max(w, 1e-3 * fr / math.pi * E):
+        if abs(v - w) > 0.01 * max(w, 1e-3 * fr / math.pi * Esum):
             bad.append("sample pixel (%d, %d): %.6g, cosine law %.6g" % (i, j, v, w))
     for (i, j) in covered:  # every pixel: no spike, no hole
         v, w = pix(i, j)[0], want(i, j)
-        d = abs(v - w) / max(w, 1e-3 * fr / math.pi * E)
+        d = abs(v - w) / max(w, 1e-3 * fr / math.pi * Esum)
         worst = max(worst, d)
+        if (i, j) in rim: worst_rim = max(worst_rim, d)
     if worst > 0.01: bad.append("a covered pixel is %.3g off the cosine law (relative)" % worst)
-    print("cosine law: 20 samples and %d covered pixels, worst relative deviation %.3g" % (len(covered), worst))
+    nrim = len(rim & set(covered))
+    print("cosine law: 20 samples and %d covered pixels, worst relative deviation %.3g; %d rim pixels beyond "
+          "θo %.2f°, worst %.3g" % (len(covered), worst, nrim, math.degrees(thmax), worst_rim))
+elif mode == "nomagenta":  # nomagenta THMAX NHELD: no magenta sphere pixel; NHELD: the summary's count
+    thmax, nheld = float(a[0]), int(a[1]) if a[1:] and a[1].isdigit() else -1
+    mag = [p for p in sphere if magenta(pix(*p))]
+    rim = [p for p in sphere if theta_o(*p) > thmax]
+    print("%d magenta of %d sphere pixels, %d rim pixels beyond θo %.2f°" % (len(mag), len(sphere), len(rim),
+                                                                          math.degrees(thmax)))
+    if mag: bad.append("%d magenta sphere pixels, e.g. %s (θo %.2f°)" % (len(mag), mag[0], math.degrees(theta_o(*mag[0]))))
+    if not rim: bad.append("no rim pixel: nothing tested")
+    if nheld != len(rim):
+        bad.append("the summary says %d held rim pixels (-1: no count), the geometry %d" % (nheld, len(rim)))
+elif mode == "held":  # held INFO.json LX LY LZ E [ERROR_IMAGE EMAX]: the rim's values are the last slice's
+    info = json.load(open(a[0]))
+    (L, E), = lights(a[1:5])
+    up = sorted((s for s in info["slices"] if not s["from_below"]), key=lambda s: s["theta_o"])
+    def pts(sl):  # lssview's scattered data: upper hemisphere, mirror images in y
+        out = []
+        for x, y, z, f, e in sl["bsdf"]:
+            if not z > 0 or f is None: continue
+            n = math.sqrt(x * x + y * y + z * z); d = (x / n, y / n, z / n)
+            out.append((d, f, e))
+            if d[1] > 1e-7: out.append(((d[0], -d[1], d[2]), f, e))
+        return out
+    R0 = 2 * math.sin(math.radians(40) / 2)  # the default --max-gap, as a chord
+    def interp(P, q):  # K = 8 nearest, weight (1 - (d/R)²)², R = min(9th nearest, R0)
+        near = sorted((sum((u - v) ** 2 for u, v in zip(d, q)), f, e) for d, f, e in P)[:9]
+        R2 = min(R0 * R0, near[8][0]) if len(near) == 9 else R0 * R0
+        sw = sf = se = 0.0
+        for d2, f, e in near[:8]:
+            if d2 >= R2: break
+            w = (1 - d2 / R2) ** 2; sw += w; sf += w * f; se += w * e
+        return (sf / sw, se / sw) if sw > 0 else None
+    last, first = pts(up[-1]), pts(up[0])
+    thmax = up[-1]["theta_o"]
+    def frame(i, j):  # wi of L in the pixel's frame: z = n, x = V on the tangent plane
+        n = normal(i, j); t = [-n[2] * c for c in n]; t[2] += 1
+        tl = math.sqrt(dot(t, t)); t = [c / tl for c in t]
+        b = (n[1] * t[2] - n[2] * t[1], n[2] * t[0] - n[0] * t[2], n[0] * t[1] - n[1] * t[0])
+        return (dot(L, t), dot(L, b), dot(L, n))
+    rim = [p for p in sphere if theta_o(*p) > thmax and frame(*p)[2] > 0]
+    got, want, other, gap, hole = [], [], [], [], []
+    for p in rim:
+        wi = frame(*p)
+        fe = interp(last, wi)
+        if fe is None:  # a real gap in the data: magenta in both modes
+            if not magenta(pix(*p)): gap.append(p)
+            continue
+        if magenta(pix(*p)): hole.append(p); continue
+        got.append(pix(*p)[0]); want.append(E * wi[2] * fe[0])
+        f0 = interp(first, wi); other.append(E * wi[2] * f0[0] if f0 else float("nan"))
+    top = max(want) if want else 0.0
+    dev = max((abs(g - w) / max(w, 1e-4 * top) for g, w in zip(got, want)), default=0.0)
+    far = [abs(o - w) / max(w, 1e-4 * top) for o, w in zip(other, want) if o == o]
+    print("held rim: %d lit rim pixels beyond θo %.2f°, value %.4g..%.4g, worst relative deviation from the last "
+          "slice %.3g, from the first slice up to %.3g" % (len(got), math.degrees(thmax), min(want, default=0),
+                                                          top, dev, max(far, default=0)))
+    if gap: bad.append("%d rim pixels with no estimate within 40° are not magenta, e.g. %s" % (len(gap), gap[0]))
+    if hole: bad.append("%d rim pixels with an estimate are magenta, e.g. %s" % (len(hole), hole[0]))
+    if len(got) < 100: bad.append("only %d lit rim pixels with a value: nothing much tested" % len(got))
+    if dev > 1e-4: bad.append("a rim pixel is %.3g off the last slice's value (relative)" % dev)
+    if max(far, default=0) < 0.5: bad.append("the first slice gives about the same rim: the test tells nothing")
+    if len(a) > 5:  # the --error image (linear, --error-max EMAX): the false colour of err / value
+        stops = [(0.05, 0.05, 0.35), (0.1, 0.35, 0.9), (0.1, 0.75, 0.3), (0.95, 0.9, 0.1), (0.9, 0.1, 0.05)]
+        def fc(u):
+            u = min(1.0, max(0.0, u)) * 4; k = min(3, int(u))
+            return [s + (t - s) * (u - k) for s, t in zip(stops[k], stops[k + 1])]
+        emax = float(a[6])
+        ed = subprocess.run([sys.argv[-1], a[5]], capture_output=True, check=True).stdout
+        EW = int(ed[:ed.index(b"\n")].split()[0])
+        epx = struct.unpack("<%df" % ((len(ed) - ed.index(b"\n") - 1) // 4), ed[ed.index(b"\n") + 1:])
+        worst_c = 0.0; n_c = 0
+        for p in rim:
+            wi = frame(*p); fe = interp(last, wi)
+            if fe is None or not fe[0] > 0: continue
+            c = fc(fe[1] / fe[0] / emax); k = (p[1] * EW + p[0]) * 3
+            worst_c = max(worst_c, max(abs(x - y) for x, y in zip(c, epx[k:k + 3]))); n_c += 1
+        print("--error rim: %d pixels, worst colour deviation %.3g" % (n_c, worst_c))
+        if worst_c > 1e-4 or n_c < 100: bad.append("--error: the rim is not the last slice's error")
 elif mode == "black":
     if len(covered) < 0.5 * len(sphere): bad.append("only %d of %d covered" % (len(covered), len(sphere)))
     m = max(max(pix(i, j)) for (i, j) in covered)
@@ -96,15 +211,42 @@ cp "$EX/tutorial/Lambertian.lsqt" L.lsqt
 "$BIN" -q -p 5000 -wo 8 -wi 80 --lss B.lss -o B.raw black.lsqt || bad "lsqt-cl black.lsqt"
 "$BIN" -q -p 20000 -wo 12 -wi 80 --lss C.lss -o C.raw coat.lsqt || bad "lsqt-cl coat.lsqt"
 
-# the cosine law (fR = 0.6), one light of irradiance 2, and the default lights too
-expect 0 "wrote L.exr (512x512)" -- "$VIEW" L.lss -o L.exr --light -0.4,0.5,1,2
-check cosine L.exr 0.6 -0.4 0.5 1 2
+# θo of the last slice from above (radians, as the LSS holds it) and in degrees as the
+# summary line prints it; -wo 8 puts it at 0.99·90°·7/8
+thmax() { python3 -c 'import json, sys
+s = [x["theta_o"] for x in json.load(open(sys.argv[1]))["slices"] if not x["from_below"]]
+print(repr(max(s)))' "$1"; }
+deg() { python3 -c 'import math, sys; print("%.1f" % math.degrees(float(sys.argv[1])))' "$1"; }
+"$BIN" info L.lss --json L.json > /dev/null || bad "lsqt-cl info L.lss"
+TL=$(thmax L.json)
+python3 -c 'import math, sys; sys.exit(abs(float(sys.argv[1]) - 0.99 * math.pi / 2 * 7 / 8) > 1e-12)' "$TL" && ok ||
+  bad "the last of 8 slices is at θo $TL rad, not 0.99·90°·7/8"
+# has TEXT: the last command's output ($out) holds TEXT
+has() { if grep -qF -- "$1" <<<"$out"; then ok; else bad "output lacks '$1': $out"; fi; }
+
+# the cosine law (fR = 0.6), one light of irradiance 2, the rim beyond θo_max included
+expect 0 "wrote L.exr (512x512), 0 of" -- "$VIEW" L.lss -o L.exr --light -0.4,0.5,1,2
+check cosine L.exr "$TL" 0.6 -0.4 0.5 1 2
 expect 0 "" -- "$VIEW" L.lss -o L2.exr --light=0.9,-0.2,0.4,1
-check cosine L2.exr 0.6 0.9 -0.2 0.4 1
-# defaults: IN.lss.png, 512x512 RGB; --image-dim; --image-mul scales linear values
-expect 0 "wrote L.lss.png (512x512)" -- "$VIEW" L.lss
+check cosine L2.exr "$TL" 0.6 0.9 -0.2 0.4 1
+# ... and under the default lights
+expect 0 "" -- "$VIEW" -q --image-dim 256 L.lss -o L4.exr
+check cosine L4.exr "$TL" 0.6 -1 1 1.2 2.5 1 0.2 0.6 0.8 0 1 -0.3 1.2
+# defaults: IN.lss.png, 512x512 RGB, a whole sphere (no magenta), and the summary line
+# names the held rim and its pixel count (checked against the geometry)
+out=$("$VIEW" L.lss 2>&1) && ok || bad "lssview L.lss: $out"
+has "wrote L.lss.png (512x512), 0 of"
+has "; rim beyond θo $(deg "$TL")° held from the last slice ("
+has "--strict shows it magenta"
 check size L.lss.png 512 512 3
-expect 0 "" -- "$VIEW" -q --image-dim 100 -o small.png L.lss
+check nomagenta L.lss.png "$TL" "$(sed -n 's/.*held from the last slice (\([0-9]*\) pixels, .*/\1/p' <<<"$out")"
+# --strict: magenta exactly on the rim, the rest as before; the summary counts it
+out=$("$VIEW" --strict --image-dim 256 L.lss -o Ls.exr --light -0.4,0.5,1,2 2>&1) && ok || bad "lssview --strict: $out"
+has ", the rim beyond θo $(deg "$TL")° included (--strict)"
+check strict Ls.exr "$TL" "$(sed -n 's/.*), \([0-9]*\) of [0-9]* sphere pixels not covered.*/\1/p' <<<"$out")" \
+  0.6 -0.4 0.5 1 2
+# -q: no summary line
+out=$("$VIEW" -q --image-dim 100 -o small.png L.lss 2>&1) && [ -z "$out" ] && ok || bad "lssview -q printed '$out'"
 check size small.png 100 100 3
 expect 0 "" -- "$VIEW" -q --image-mul 2.5 -o L3.exr --light -0.4,0.5,1,2 L.lss
 check scaled L3.exr L.exr 2.5
@@ -118,6 +260,13 @@ for L in -0.5,0.3,1 0.7,-0.2,1; do
   expect 0 "" -- "$VIEW" -q C.lss -o "C$L.exr" --light "$L,1"
   check highlight "C$L.exr" ${L//,/ }
 done
+
+# a rough dielectric (not constant in θo): the rim holds the last slice's values and
+# errors; the light from behind puts the last slice's grazing reflection on the rim
+"$BIN" info C.lss --json C.json --bsdf > /dev/null || bad "lsqt-cl info --bsdf C.lss"
+expect 0 "" -- "$VIEW" -q --image-dim 256 C.lss -o Crim.exr --light 0.3,1,-0.5,1
+expect 0 "" -- "$VIEW" -q --image-dim 256 --error --error-max 0.2 C.lss -o Crim.err.exr --light 0.3,1,-0.5,1
+check held Crim.exr C.json 0.3 1 -0.5 1 Crim.err.exr 0.2
 
 # --error: 4x the paths (the same directions: the LSS continued) halve the relative error
 "$BIN" -q -p 20000 -wo 6 -wi 48 --lss E.lss -o E.raw "$EX/slab.lsqt" || bad "lsqt-cl slab"
@@ -151,6 +300,7 @@ expect 2 "--image-dim" -- "$VIEW" --image-dim 0 L.lss
 expect 2 "--light" -- "$VIEW" --light 1,2 L.lss
 expect 2 "" -- "$VIEW"
 expect 0 "--image-dim" -- "$VIEW" --help
+expect 0 "--strict" -- "$VIEW" --help
 [ ! -e t.png ] && ok || bad "an image of a refused LSS"
 
 finish test_lssview

@@ -30,12 +30,18 @@
 //    a neighbour enters or leaves the set with weight 0, so the result is continuous in
 //    q, and it is a convex combination, so it never leaves the range of its neighbours
 //    (no spikes, no overshoot; a constant BSDF comes out exactly constant).
-//  - no stored direction within the --max-gap angle (default 40°) of q, or θo outside
-//    the slices' range: the pixel is not covered by the LSS and is marked magenta
-//    (1, 0, 1), never filled in.
+//  - θo beyond the last slice θ_max (the default slices end at 0.99·90°·(N-1)/N, so the
+//    sphere's rim has no slice): by default the last slice is held, f(θo, wi) = f(θ_max,
+//    wi) for θo in (θ_max, 90°] (its estimates as they are, no warp, no extrapolation),
+//    and the summary line says how many pixels that is; a Lambertian's f is constant, so
+//    it is exact there. --strict marks the rim uncovered instead.
+//  - no stored direction within the --max-gap angle (default 40°) of q (both modes), or
+//    θo below the first slice, or beyond the last with --strict: the pixel is not
+//    covered by the LSS and is marked magenta (1, 0, 1), never filled in.
 // Errors (--error): the estimates of one slice share their paths, so their errors are
 // combined as fully correlated (err = the same weighted mean of the errors, summed over
 // lights like the values): an upper bound that scales as 1/sqrt(paths) like each error.
+// A held rim pixel gets the last slice's error, as it gets its values.
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
@@ -82,6 +88,7 @@ struct Options {
     double error_max = 0.0; // 0: automatic
     double max_gap_deg = 40.0;
     bool quiet = false;
+    bool strict = false; // no held rim: θo beyond the last slice is uncovered
     std::vector<Light> lights;
 };
 
@@ -101,10 +108,16 @@ void usage(FILE *f)
                  "                       +z to the camera) of irradiance E; repeat it; replaces the default lights\n"
                  "                       (-1,1,1.2) E=2.5, (1,0.2,0.6) E=0.8, (0,1,-0.3) E=1.2\n"
                  "  --max-gap DEG        a direction with no estimate within DEG degrees is uncovered (40)\n"
+                 "  --strict             the rim beyond the last slice's view angle is uncovered (magenta)\n"
+                 "                       instead of held from the last slice\n"
                  "  -q, --quiet          no summary line\n"
                  "  -h, --help           this text\n"
-                 "Pixels the LSS does not cover (view angle beyond the slices, or no estimate near the light\n"
-                 "direction) are magenta. Exit status: 0 success, 2 bad input or flags, 1 other failure.\n");
+                 "The slices end short of grazing (θo_max = 0.99·90°·(N-1)/N for N default slices, 81.7° for\n"
+                 "12): beyond θo_max, on the sphere's rim, the last slice's values (and, with --error, its\n"
+                 "errors) are held as they are, and the summary line says how many pixels that is. Pixels\n"
+                 "the LSS does not cover are magenta: no estimate within --max-gap of a light's direction,\n"
+                 "a view angle below the first slice, and with --strict the rim beyond the last slice.\n"
+                 "Exit status: 0 success, 2 bad input or flags, 1 other failure.\n");
 }
 
 [[noreturn]] void die(int code, const char *fmt, const char *a = "", const char *b = "")
@@ -180,6 +193,8 @@ Options parse_args(int argc, char **argv)
             if (!lights_given) o.lights.clear();
             lights_given = true;
             o.lights.push_back({d / len, c[3]});
+        } else if (a == "--strict") {
+            o.strict = true;
         } else if (a == "-q" || a == "--quiet") {
             o.quiet = true;
         } else if (a.size() > 1 && a[0] == '-') {
@@ -229,6 +244,7 @@ std::vector<Slice> build_slices(const lsqt_state &st, const lsqt_slice_est *est)
 struct Eval {
     double f, e;
     bool ok;
+    bool held = false; // θo beyond the last slice, the last slice's values held
 };
 
 // Scattered-data interpolation within one slice (see the top of the file).
@@ -284,11 +300,21 @@ struct Renderer {
     const std::vector<Slice> &slices;
     const std::vector<Light> &lights;
     double rmax_chord;
+    bool strict;
+
+    // θo beyond the last slice, where the last slice is held (not with --strict)
+    bool held(double theta_o) const { return !strict && !slices.empty() && theta_o > slices.back().theta; }
+    // θo within the slices' range or held
+    bool in_range(double theta_o) const
+    {
+        return !slices.empty() && theta_o >= slices.front().theta && (theta_o <= slices.back().theta || held(theta_o));
+    }
 
     // f and its error at (θo, wi in the frame where wo = (sin θo, 0, cos θo)).
     Eval f(double theta_o, const glm::dvec3 &wi) const
     {
-        if (slices.empty() || theta_o < slices.front().theta || theta_o > slices.back().theta) return {0, 0, false};
+        if (!in_range(theta_o)) return {0, 0, false};
+        if (held(theta_o)) return eval_slice(slices.back(), wi, rmax_chord); // as it is, no warp
         size_t b = 0;
         while (b + 1 < slices.size() && slices[b + 1].theta < theta_o) b++;
         // slices[b].theta <= theta_o; the upper neighbour, if theta_o is not on slice b
@@ -325,8 +351,8 @@ struct Renderer {
             v += L.E * ci * fe.f;
             e += L.E * ci * fe.e;
         }
-        if (slices.empty() || theta_o < slices.front().theta || theta_o > slices.back().theta) return {0, 0, false};
-        return {v, e, true};
+        if (!in_range(theta_o)) return {0, 0, false};
+        return {v, e, true, held(theta_o)};
     }
 };
 
@@ -441,13 +467,14 @@ int main(int argc, char **argv)
     lsqt_estimates_free(est, st.n_slices);
     lsqt_state_free(&st);
     if (slices.size() < 2 && !o.quiet)
-        std::fprintf(stderr, "lssview: warning: fewer than two slices from above: only θo = θ_0 is covered\n");
+        std::fprintf(stderr, "lssview: warning: fewer than two slices from above: only θo = θ_0 is estimated%s\n",
+                     o.strict ? "" : " (held beyond it; --strict shows that magenta)");
 
     const double gap = o.max_gap_deg * M_PI / 180.0;
-    Renderer r{slices, o.lights, 2.0 * std::sin(std::min(gap, M_PI) / 2.0)};
+    Renderer r{slices, o.lights, 2.0 * std::sin(std::min(gap, M_PI) / 2.0), o.strict};
     const int D = o.dim;
     std::vector<double> val((size_t)D * D, 0.0), rel((size_t)D * D, 0.0);
-    std::vector<unsigned char> kind((size_t)D * D, 0); // 0 outside, 1 value, 2 uncovered
+    std::vector<unsigned char> kind((size_t)D * D, 0); // 0 outside, 1 value, 2 uncovered, 3 held value
     const double rad = SPHERE_FRAC * D;
     auto rows = [&](int j0, int j1) {
         for (int j = j0; j < j1; j++)
@@ -461,7 +488,7 @@ int main(int argc, char **argv)
                     kind[p] = 2;
                     continue;
                 }
-                kind[p] = 1;
+                kind[p] = e.held ? 3 : 1;
                 val[p] = e.f;
                 rel[p] = e.f > 0 ? e.e / e.f : (e.e > 0 ? INFINITY : 0.0);
             }
@@ -472,6 +499,8 @@ int main(int argc, char **argv)
     for (auto &th : pool) th.join();
 
     size_t n_unc = (size_t)std::count(kind.begin(), kind.end(), (unsigned char)2);
+    size_t n_held = (size_t)std::count(kind.begin(), kind.end(), (unsigned char)3);
+    auto has_value = [&](size_t p) { return kind[p] == 1 || kind[p] == 3; };
     const bool linear = is_linear_format(o.out);
     int W = D;
     std::vector<float> img;
@@ -483,7 +512,7 @@ int main(int argc, char **argv)
             float *px = &img[p * 3];
             if (kind[p] == 2) {
                 px[0] = 1, px[1] = 0, px[2] = 1;
-            } else if (kind[p] == 1) {
+            } else if (has_value(p)) {
                 double v = val[p] * o.mul;
                 float g = (float)(linear ? v : srgb(1.0 - std::exp(-std::max(0.0, v))));
                 px[0] = px[1] = px[2] = g;
@@ -491,7 +520,7 @@ int main(int argc, char **argv)
         }
     } else {
         for (size_t p = 0; p < val.size(); p++)
-            if (kind[p] == 1 && val[p] > 0 && std::isfinite(rel[p])) errs.push_back(rel[p]);
+            if (has_value(p) && val[p] > 0 && std::isfinite(rel[p])) errs.push_back(rel[p]);
         if (emax == 0) emax = nice_ceil(errs.empty() ? 0.0 : *std::max_element(errs.begin(), errs.end()));
         int bar = std::max(40, D / 6);
         W = D + bar;
@@ -502,8 +531,8 @@ int main(int argc, char **argv)
                 float *px = &img[((size_t)j * (size_t)W + (size_t)i) * 3];
                 glm::dvec3 c(0);
                 if (kind[p] == 2) c = glm::dvec3(1, 0, 1);
-                else if (kind[p] == 1 && val[p] > 0) c = false_colour(rel[p] / emax);
-                else if (kind[p] == 1) c = glm::dvec3(0.3); // no light reaches it: no relative error
+                else if (has_value(p) && val[p] > 0) c = false_colour(rel[p] / emax);
+                else if (has_value(p)) c = glm::dvec3(0.3); // no light reaches it: no relative error
                 px[0] = (float)c.x, px[1] = (float)c.y, px[2] = (float)c.z;
             }
         // the bar: bottom 0, top emax, with labels at 0, emax/2, emax
@@ -526,15 +555,30 @@ int main(int argc, char **argv)
     if (!out) die(2, "cannot write '%s': %s", o.out.c_str(), OIIO::geterror().c_str());
     OIIO::ImageSpec spec(W, D, 3, linear ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
     spec.attribute("oiio:ColorSpace", linear && !o.error ? "Linear" : "sRGB");
-    spec.attribute("ImageDescription", o.error ? "lssview --error: relative standard error, magenta: not covered"
-                                               : "lssview: BSDF sphere, magenta: not covered");
+    const double theta_max_deg = slices.empty() ? 0.0 : slices.back().theta * 180.0 / M_PI;
+    char rim[160] = "";
+    if (n_held > 0)
+        std::snprintf(rim, sizeof rim, "; rim beyond theta_o %.1f deg held from the last slice", theta_max_deg);
+    else if (o.strict)
+        std::snprintf(rim, sizeof rim, "; --strict: rim beyond theta_o %.1f deg not covered", theta_max_deg);
+    spec.attribute("ImageDescription",
+                   std::string(o.error ? "lssview --error: relative standard error, magenta: not covered"
+                                       : "lssview: BSDF sphere, magenta: not covered") +
+                       rim);
     if (!out->open(o.out, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, img.data()) || !out->close())
         die(1, "cannot write '%s': %s", o.out.c_str(), out->geterror().c_str());
 
     if (!o.quiet) {
         size_t n_sphere = (size_t)std::count_if(kind.begin(), kind.end(), [](unsigned char k) { return k != 0; });
-        std::printf("lssview: wrote %s (%dx%d), %zu of %zu sphere pixels not covered (magenta)\n", o.out.c_str(), W,
-                    D, n_unc, n_sphere);
+        std::printf("lssview: wrote %s (%dx%d), %zu of %zu sphere pixels not covered (magenta)", o.out.c_str(), W, D,
+                    n_unc, n_sphere);
+        if (n_held > 0)
+            std::printf("; rim beyond θo %.1f° held from the last slice (%zu pixels, %.1f %% of sphere pixels); "
+                        "--strict shows it magenta",
+                        theta_max_deg, n_held, 100.0 * (double)n_held / (double)n_sphere);
+        else if (o.strict && !slices.empty())
+            std::printf(", the rim beyond θo %.1f° included (--strict)", theta_max_deg);
+        std::printf("\n");
         if (o.error) {
             std::sort(errs.begin(), errs.end());
             auto q = [&](double p) { return errs.empty() ? NAN : errs[(size_t)(p * (double)(errs.size() - 1))]; };
