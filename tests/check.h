@@ -1,14 +1,32 @@
 /* Minimal test helpers: every CHECK that fails prints where and why; a test program
- * returns check_finish(), non-zero when anything failed. */
+ * returns check_finish(), non-zero when anything failed. With LSQT_CHECK_FAIL_FAST=1 in
+ * the environment (the mutation check sets it) the first failed CHECK ends the program
+ * with status 1: a planted error is known to be caught at its first sign, and the rest
+ * of a long test would only say so again. */
 #ifndef LSQT_TESTS_CHECK_H
 #define LSQT_TESTS_CHECK_H
 
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 static int check_failures = 0;
 static int check_count = 0;
+
+static inline void check_failed_now(void)
+{
+    static int fast = -1;
+    if (fast < 0) {
+        const char *e = getenv("LSQT_CHECK_FAIL_FAST");
+        fast = e && *e && strcmp(e, "0") != 0;
+    }
+    if (fast) {
+        fprintf(stderr, "stopping at the first failed check (LSQT_CHECK_FAIL_FAST)\n");
+        fflush(NULL);
+        exit(1);
+    }
+}
 
 #define CHECK(cond, ...)                                                         \
     do {                                                                         \
@@ -18,6 +36,7 @@ static int check_count = 0;
             fprintf(stderr, "%s:%d: CHECK failed: %s: ", __FILE__, __LINE__, #cond); \
             fprintf(stderr, __VA_ARGS__);                                        \
             fprintf(stderr, "\n");                                               \
+            check_failed_now();                                                  \
         }                                                                        \
     } while (0)
 

@@ -2,7 +2,12 @@
 pass=0
 fail=0
 ok() { pass=$((pass + 1)); }
-bad() { fail=$((fail + 1)); echo "FAIL: $*" >&2; }
+# With LSQT_CHECK_FAIL_FAST=1 (the mutation check) the first failure ends the test.
+bad() {
+  fail=$((fail + 1))
+  echo "FAIL: $*" >&2
+  if [ -n "${LSQT_CHECK_FAIL_FAST:-}" ] && [ "${LSQT_CHECK_FAIL_FAST}" != 0 ]; then exit 1; fi
+}
 
 # expect STATUS SUBSTRING -- command...: exit status and a substring of stdout+stderr.
 # A command that hangs fails after 120 s instead of stalling the suite.

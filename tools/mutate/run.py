@@ -2,7 +2,7 @@
 """Mutation check: plants each error of tools/mutate/mutations.txt in a scratch copy and
 runs the tests that should catch it. See tools/mutate/README.md.
 
-usage: run.sh [-l] [-a] [-k] [NAME_REGEX]
+usage: run.sh [-l] [-a] [-k] [-j N] [--no-baseline] [--ci] [NAME_REGEX]
 
 Kernel files (kernels/*.cl, and shared headers the host never includes) are mutated in a
 copy of kernels/ + include/ and tested with the release build (build/, or LSQT_BUILD_DIR)
@@ -20,7 +20,9 @@ import signal
 import subprocess
 import sys
 import tempfile
+import threading
 import time
+import zlib
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
@@ -145,12 +147,16 @@ def kill_session(sid):
         time.sleep(0.2)
 
 
+ACTIVE = set()  # sessions of the commands running now (several with parallel workers)
+
+
 def run(cmd, cwd, env, limit=None):
     """Runs cmd in a session of its own; returns (rc, output, timed_out). On timeout, or
     when we are interrupted, the whole session (ctest and the tests it started) is
     killed."""
     p = subprocess.Popen(cmd, cwd=cwd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                          start_new_session=True)
+    ACTIVE.add(p.pid)
     try:
         out, _ = p.communicate(timeout=limit)
         return p.returncode, out.decode("utf-8", "replace"), False
@@ -162,6 +168,8 @@ def run(cmd, cwd, env, limit=None):
         kill_session(p.pid)
         p.wait()
         raise
+    finally:
+        ACTIVE.discard(p.pid)
 
 
 class Ctest:
@@ -268,6 +276,65 @@ def write(path, text):
     os.utime(path, None)
 
 
+def git(*args):
+    """Output of a git command in ROOT, or None where git or the history is missing."""
+    try:
+        return subprocess.run(["git"] + list(args), cwd=ROOT, capture_output=True, text=True,
+                              check=True).stdout
+    except (OSError, subprocess.CalledProcessError):
+        return None
+
+
+def test_sources(name):
+    """The source file of a ctest test (test_phases.hg2 -> tests/test_phases.c)."""
+    base = name.split(".")[0] if name.startswith("test_phases.") else name
+    for ext in ("", ".c", ".sh", ".py"):
+        rel = "tests/" + base + ext
+        if os.path.isfile(os.path.join(ROOT, rel)):
+            return rel
+    return None
+
+
+def recent_files(hours):
+    """Files changed by the commits of the last `hours` hours before HEAD's commit (a
+    session's work), and any uncommitted change; None without git history."""
+    t = git("log", "-1", "--format=%ct")
+    if not t or not t.strip():
+        return None
+    since = int(t.strip()) - int(hours * 3600)
+    out = git("log", "--since=@%d" % since, "--name-only", "--format=")
+    dirty = git("diff", "--name-only", "HEAD") or ""
+    return {l.strip() for l in (out or "").splitlines() + dirty.splitlines() if l.strip()}
+
+
+def ci_select(muts, shares, seed, hours):
+    """CI's choice: every mutation whose file, or whose tests' source, changed recently,
+    plus the share (seed mod shares) of the rest; each mutation belongs to the share
+    crc32(name) mod shares, so a mutation keeps its share when others are added.
+    Returns (selected, lines that say what was chosen)."""
+    changed = recent_files(hours)
+    why = []
+    if changed is None:
+        return list(muts), ["no git history: every mutation runs"]
+    share = seed % shares
+    sel, n_changed, n_share = [], 0, 0
+    for m in muts:
+        srcs = {m["file"]} | {test_sources(t) for t in m["tests"].split()}
+        if srcs & changed:
+            sel.append(m)
+            n_changed += 1
+        elif zlib.crc32(m["name"].encode()) % shares == share:
+            sel.append(m)
+            n_share += 1
+    why.append("%d of %d mutations: %d whose file or tests changed in the commits of the %g hours "
+               "before HEAD (or are uncommitted), and share %d of %d of the rest, %d (seed %d: "
+               "LSQT_MUTATE_SEED, default the commit count of HEAD; each share comes round every %d "
+               "seeds); the other %d run on other seeds" % (len(sel), len(muts), n_changed, hours, share,
+                                                            shares, n_share, seed, shares,
+                                                            len(muts) - len(sel)))
+    return sel, why
+
+
 def clang_check(kdir, kfiles, scratch):
     """Compiles the kernel sources as lsqt does (one unit, in order) with clang's OpenCL
     front end for each precision/atomics variant; returns None or the first error. A
@@ -300,6 +367,17 @@ def main():
                     help="run every test for each mutation and print which fail (to pick the smallest set)")
     ap.add_argument("-k", "--keep", action="store_true", help="keep the scratch directory")
     ap.add_argument("-f", "--file", default=LIST, help="the list to run (default tools/mutate/mutations.txt)")
+    ap.add_argument("-j", "--parallel", type=int, default=int(os.environ.get("LSQT_MUTATE_PARALLEL") or 2),
+                    help="kernel mutants tested at once, each in its own kernel directory with ctest -j 1 "
+                         "(default 2, LSQT_MUTATE_PARALLEL); host mutants share one scratch build and "
+                         "run one at a time with ctest -j LSQT_MUTATE_JOBS")
+    ap.add_argument("--no-baseline", action="store_true",
+                    help="skip running the unmutated tests first (for a caller that has just passed the "
+                         "whole suite on this tree, as .ci/run has)")
+    ap.add_argument("--ci", action="store_true",
+                    help="CI's selection: the mutations of recently changed files and tests, and a "
+                         "rotating share of the rest (LSQT_MUTATE_SHARES, default 2; LSQT_MUTATE_SEED; "
+                         "LSQT_MUTATE_RECENT_HOURS, default 6)")
     args = ap.parse_args()
 
     t_start = time.time()
@@ -323,6 +401,17 @@ def main():
     if not sel:
         print("error: no mutation matches '%s'" % args.regex)
         return 2
+    if args.ci:
+        shares = max(1, int(os.environ.get("LSQT_MUTATE_SHARES") or 2))
+        seed_env = os.environ.get("LSQT_MUTATE_SEED")
+        seed = int(seed_env) if seed_env else int((git("rev-list", "--count", "HEAD") or "0").strip() or 0)
+        hours = float(os.environ.get("LSQT_MUTATE_RECENT_HOURS") or 6)
+        sel, lines = ci_select(sel, shares, seed, hours)
+        for l in lines:
+            print("mutation check: " + l)
+        # An entry that has rotted is reported whatever the share: the list must not rot.
+        names = {m["name"] for m in sel}
+        sel += [m for m in muts if m["name"] in bad and m["name"] not in names]
     kfiles, hinc = kernel_files(), host_includes()
     for m in sel:
         m["kernel"] = is_kernel_side(m["file"], kfiles, hinc)
@@ -341,6 +430,7 @@ def main():
     jobs = int(os.environ.get("LSQT_MUTATE_JOBS") or 2)
     limit = int(os.environ.get("LSQT_MUTATE_TIMEOUT") or 300)
     build_jobs = str(os.environ.get("LSQT_MUTATE_BUILD_JOBS") or os.cpu_count() or 2)
+    par = max(1, args.parallel)
 
     scratch = tempfile.mkdtemp(prefix="lsqt-mutate.")
     env = os.environ.copy()
@@ -348,17 +438,23 @@ def main():
     if not env.get("POCL_CACHE_DIR"):
         env["POCL_CACHE_DIR"] = os.path.join(scratch, "pocl-cache")
         os.makedirs(env["POCL_CACHE_DIR"])
+    # A mutant's tests stop at their first failed check (tests/check.h, tests/cli_lib.sh):
+    # being caught once is all the check asks. The baselines run without it.
+    mut_env = dict(env, LSQT_CHECK_FAIL_FAST="1")
     passed = failed = 0
     width = max(len(m["name"]) for m in sel)
+    lock = threading.Lock()
 
     def report(m, status, secs, note=""):
         nonlocal passed, failed
-        if status == "killed":
-            passed += 1
-        else:
-            failed += 1
-        note = note.rstrip().replace("\n", "\n        ")
-        print("%-*s  %-8s %6.1f s%s" % (width, m["name"], status, secs, ("  " + note) if note else ""), flush=True)
+        with lock:
+            if status == "killed":
+                passed += 1
+            else:
+                failed += 1
+            note = note.rstrip().replace("\n", "\n        ")
+            print("%-*s  %-8s %6.1f s%s" % (width, m["name"], status, secs, ("  " + note) if note else ""),
+                  flush=True)
 
     def tests_of(m, ct):
         return [".*"] if args.all_tests else m["tests"].split()
@@ -393,6 +489,8 @@ def main():
     def baseline(ct, group, label):
         """The unmutated tree must pass the tests the group names; else nothing it
         says is meaningful."""
+        if args.no_baseline:
+            return True
         names = sorted({t for m in group for t in tests_of(m, ct)})
         names = [t for t in names if ct.count(t) > 0]
         if not names:
@@ -406,29 +504,56 @@ def main():
                                            time.time() - t0, " ".join(names)), flush=True)
         return True
 
+    def kernel_worker(k, queue, use_clang):
+        """Tests kernel mutants from the shared queue in kernel directory k."""
+        kdir = os.path.join(scratch, "kernel-dir-%d" % k)
+        ct = Ctest(bdir, dict(mut_env, LSQT_KERNEL_DIR=kdir), 1 if par > 1 else jobs, limit)
+        k_apply, k_restore = patcher(kdir)
+        cdir = os.path.join(scratch, "clang-%d" % k)
+        os.makedirs(cdir)
+
+        def k_check(m):
+            return clang_check(kdir, kfiles, cdir) if use_clang else None
+
+        while True:
+            with lock:
+                if not queue:
+                    return
+                m = queue.pop(0)
+            one(m, ct, k_apply, k_restore, k_check)
+
     try:
         kern = [m for m in sel if m["kernel"]]
         host = [m for m in sel if not m["kernel"]]
         if kern:
-            kdir = os.path.join(scratch, "kernel-dir")
-            for d in ("kernels", "include"):
-                shutil.copytree(os.path.join(ROOT, d), os.path.join(kdir, d))
-            kenv = dict(env, LSQT_KERNEL_DIR=kdir)
-            ct = Ctest(bdir, kenv, jobs, limit)
-            k_apply, k_restore = patcher(kdir)
-
+            for k in range(par):
+                kdir = os.path.join(scratch, "kernel-dir-%d" % k)
+                for d in ("kernels", "include"):
+                    shutil.copytree(os.path.join(ROOT, d), os.path.join(kdir, d))
+            ct = Ctest(bdir, dict(env, LSQT_KERNEL_DIR=os.path.join(scratch, "kernel-dir-0")), jobs, limit)
             use_clang = True
-            problem = clang_check(kdir, kfiles, scratch)
+            problem = clang_check(os.path.join(scratch, "kernel-dir-0"), kfiles, scratch)
             if problem:  # this clang cannot judge the clean sources: rely on the device
                 print("note: clang's check fails on the unmutated kernels; skipped:\n" + problem)
                 use_clang = False
-
-            def k_check(m):
-                return clang_check(kdir, kfiles, scratch) if use_clang else None
-
             if baseline(ct, [m for m in kern if m["name"] not in bad], "release build"):
-                for m in kern:
-                    one(m, ct, k_apply, k_restore, k_check)
+                queue = list(kern)
+                workers = [threading.Thread(target=kernel_worker, args=(k, queue, use_clang))
+                           for k in range(par)]
+                for w in workers:
+                    w.start()
+                try:
+                    for w in workers:
+                        while w.is_alive():
+                            w.join(0.5)
+                except KeyboardInterrupt:
+                    with lock:
+                        queue.clear()
+                    for sid in list(ACTIVE):
+                        kill_session(sid)
+                    for w in workers:
+                        w.join()
+                    raise
             else:
                 for m in kern:
                     report(m, "error", 0.0, "baseline fails")
@@ -446,6 +571,7 @@ def main():
             else:
                 print("%-*s  %-8s %6.1f s" % (width, "(scratch build)", "ok", time.time() - t0), flush=True)
             ct = Ctest(hb, env, jobs, limit)
+            mct = Ctest(hb, mut_env, jobs, limit)
             h_apply, h_restore = patcher(src)
 
             def h_build(m):
@@ -454,7 +580,7 @@ def main():
 
             if ok and baseline(ct, [m for m in host if m["name"] not in bad], "scratch build"):
                 for m in host:
-                    one(m, ct, h_apply, h_restore, h_build)
+                    one(m, mct, h_apply, h_restore, h_build)
             else:
                 for m in host:
                     report(m, "error", 0.0, "scratch build or baseline fails")
