@@ -11,7 +11,8 @@ cd "$(dirname "$0")/.."
 source tools/timing.sh
 step setup bash tools/setup.sh
 step build bash tools/build.sh -DLSQT_WERROR=ON
-step ctest bash -c '(cd build && ctest --output-on-failure -j 2 "$@") || { bash tools/ctest_tail.sh build; exit 8; }' \
+# The power tests (label "power": many paths, one regime each) are CI's (.ci/run).
+step ctest bash -c '(cd build && ctest --output-on-failure -j 2 -LE power "$@") || { bash tools/ctest_tail.sh build; exit 8; }' \
   ctest "$@"
 step fuzz bash tools/fuzz/run.sh "${LSQT_FUZZ_SECONDS:-30}"
 steps_done "tools/test.sh" 600
