@@ -4,9 +4,11 @@ tools/validate/validate.py --write-fixtures from closed forms, iadpython, mitsub
 independent numpy random walk) against lsqt-cl at each case's fixture_paths, with the
 standard library only: no network, no PyPI package.
 
-    test_fixtures.py [--every N] LSQT_CL [FIXTURES]
+    test_fixtures.py [--double] [--group NAME] [--every N] LSQT_CL [FIXTURES]
 
-(--every N: every N-th case only; the sanitizer build, where each process costs seconds.)
+(--every N: every N-th case only; the sanitizer build, where each process costs seconds.
+--double: every case in double precision, --group NAME: only the cases of that reference
+group; for the power test of the double path, test_fixtures.double.)
 
 Each row: z = (lsqt-cl - reference) / sqrt(std_err^2 + ref_err^2). The seeds are fixed, so
 the result is reproducible; the tolerance is a family one: all rows together fail by
@@ -36,13 +38,22 @@ def z_family(n, alpha=1e-3):
 
 
 def main():
-    every, binary, path = common.test_args(sys.argv[1:], "test_fixtures.py [--every N] LSQT_CL [FIXTURES]")
+    argv, extra, group = sys.argv[1:], [], None
+    while argv[:1] in (["--double"], ["--group"]):
+        if argv[0] == "--double":
+            extra, argv = ["--double"], argv[1:]
+        else:
+            group, argv = argv[1], argv[2:]
+    every, binary, path = common.test_args(argv, "test_fixtures.py [--double] [--group NAME] [--every N] LSQT_CL [FIXTURES]")
     path = path or os.path.join(ROOT, "tests", "data", "validation_fixtures.json")
-    cases = json.load(open(path))["cases"][::every]
+    cases = [c for c in json.load(open(path))["cases"] if group is None or c["group"] == group]
+    if extra:  # leave out the cases that run in double anyway (test_fixtures has them)
+        cases = [c for c in cases if "--double" not in c.get("args", [])]
+    cases = cases[::every]
     n_rows = sum(len(c["checks"]) for c in cases)
     zmax = z_family(n_rows)
     common.Z_MAX = zmax
-    print(f"{len(cases)} cases, {n_rows} rows; |z| <= {zmax:.2f} (family 1e-3)")
+    print(f"{len(cases)} cases, {n_rows} rows; |z| <= {zmax:.2f} (family 1e-3)" + (" in double" if extra else ""))
     print(common.HEADER)
     t0 = time.time()
     failed = passed = known = 0
@@ -50,7 +61,7 @@ def main():
     groups = {}
     for c in cases:
         t = time.time()
-        for r in common.rows_of_case(c, c["fixture_paths"], binary):
+        for r in common.rows_of_case(c, c["fixture_paths"], binary, extra):
             print(common.format_row(r), flush=True)
             if r["verdict"] == "known":
                 known += 1

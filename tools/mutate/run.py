@@ -286,12 +286,13 @@ def git(*args):
 
 
 def test_sources(name):
-    """The source file of a ctest test (test_phases.hg2 -> tests/test_phases.c)."""
-    base = name.split(".")[0] if name.startswith("test_phases.") else name
-    for ext in ("", ".c", ".sh", ".py"):
-        rel = "tests/" + base + ext
-        if os.path.isfile(os.path.join(ROOT, rel)):
-            return rel
+    """The source file of a ctest test: tests/NAME(.c|.sh|.py), else that of the part
+    before the first dot (a section: test_phases.hg2 -> tests/test_phases.c)."""
+    for base in (name, name.split(".")[0]):
+        for ext in ("", ".c", ".sh", ".py"):
+            rel = "tests/" + base + ext
+            if os.path.isfile(os.path.join(ROOT, rel)):
+                return rel
     return None
 
 

@@ -1,0 +1,658 @@
+/* Power tests of media (issue 23): enough paths to see a 1 % systematic error in two
+ * regimes that the other tests reach only weakly.
+ *
+ *   test_power_media double    media walks in --double (LSQT_DOUBLE kernels) against
+ *                              closed forms: a clear absorber's analog transmission
+ *                              exp(-tau/muo) (free flights), a clear absorber over a
+ *                              Lambertian (exact point estimates, 2 E3 analog R), single
+ *                              scattering of thin HG slabs per collision (phase values),
+ *                              a semi-infinite isotropic medium against Chandrasekhar's H
+ *                              (the medium's next-event transmittance).
+ *   test_power_media grazing   point estimates at theta_i = 89, 89.5, 89.9 degrees (above
+ *                              and below the horizon, three azimuths) through media, float:
+ *                              thin HG slabs' single scattering per collision, clear
+ *                              absorbers around a Lambertian (exact), H for a semi-infinite
+ *                              isotropic medium.
+ *
+ * Conventions as tests/test_references.c (whose closed forms these are, here at other
+ * precisions and angles): a path enters along -wo, wo = (sin to, 0, cos to); RAW f is the
+ * tallied value over |wi.z|. Statistical checks are z-scores with batch-means errors over
+ * LSQT_BATCHES = 32 batches (Student t, 31 degrees of freedom); each section is one
+ * family: its thresholds are the t quantiles of two-sided tail 5e-4 / (the number of
+ * checks of single directions) for those, and 5e-4 / (the number of aggregates) for the
+ * aggregates, so an unmodified code fails a section by chance with probability <= 1e-3.
+ * Checks of exact identities (float or double rounding only) are not in the family.
+ * `test_power_media SECTION N` adds N to every seed (to check that the tolerances hold).
+ *
+ * Detectable effects (planted in the kernels, tools/mutate/new-h1.txt): double: free
+ * flights 0.5 % too long, uniforms scaled by 0.998, HG values +-0.25 %, the medium's
+ * next-event exponent 1 % high (0.5 % is missed); grazing: a medium next-event error of
+ * 0.66 % at 89.9 degrees (0.16 % is missed), any change of the layers' next-event
+ * transmittance above float rounding (1e-6). */
+#include "cl_fixture.h"
+#include "quadrature.h"
+
+#define PI 3.14159265358979323846
+#define NB LSQT_BATCHES
+
+/* ------------------------------------------------------------ statistics */
+
+/* Two-sided tail of Student's t with nu degrees of freedom beyond |t|, by Simpson's rule
+ * on the density in u = 1/x (the density has a polynomial tail). */
+static double t_tail2(double t, int nu)
+{
+    const double c = exp(lgamma((nu + 1) / 2.0) - lgamma(nu / 2.0)) / sqrt(nu * PI);
+    /* int_t^inf c (1 + x^2/nu)^(-(nu+1)/2) dx = int_0^{1/t} c (1 + 1/(u^2 nu))^(-(nu+1)/2) / u^2 du */
+    const int n = 4000;
+    const double h = (1.0 / t) / n;
+    double s = 0.0;
+    for (int i = 1; i <= n; i++) {
+        const double u = i * h;
+        const double f = c * pow(1.0 + 1.0 / (u * u * nu), -(nu + 1) / 2.0) / (u * u);
+        s += f * (i == n ? 1.0 : (i % 2 ? 4.0 : 2.0));
+    }
+    return 2.0 * s * h / 3.0;
+}
+
+/* |t| whose two-sided tail (31 degrees of freedom) is alpha / n_checks */
+static double z_family(int n_checks, double alpha)
+{
+    double lo = 1.0, hi = 40.0, p = alpha / n_checks;
+    for (int i = 0; i < 60; i++) {
+        double mid = 0.5 * (lo + hi);
+        if (t_tail2(mid, NB - 1) > p) lo = mid;
+        else hi = mid;
+    }
+    return hi;
+}
+
+/* The section's thresholds: half the family's 1e-3 for the checks of single directions,
+ * half for the aggregates (means over directions, R, T, delta_T), each Bonferroni over
+ * its count (counted by a dry pass of the section). */
+static double ZD, ZA;
+static int n_dir, n_agg;
+static uint64_t seed_offset; /* argv[2]: other seeds, to check that the tolerances hold */
+
+/* ---------------------------------------------------------------- helpers */
+
+static int composite_gl(const double *edges, int n_panels, int n, double *x, double *w)
+{
+    double gx[64], gw[64];
+    gauss_legendre(n, gx, gw);
+    int m = 0;
+    for (int p = 0; p < n_panels; p++) {
+        double a = edges[p], b = edges[p + 1];
+        for (int i = 0; i < n; i++, m++) {
+            x[m] = 0.5 * (a + b) + 0.5 * (b - a) * gx[i];
+            w[m] = 0.5 * (b - a) * gw[i];
+        }
+    }
+    return m;
+}
+
+static double hg(double g, double c)
+{
+    double d = 1.0 + g * g - 2.0 * g * c;
+    return (1.0 - g * g) / (4.0 * PI * d * sqrt(d));
+}
+
+static double phi1(double x) { return fabs(x) < 1e-300 ? 1.0 : -expm1(-x) / x; }
+
+/* E3(tau) = int_0^1 mu exp(-tau/mu) dmu */
+static double e3(double tau)
+{
+    double x[128], w[128], sum = 0;
+    gauss_legendre(128, x, w);
+    for (int i = 0; i < 128; i++) {
+        double mu = 0.5 * (x[i] + 1);
+        sum += 0.5 * w[i] * mu * exp(-tau / mu);
+    }
+    return sum;
+}
+
+/* The direction the device uses: the state's float one, normalised again in double for a
+ * double kernel (host/session.c), as the RAW divides by the float |z|. */
+static void wi_of(const lsqt_state *st, int s, int k, double v[3])
+{
+    const float *p = st->wi + ((size_t)s * (size_t)st->n_wi + (size_t)k) * 4;
+    v[0] = p[0], v[1] = p[1], v[2] = p[2];
+    if (st->use_double) {
+        const double len = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+        v[0] /= len, v[1] /= len, v[2] /= len;
+    }
+}
+
+/* |z| of direction k as the host divides by it (the state's float) */
+static double host_az(const lsqt_state *st, int s, int k)
+{
+    return fabs((double)st->wi[((size_t)s * (size_t)st->n_wi + (size_t)k) * 4 + 2]);
+}
+
+/* Batch b's sum of the RAW value at (s, k) */
+static double batch_f(const lsqt_state *st, int s, int b, int k)
+{
+    const lsqt_u128 *nee = st->nee + (size_t)s * NB * (size_t)st->n_wi;
+    double z = st->wi[((size_t)s * (size_t)st->n_wi + (size_t)k) * 4 + 2];
+    return lsqt_u128_to_double(nee[(size_t)b * (size_t)st->n_wi + (size_t)k]) / LSQT_FIX_SCALE / fabs(z);
+}
+
+static double batch_scalar(const lsqt_state *st, int s, int b, int q)
+{
+    return lsqt_u128_to_double(st->scalars[((size_t)s * NB + (size_t)b) * LSQT_T_COUNT + (size_t)q]) / LSQT_FIX_SCALE;
+}
+
+/* sum(y) / sum(x) over the batches with its linearised batch-means error */
+static lsqt_est batch_ratio(const double *y, const double *x)
+{
+    double sy = 0.0, sx = 0.0, ss = 0.0;
+    for (int b = 0; b < NB; b++) sy += y[b], sx += x[b];
+    lsqt_est r = {sy / sx, 0.0};
+    for (int b = 0; b < NB; b++) ss += (y[b] - r.mean * x[b]) * (y[b] - r.mean * x[b]);
+    r.err = sqrt(ss * NB / (NB - 1)) / sx;
+    return r;
+}
+
+/* Mean over the directions ks of f/ref, per path (x = paths) or per unit of *den */
+static lsqt_est ratio_over(const lsqt_state *st, int s, const int *ks, int n, const double *ref, const double *den,
+                           double scale)
+{
+    double y[NB], x[NB];
+    for (int b = 0; b < NB; b++) {
+        y[b] = 0.0;
+        for (int i = 0; i < n; i++) y[b] += batch_f(st, s, b, ks[i]) / ref[ks[i]];
+        y[b] *= scale / n;
+        x[b] = den ? den[b] : (double)lsqt_batch_paths(st->paths, b);
+    }
+    return batch_ratio(y, x);
+}
+
+/* Simulates text at the slices deg with the given directions (float x, y, z per row), or
+ * n_wi spread ones when dirs is NULL. */
+static lsqt_slice_est *run_dirs(const char *text, int n_slices, const double *deg, int n_wi, const double (*dirs)[3],
+                                uint64_t paths, uint64_t seed, int use_double, lsqt_state *st)
+{
+    lsqt_assembly a;
+    lsqt_diag diag;
+    memset(&diag, 0, sizeof diag);
+    if (lsqt_parse(text, strlen(text), "test", &a, &diag)) {
+        fprintf(stderr, "parse failed: %s\n", diag.error);
+        exit(1);
+    }
+    size_t n = lsqt_assembly_canonical(&a, NULL, 0);
+    char *canon = malloc(n + 1);
+    lsqt_assembly_canonical(&a, canon, n + 1);
+    if (lsqt_state_init(st, canon, lsqt_assembly_hash(&a), seed, n_slices, n_wi, lsqt_assembly_transmits(&a)))
+        exit(1);
+    free(canon);
+    st->use_double = use_double;
+    for (int s = 0; s < n_slices; s++) {
+        st->theta_o[s] = deg[s] * PI / 180.0;
+        float *w = st->wi + (size_t)s * (size_t)n_wi * 4;
+        if (!dirs) {
+            lsqt_wi_spread(n_wi, st->transmits, w);
+            continue;
+        }
+        for (int k = 0; k < n_wi; k++) {
+            w[4 * k] = (float)dirs[k][0], w[4 * k + 1] = (float)dirs[k][1], w[4 * k + 2] = (float)dirs[k][2];
+            w[4 * k + 3] = 0.0f;
+        }
+    }
+    st->seed += seed_offset;
+    lsqt_sim_opts o = {0, 0.0, 0, NULL, NULL, 0, 0.0, 0.0, NULL, NULL};
+    lsqt_sim_stats stats;
+    char err[1024];
+    if (lsqt_simulate(&fixture_cx, &a, st, paths, &o, &stats, err, sizeof err)) {
+        fprintf(stderr, "simulate failed: %s\n", err);
+        exit(1);
+    }
+    lsqt_assembly_free(&a);
+    CHECK(st->flags == 0, "flags %u", st->flags);
+    return lsqt_estimates(st);
+}
+
+/* The grazing set: theta_i = 89, 89.5, 89.9 degrees at azimuths 0, 90, 180 (relative to
+ * wo's), above the horizon and (for a transmitting stack) below it, then theta_i = 0 and
+ * 60 (at azimuth 45) on each side, as anchors. Returns the count. */
+enum { NWI_GRAZE = 22 };
+static int grazing_dirs(int transmits, double (*d)[3])
+{
+    static const double th[] = {89.0, 89.5, 89.9}, ph[] = {0.0, 90.0, 180.0};
+    int n = 0;
+    for (int side = 0; side < (transmits ? 2 : 1); side++) {
+        for (int i = 0; i < 3; i++)
+            for (int j = 0; j < 3; j++, n++) {
+                const double t = th[i] * PI / 180.0, p = ph[j] * PI / 180.0;
+                d[n][0] = sin(t) * cos(p), d[n][1] = sin(t) * sin(p), d[n][2] = side ? -cos(t) : cos(t);
+            }
+        for (int i = 0; i < 2; i++, n++) {
+            const double t = (i ? 60.0 : 0.0) * PI / 180.0, p = PI / 4;
+            d[n][0] = sin(t) * cos(p), d[n][1] = sin(t) * sin(p), d[n][2] = side ? -cos(t) : cos(t);
+        }
+    }
+    return n;
+}
+
+/* ------------------------------------------ multiple-scattering bound (thin slab) */
+
+/* As tests/test_references.c section 1: a bound on what second and later collisions add
+ * to the point estimate at wi of a slab of thickness 1, mut = tau, entered along -wo
+ * (Jensen on the depth of the first collision; later ones by a geometric series); the
+ * quadratures raised by 10 %. */
+enum { MS_NP = 15, MS_NG = 8, MS_NMU = MS_NP * MS_NG, MS_NPHI = 128 };
+typedef struct {
+    double g, tau;
+    double mu[MS_NMU], w[MS_NMU];
+    double cphi[MS_NPHI], sphi[MS_NPHI];
+    double q[MS_NMU];
+    double qsup;
+} ms_grid;
+
+static void ms_grid_init(ms_grid *G, double g, double tau)
+{
+    static const double edges[MS_NP + 1] = {0, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 0.04, 0.1, 0.2, 0.35,
+                                            0.5, 0.65, 0.8, 0.9, 0.97, 1};
+    G->g = g;
+    G->tau = tau;
+    composite_gl(edges, MS_NP, MS_NG, G->mu, G->w);
+    for (int j = 0; j < MS_NPHI; j++) {
+        G->cphi[j] = cos(2.0 * PI * (j + 0.5) / MS_NPHI);
+        G->sphi[j] = sin(2.0 * PI * (j + 0.5) / MS_NPHI);
+    }
+    G->qsup = 0.0;
+    for (int a = 0; a < MS_NMU; a++) {
+        const double mu = G->mu[a], s = sqrt(1.0 - mu * mu);
+        double q = 0.0;
+        for (int side = -1; side <= 1; side += 2)
+            for (int i = 0; i < MS_NMU; i++) {
+                const double mu2 = side * G->mu[i], s2 = sqrt(1.0 - mu2 * mu2);
+                const double m2 = -expm1(-tau / G->mu[i]) * G->w[i] * (2.0 * PI / MS_NPHI);
+                for (int j = 0; j < MS_NPHI; j++) q += m2 * hg(g, s * s2 * G->cphi[j] + mu * mu2);
+            }
+        G->q[a] = 1.1 * q;
+        G->qsup = fmax(G->qsup, G->q[a]);
+    }
+}
+
+static void ms_integrals(const ms_grid *G, double muo, const double (*wi)[3], int nwi, double *J, double *Q3)
+{
+    const double g = G->g, tau = G->tau;
+    const double lam = muo / tau, tbar = lam - 1.0 / expm1(1.0 / lam);
+    const double so = sqrt(1.0 - muo * muo);
+    for (int k = 0; k < nwi; k++) J[k] = 0.0;
+    *Q3 = 0.0;
+    for (int side = -1; side <= 1; side += 2) {
+        for (int i = 0; i < MS_NMU; i++) {
+            const double mu = side * G->mu[i], st = sqrt(1.0 - mu * mu);
+            const double m = -expm1(-tau * (mu > 0 ? tbar : 1.0 - tbar) / G->mu[i]);
+            for (int j = 0; j < MS_NPHI; j++) {
+                const double d[3] = {st * G->cphi[j], st * G->sphi[j], mu};
+                const double a = hg(g, -so * d[0] - muo * d[2]) * m * G->w[i] * (2.0 * PI / MS_NPHI);
+                *Q3 += a * G->q[i];
+                for (int k = 0; k < nwi; k++) J[k] += a * hg(g, d[0] * wi[k][0] + d[1] * wi[k][1] + d[2] * wi[k][2]);
+            }
+        }
+    }
+    for (int k = 0; k < nwi; k++) J[k] *= 1.1;
+    *Q3 *= 1.1;
+}
+
+static ms_grid ms_g;
+
+/* Thin HG slab (thickness 1, mut = tau, albedo om): per direction, the value tallied per
+ * collision, C_k = (sum f_k / ref_k) p1 / (paths that collided), where ref_k is the
+ * single-scattering closed form and p1 = 1 - exp(-tau/muo). Paths that collided are
+ * those not in delta_T (weight exactly 1 each), so the count's noise cancels: C_k checks
+ * the phase value, the albedo and the exit transmittance per collision. It lies in
+ * [1, 1 + bound_k/ref_k] up to noise. Also the absolute mean over each hemisphere, A
+ * (the collision count: free flights), and delta_T = exp(-tau/muo) (analog).
+ * count_only: only count the checks (n_dir, n_agg). */
+static void thin_slab(const char *what, double g, double om, double tau, int ns, const double *deg, int nwi,
+                     const double (*dirs)[3], uint64_t paths, uint64_t seed, int use_double, int count_only)
+{
+    lsqt_state st;
+    lsqt_slice_est *e = NULL;
+    char text[256];
+    snprintf(text, sizeof text,
+             "Medium\nLayer z=1 NullBsdf\nMedium mus=%.17g mua=%.17g HenyeyGreensteinPhase g=%.17g\n"
+             "Layer z=0 NullBsdf\nMedium\n",
+             om * tau, (1.0 - om) * tau, g);
+    if (!count_only) {
+        e = run_dirs(text, ns, deg, nwi, dirs, paths, seed, use_double, &st);
+        CHECK(st.transmits && st.n_wi == nwi, "%s: expected a transmitting slab", what);
+        ms_grid_init(&ms_g, g, tau);
+        CHECK(ms_g.qsup < 0.5, "q bound %g", ms_g.qsup);
+    }
+    const double pmax = hg(fabs(g), 1.0);
+    for (int s = 0; s < ns; s++) {
+        /* C_k per direction; A and C per hemisphere, C over its grazing directions, delta_T */
+        n_dir += nwi, n_agg += 2 + 2 + 2 + 1;
+        if (count_only) continue;
+        const double muo = cos(st.theta_o[s]), so = sin(st.theta_o[s]);
+        const double p1 = -expm1(-tau / muo);
+        double wi[128][3], ref[128], bnd[128], J[128], Q3, dcol[NB];
+        for (int k = 0; k < nwi; k++) wi_of(&st, s, k, wi[k]);
+        ms_integrals(&ms_g, muo, (const double(*)[3])wi, nwi, J, &Q3);
+        const double e3b = om * om * om * pmax * p1 * Q3 / (1.0 - ms_g.qsup);
+        for (int b = 0; b < NB; b++)
+            dcol[b] = (double)lsqt_batch_paths(st.paths, b) - batch_scalar(&st, s, b, LSQT_T_DELTA_T);
+        double cmin = 1e9, cmax = -1e9, errmax = 0.0;
+        for (int k = 0; k < nwi; k++) {
+            const double mui = fabs(wi[k][2]), c = -so * wi[k][0] - muo * wi[k][2];
+            double a = wi[k][2] > 0 ? phi1(tau * (1.0 / muo + 1.0 / mui))
+                                    : exp(-tau / mui) * phi1(tau * (1.0 / muo - 1.0 / mui));
+            ref[k] = om * hg(g, c) * tau / (muo * mui) * a;
+            bnd[k] = (om * om * p1 * J[k] + e3b) / mui;
+            int one[1] = {k};
+            lsqt_est C = ratio_over(&st, s, one, 1, ref, dcol, p1);
+            const double rb = bnd[k] / ref[k];
+            CHECK(C.err > 0 && C.mean - 1 >= -ZD * C.err && C.mean - 1 <= ZD * C.err + rb,
+                  "%s to=%g wi=(%.4f %.4f %.5f): per collision f/ref %.6f +- %.2g (ms bound %.2g), z=%.2f", what,
+                  deg[s], wi[k][0], wi[k][1], wi[k][2], C.mean, C.err, rb, (C.mean - 1) / C.err);
+            cmin = fmin(cmin, C.mean - 1), cmax = fmax(cmax, C.mean - 1 - rb), errmax = fmax(errmax, C.err);
+        }
+        for (int up = 0; up <= 1; up++) {
+            int ks[128], n = 0;
+            double bmean = 0.0;
+            for (int k = 0; k < nwi; k++)
+                if ((wi[k][2] > 0) == up) ks[n++] = k, bmean += bnd[k] / ref[k];
+            if (!n) continue;
+            bmean /= n;
+            lsqt_est A = ratio_over(&st, s, ks, n, ref, NULL, 1.0), C = ratio_over(&st, s, ks, n, ref, dcol, p1);
+            CHECK(A.mean - 1 >= -ZA * A.err && A.mean - 1 <= ZA * A.err + bmean,
+                  "%s to=%g %s: mean f/ref %.5f +- %.2g (ms bound %.2g)", what, deg[s], up ? "R" : "T", A.mean,
+                  A.err, bmean);
+            CHECK(C.mean - 1 >= -ZA * C.err && C.mean - 1 <= ZA * C.err + bmean,
+                  "%s to=%g %s: per collision mean f/ref %.5f +- %.2g (ms bound %.2g)", what, deg[s],
+                  up ? "R" : "T", C.mean, C.err, bmean);
+            printf("  %s to=%4.1f %s: mean f/ref %.5f +- %.5f, per collision %.5f +- %.5f (ms bound %.5f)\n", what,
+                   deg[s], up ? "R" : "T", A.mean, A.err, C.mean, C.err, bmean);
+            /* the same over the grazing directions (|wi.z| < 0.02) alone */
+            int kg[128], ng = 0;
+            double bg = 0.0;
+            for (int i = 0; i < n; i++)
+                if (fabs(wi[ks[i]][2]) < 0.02) kg[ng++] = ks[i], bg += bnd[ks[i]] / ref[ks[i]];
+            if (!ng) continue;
+            bg /= ng;
+            lsqt_est G = ratio_over(&st, s, kg, ng, ref, dcol, p1);
+            CHECK(G.mean - 1 >= -ZA * G.err && G.mean - 1 <= ZA * G.err + bg,
+                  "%s to=%g %s: per collision mean f/ref over %d grazing directions %.5f +- %.2g (ms bound %.2g)",
+                  what, deg[s], up ? "R" : "T", ng, G.mean, G.err, bg);
+            printf("  %s to=%4.1f %s: per collision over %d grazing directions %.5f +- %.5f (ms bound %.5f)\n",
+                   what, deg[s], up ? "R" : "T", ng, G.mean, G.err, bg);
+        }
+        CHECK_Z(e[s].delta_T.mean, exp(-tau / muo), e[s].delta_T.err, ZA);
+        printf("  %s to=%4.1f: per collision f/ref - 1 in [%.2e, %.2e] beyond the ms bound, largest err %.2e; "
+               "delta_T/exp(-tau/muo) %.5f +- %.5f\n",
+               what, deg[s], cmin, cmax, errmax, e[s].delta_T.mean / exp(-tau / muo),
+               e[s].delta_T.err / exp(-tau / muo));
+    }
+    if (!count_only) {
+        lsqt_estimates_free(e, ns);
+        lsqt_state_free(&st);
+    }
+}
+
+/* ------------------------------------------------ clear absorber, analog */
+
+/* A clear absorber (mua only) between null layers: no path scatters, T = delta_T =
+ * exp(-tau/muo) exactly (a binomial): the free-flight lengths themselves. */
+static void clear_slab(double tau, int ns, const double *deg, uint64_t paths, uint64_t seed, int use_double,
+                      int count_only)
+{
+    if (count_only) {
+        n_agg += ns;
+        return;
+    }
+    char text[256];
+    snprintf(text, sizeof text, "Medium\nLayer z=1 NullBsdf\nMedium mua=%.17g\nLayer z=0 NullBsdf\nMedium\n", tau);
+    lsqt_state st;
+    lsqt_slice_est *e = run_dirs(text, ns, deg, 16, NULL, paths, seed, use_double, &st);
+    for (int s = 0; s < ns; s++) {
+        const double want = exp(-tau / cos(st.theta_o[s]));
+        CHECK_Z(e[s].delta_T.mean, want, e[s].delta_T.err, ZA);
+        CHECK(e[s].R.mean == 0 && e[s].T.mean == e[s].delta_T.mean, "clear slab: R %g T %g", e[s].R.mean, e[s].T.mean);
+        printf("  clear slab tau=%g to=%4.1f: T/exp(-tau/muo) = %.5f +- %.5f\n", tau, deg[s], e[s].delta_T.mean / want,
+               e[s].delta_T.err / want);
+    }
+    lsqt_estimates_free(e, ns);
+    lsqt_state_free(&st);
+}
+
+/* -------------------------------------- clear absorbers around a Lambertian */
+
+/* Clear absorbers (optical thickness tau1 above, tau2 below) around a Lambertian layer
+ * (fR, fT): every surviving path reaches the layer with weight 1, so
+ *   f(wi) = fR/pi e^{-tau1/muo} e^{-tau1/mui} above, fT/pi e^{-tau1/muo} e^{-tau2/|mui|} below,
+ * and f e^{tau/|mui|} (tau of the side) / f_side is one number for all wi of a side, to the
+ * rounding of the device's precision (eps per operation) and of the fixed point. Plus,
+ * statistically, that number against fR/pi e^{-tau1/muo} (the analog way in) and the
+ * analog R against fR e^{-tau1/muo} 2 E3(tau1) (the analog way out). */
+static void absorber_lambertian(const char *what, double tau1, double tau2, double fr, double ft, int ns,
+                               const double *deg, int nwi, const double (*dirs)[3], uint64_t paths, uint64_t seed,
+                               int use_double, int count_only)
+{
+    const int transmits = ft > 0;
+    if (count_only) {
+        n_agg += ns * (transmits ? 4 : 2);
+        return;
+    }
+    char text[512];
+    if (transmits)
+        snprintf(text, sizeof text,
+                 "Medium\nLayer z=2 NullBsdf\nMedium mua=%.17g\nLayer z=1 LambertianBsdf fR=%.17g fT=%.17g\n"
+                 "Medium mua=%.17g\nLayer z=0 NullBsdf\nMedium\n",
+                 tau1, fr, ft, tau2);
+    else
+        snprintf(text, sizeof text, "Medium\nLayer z=1 NullBsdf\nMedium mua=%.17g\nLayer z=0 LambertianBsdf fR=%.17g\nMedium\n",
+                 tau1, fr);
+    lsqt_state st;
+    lsqt_slice_est *e = run_dirs(text, ns, deg, nwi, dirs, paths, seed, use_double, &st);
+    CHECK(st.transmits == transmits, "%s: transmits %d", what, st.transmits);
+    const double eps = use_double ? ldexp(1.0, -53) : ldexp(1.0, -24);
+    for (int s = 0; s < ns; s++) {
+        const double muo = cos(st.theta_o[s]);
+        for (int up = 1; up >= (transmits ? 0 : 1); up--) {
+            const double tau = up ? tau1 : tau2, fx = up ? fr : ft;
+            int kb = -1, used = 0;
+            double scaled[128], tol[128], spread = 0.0, spread_graze = 0.0;
+            for (int k = 0; k < nwi; k++) {
+                double wi[3];
+                wi_of(&st, s, k, wi);
+                tol[k] = -1.0;
+                if ((wi[2] > 0) != up) continue;
+                const double mui = fabs(wi[2]), x = tau / mui, v = fx * mui / PI * exp(-x);
+                scaled[k] = e[s].f[k].mean * host_az(&st, s, k) / mui * exp(x);
+                /* per arrival: round(v 2^40) (<= 0.5 units relative to v 2^40) and a few
+                 * roundings: fx mui/pi (3), 1/mui (1, times x), exp (<= 3 ulp), f*t (1),
+                 * the host's division (1); allowed twice that */
+                tol[k] = v * LSQT_FIX_SCALE >= 64.0 ? 2.0 * ((0.5 / LSQT_FIX_SCALE) / v + (9.0 + x) * eps) : -1.0;
+                if (tol[k] > 0 && (kb < 0 || mui > host_az(&st, s, kb))) kb = k;
+            }
+            CHECK(kb >= 0, "%s: no usable direction", what);
+            if (kb < 0) continue;
+            for (int k = 0; k < nwi; k++) {
+                if (tol[k] < 0) continue;
+                used++;
+                const double r = scaled[k] / scaled[kb] - 1.0, z = st.wi[((size_t)s * nwi + (size_t)k) * 4 + 2];
+                spread = fmax(spread, fabs(r));
+                if (fabs(z) < 0.02) spread_graze = fmax(spread_graze, fabs(r));
+                CHECK(fabs(r) <= tol[k] + tol[kb], "%s to=%g wi.z=%.5f: f e^{tau/mui} differs by %.3g (allowed %.2g)",
+                      what, deg[s], z, r, tol[k] + tol[kb]);
+            }
+            const double mub = host_az(&st, s, kb);
+            const double want = fx / PI * exp(-tau1 / muo);
+            CHECK_Z(scaled[kb], want, e[s].f[kb].err * exp(tau / mub), ZA);
+            /* analog exit: R or T = fx e^{-tau1/muo} 2 E3(tau) */
+            const lsqt_est *an = up ? &e[s].R : &e[s].T;
+            const double want_an = fx * exp(-tau1 / muo) * 2.0 * e3(tau);
+            CHECK_Z(an->mean, want_an, an->err, ZA);
+            printf("  %s to=%4.1f %s: f e^{tau/mui} spread %.2g over %d directions (%.2g where |wi.z| < 0.02), "
+                   "%.6f vs %.6f (+- %.2g); %s %.6f vs %.6f +- %.2g\n",
+                   what, deg[s], up ? "up" : "down", spread, used, spread_graze, scaled[kb], want,
+                   e[s].f[kb].err * exp(tau / mub), up ? "R" : "T", an->mean, want_an, an->err);
+        }
+    }
+    lsqt_estimates_free(e, ns);
+    lsqt_state_free(&st);
+}
+
+/* -------------------------------- semi-infinite isotropic medium (Chandrasekhar) */
+
+enum { H_PANELS = 8, H_MAX = H_PANELS * 32 };
+typedef struct {
+    double omega;
+    int n;
+    double x[H_MAX], w[H_MAX], h[H_MAX];
+} hfun;
+
+/* 1/H(mu) = sqrt(1 - om) + (om/2) int_0^1 mu' H(mu') / (mu + mu') dmu', iterated on
+ * Gauss-Legendre panels graded towards 0; H elsewhere by the same formula (Nystrom). */
+static int h_solve(hfun *H, double omega, int per_panel)
+{
+    static const double edges[H_PANELS + 1] = {0, 1e-4, 1e-3, 1e-2, 0.05, 0.15, 0.35, 0.65, 1};
+    H->omega = omega;
+    H->n = composite_gl(edges, H_PANELS, per_panel, H->x, H->w);
+    const double s = sqrt(1.0 - omega);
+    double wx[H_MAX];
+    for (int i = 0; i < H->n; i++) H->h[i] = 1.0, wx[i] = H->w[i] * H->x[i];
+    for (int it = 1; it <= 20000; it++) {
+        double change = 0.0;
+        for (int j = 0; j < H->n; j++) {
+            double sum = 0.0;
+            for (int i = 0; i < H->n; i++) sum += wx[i] * H->h[i] / (H->x[j] + H->x[i]);
+            double v = 1.0 / (s + 0.5 * omega * sum);
+            change = fmax(change, fabs(v - H->h[j]));
+            H->h[j] = v;
+        }
+        if (change < 1e-13) return it;
+    }
+    return -1;
+}
+
+static double h_eval(const hfun *H, double mu)
+{
+    double sum = 0.0;
+    for (int i = 0; i < H->n; i++) sum += H->w[i] * H->x[i] * H->h[i] / (mu + H->x[i]);
+    return 1.0 / (sqrt(1.0 - H->omega) + 0.5 * H->omega * sum);
+}
+
+static hfun hf_a, hf_b;
+
+/* A slab of optical thickness 100 (mut = 1) as a half space: f = om/(4 pi) H(muo) H(mui) /
+ * (muo + mui) above. Per direction, and the mean of f/ref over the upper directions that
+ * are checked (`sel`: all, or only |wi.z| < 0.02, the grazing ones). */
+static void semi_infinite(const char *what, double om, int ns, const double *deg, int nwi, const double (*dirs)[3],
+                         uint64_t paths, uint64_t seed, int use_double, int count_only)
+{
+    if (count_only) {
+        int n_up = 0;
+        if (dirs)
+            for (int k = 0; k < nwi; k++) n_up += dirs[k][2] > 0;
+        else
+            n_up = nwi / 2; /* lsqt_wi_spread on the sphere: half above */
+        n_dir += ns * n_up, n_agg += ns;
+        return;
+    }
+    CHECK(h_solve(&hf_a, om, 16) > 0 && h_solve(&hf_b, om, 32) > 0, "H(om=%g) did not converge", om);
+    double hdiff = 0.0;
+    for (int i = 0; i <= 1000; i++)
+        hdiff = fmax(hdiff, fabs(h_eval(&hf_a, i / 1000.0) / h_eval(&hf_b, i / 1000.0) - 1.0));
+    CHECK(hdiff < 1e-9, "H(om=%g): quadratures differ by %.3g", om, hdiff);
+    char text[256];
+    snprintf(text, sizeof text,
+             "Medium\nLayer z=100 NullBsdf\nMedium mus=%.17g mua=%.17g HenyeyGreensteinPhase g=0\n"
+             "Layer z=0 NullBsdf\nMedium\n",
+             om, 1.0 - om);
+    lsqt_state st;
+    lsqt_slice_est *e = run_dirs(text, ns, deg, nwi, dirs, paths, seed, use_double, &st);
+    for (int s = 0; s < ns; s++) {
+        const double muo = cos(st.theta_o[s]), ho = h_eval(&hf_b, muo);
+        CHECK(e[s].T.mean < 1e-4, "%s slice %d: T = %.3g, not semi-infinite", what, s, e[s].T.mean);
+        const double model = (e[s].T.mean + 3 * e[s].T.err) / e[s].R.mean + 1e-6;
+        double ref[128];
+        int ks[128], n = 0;
+        double zmax = 0.0;
+        for (int k = 0; k < nwi; k++) {
+            double wi[3];
+            wi_of(&st, s, k, wi);
+            ref[k] = 1.0;
+            if (wi[2] <= 0) continue;
+            ref[k] = om / (4.0 * PI) * ho * h_eval(&hf_b, wi[2]) / (muo + wi[2]);
+            ks[n++] = k;
+            const double d = e[s].f[k].mean - ref[k], sg = e[s].f[k].err;
+            zmax = fmax(zmax, fabs(d) / sg);
+            CHECK(sg > 0 && fabs(d) <= ZD * sg + model * ref[k], "%s om=%g to=%g wi.z=%.5f: f %.6g +- %.2g vs %.6g: z = %.2f",
+                  what, om, deg[s], wi[2], e[s].f[k].mean, sg, ref[k], d / sg);
+        }
+        lsqt_est A = ratio_over(&st, s, ks, n, ref, NULL, 1.0);
+        CHECK(fabs(A.mean - 1.0) <= ZA * A.err + model, "%s om=%g to=%g: mean f/ref %.5f +- %.2g", what, om, deg[s],
+              A.mean, A.err);
+        printf("  %s om=%.2f to=%4.1f: mean f/ref %.5f +- %.5f over %d directions, max |z| %.2f\n", what, om, deg[s],
+               A.mean, A.err, n, zmax);
+    }
+    lsqt_estimates_free(e, ns);
+    lsqt_state_free(&st);
+}
+
+/* ---------------------------------------------------------------- sections */
+
+/* Each section runs its cases twice: first counting the family's checks (no simulation),
+ * then for real with ZD and ZA from those counts. */
+static void section_double(int count_only)
+{
+    const double deg3[] = {0, 50, 80}, deg2[] = {0, 60};
+    /* free flights: T = exp(-tau/muo) to ~5e-4 relative */
+    clear_slab(1.0, 3, deg3, (uint64_t)1 << 22, 1001, 1, count_only);
+    /* the way out of an absorber (layer next-event transmittance, exp in double) and 2 E3 */
+    absorber_lambertian("double absorber/Lambertian", 1.0, 0.5, 0.5, 0.3, 2, deg2, 64, NULL, (uint64_t)1 << 20, 1002, 1,
+                        count_only);
+    /* phase values per collision (om small: second collisions weigh om^2) */
+    thin_slab("double thin g=0.6", 0.6, 0.1, 1e-3, 2, deg2, 64, NULL, (uint64_t)1 << 22, 1003, 1, count_only);
+    thin_slab("double thin g=-0.3", -0.3, 0.1, 1e-3, 2, deg2, 64, NULL, (uint64_t)1 << 22, 1004, 1, count_only);
+    /* the medium's next-event transmittance, to all orders */
+    semi_infinite("double semi-infinite", 0.5, 2, deg2, 64, NULL, (uint64_t)1 << 19, 1005, 1, count_only);
+}
+
+static void section_grazing(int count_only)
+{
+    double dirs[NWI_GRAZE][3], up_only[NWI_GRAZE][3];
+    const int nt = grazing_dirs(1, dirs), nr = grazing_dirs(0, up_only);
+    const double(*dt)[3] = (const double(*)[3])dirs, (*dr)[3] = (const double(*)[3])up_only;
+    const double deg3[] = {0, 60, 85};
+    /* exact: the layer's next-event transmittance at grazing, both sides */
+    absorber_lambertian("grazing absorbers/Lambertian", 1e-3, 2e-3, 0.5, 0.3, 3, deg3, nt, dt, (uint64_t)1 << 18, 2001,
+                        0, count_only);
+    absorber_lambertian("grazing absorber/opaque Lambertian", 3e-3, 0.0, 0.7, 0.0, 3, deg3, nr, dr, (uint64_t)1 << 18,
+                        2002, 0, count_only);
+    /* the medium's: single scattering per collision, tau/|mu_i| up to 0.57 */
+    thin_slab("grazing thin g=0", 0.0, 0.1, 1e-3, 3, deg3, nt, dt, (uint64_t)1 << 23, 2003, 0, count_only);
+    thin_slab("grazing thin g=0.7", 0.7, 0.1, 1e-3, 3, deg3, nt, dt, (uint64_t)1 << 23, 2004, 0, count_only);
+    /* all orders: H(mu_i) near mu_i = 0 */
+    semi_infinite("grazing semi-infinite", 0.9, 2, deg3, nr, dr, (uint64_t)1 << 17, 2005, 0, count_only);
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2 || argc > 3 || (strcmp(argv[1], "double") && strcmp(argv[1], "grazing"))) {
+        fprintf(stderr, "usage: test_power_media double|grazing [SEED_OFFSET]\n");
+        return 2;
+    }
+    if (argc == 3) seed_offset = strtoull(argv[2], NULL, 10);
+    const int dbl = !strcmp(argv[1], "double");
+    if (dbl) section_double(1);
+    else section_grazing(1);
+    ZD = z_family(n_dir, 5e-4), ZA = z_family(n_agg, 5e-4);
+    printf("%s: %d checks of single directions, |z| <= %.2f; %d aggregates, |z| <= %.2f (Student t, 31 dof, "
+           "family 1e-3)\n",
+           argv[1], n_dir, ZD, n_agg, ZA);
+    fixture_open();
+    if (dbl && !fixture_cx.dev.has_fp64) {
+        printf("no fp64 on this device: skipped\n");
+        lsqt_context_release(&fixture_cx);
+        return 77;
+    }
+    if (dbl) section_double(0);
+    else section_grazing(0);
+    lsqt_context_release(&fixture_cx);
+    return check_finish(dbl ? "test_power_media double" : "test_power_media grazing");
+}
