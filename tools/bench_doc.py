@@ -216,7 +216,7 @@ workload with itself (another run, device or build), not one workload with anoth
 *efficiency*: 1 / (error² × CPU s), the same for any `-p` once start-up is small, and twice
 as large when the same error takes half the time. The target
 column gives the target of the speed issue, met or not, and the original layered-sqt's CPU
-seconds for the same workload on this kind of machine (for the MCX-like slab, MCX-CL's
+seconds for the same workload as stated by the speed issue (another machine: an order of magnitude, not a ratio to trust to 10 %) (for the MCX-like slab, MCX-CL's
 rate in events per second) for comparison.
 
 {gpu_line}
