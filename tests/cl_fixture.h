@@ -27,6 +27,26 @@ static inline void fixture_open(void)
     printf("device: %s\n", fixture_cx.dev.name);
 }
 
+/* Parses text into *a and makes a fresh state of n_slices x n_wi for it in *st (caller
+ * frees; slice angles and directions still to be set); ends the test on an error. */
+static inline void fixture_state(const char *text, int n_slices, int n_wi, uint64_t seed, int use_double,
+                                 lsqt_assembly *a, lsqt_state *st)
+{
+    lsqt_diag diag;
+    memset(&diag, 0, sizeof diag);
+    if (lsqt_parse(text, strlen(text), "test", a, &diag)) {
+        fprintf(stderr, "parse failed: %s\n", diag.error);
+        exit(1);
+    }
+    size_t n = lsqt_assembly_canonical(a, NULL, 0);
+    char *canon = malloc(n + 1);
+    lsqt_assembly_canonical(a, canon, n + 1);
+    if (lsqt_state_init(st, canon, lsqt_assembly_hash(a), seed, n_slices, n_wi, lsqt_assembly_transmits(a)))
+        exit(1);
+    free(canon);
+    st->use_double = use_double;
+}
+
 /* Parses text and simulates `paths` per slice at the given angles (degrees) with n_wi
  * spread directions, in double precision when use_double; fills *st (caller frees) and
  * returns the estimates. */
@@ -34,19 +54,7 @@ static inline lsqt_slice_est *fixture_run_prec(const char *text, int n_slices, c
                                                uint64_t paths, uint64_t seed, int use_double, lsqt_state *st)
 {
     lsqt_assembly a;
-    lsqt_diag diag;
-    memset(&diag, 0, sizeof diag);
-    if (lsqt_parse(text, strlen(text), "test", &a, &diag)) {
-        fprintf(stderr, "parse failed: %s\n", diag.error);
-        exit(1);
-    }
-    size_t n = lsqt_assembly_canonical(&a, NULL, 0);
-    char *canon = malloc(n + 1);
-    lsqt_assembly_canonical(&a, canon, n + 1);
-    if (lsqt_state_init(st, canon, lsqt_assembly_hash(&a), seed, n_slices, n_wi, lsqt_assembly_transmits(&a)))
-        exit(1);
-    free(canon);
-    st->use_double = use_double;
+    fixture_state(text, n_slices, n_wi, seed, use_double, &a, st);
     for (int s = 0; s < n_slices; s++) {
         st->theta_o[s] = deg[s] * 3.14159265358979323846 / 180.0;
         lsqt_wi_spread(n_wi, st->transmits, st->wi + (size_t)s * (size_t)n_wi * 4);

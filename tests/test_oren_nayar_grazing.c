@@ -41,18 +41,7 @@ static double on_ref(double fr, double s, const double o[3], const double i[3])
 static lsqt_slice_est *run(const char *text, uint64_t paths, int use_double, lsqt_state *st)
 {
     lsqt_assembly a;
-    lsqt_diag diag;
-    memset(&diag, 0, sizeof diag);
-    if (lsqt_parse(text, strlen(text), "test", &a, &diag)) {
-        fprintf(stderr, "parse failed: %s\n", diag.error);
-        exit(1);
-    }
-    size_t n = lsqt_assembly_canonical(&a, NULL, 0);
-    char *canon = malloc(n + 1);
-    lsqt_assembly_canonical(&a, canon, n + 1);
-    if (lsqt_state_init(st, canon, lsqt_assembly_hash(&a), 7, NTH, NWI, lsqt_assembly_transmits(&a))) exit(1);
-    free(canon);
-    st->use_double = use_double;
+    fixture_state(text, NTH, NWI, 7, use_double, &a, st);
     for (int s = 0; s < NTH; s++) {
         st->theta_o[s] = th_deg[s] * PI / 180.0;
         for (int i = 0; i < NTH; i++)

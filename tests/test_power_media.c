@@ -141,19 +141,7 @@ static lsqt_slice_est *run_dirs(const char *text, int n_slices, const double *de
                                 uint64_t paths, uint64_t seed, int use_double, lsqt_state *st)
 {
     lsqt_assembly a;
-    lsqt_diag diag;
-    memset(&diag, 0, sizeof diag);
-    if (lsqt_parse(text, strlen(text), "test", &a, &diag)) {
-        fprintf(stderr, "parse failed: %s\n", diag.error);
-        exit(1);
-    }
-    size_t n = lsqt_assembly_canonical(&a, NULL, 0);
-    char *canon = malloc(n + 1);
-    lsqt_assembly_canonical(&a, canon, n + 1);
-    if (lsqt_state_init(st, canon, lsqt_assembly_hash(&a), seed, n_slices, n_wi, lsqt_assembly_transmits(&a)))
-        exit(1);
-    free(canon);
-    st->use_double = use_double;
+    fixture_state(text, n_slices, n_wi, seed, use_double, &a, st);
     for (int s = 0; s < n_slices; s++) {
         st->theta_o[s] = deg[s] * PI / 180.0;
         float *w = st->wi + (size_t)s * (size_t)n_wi * 4;
