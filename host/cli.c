@@ -118,7 +118,9 @@ void lsqt_cli_help(FILE *f)
           "that is not a regular file is never read: use -R to write a fresh state into it.\n"
           "Environment: LSQT_VECTOR_WIDTH=2|4|8|16 sets how many directions next-event\n"
           "estimation evaluates at once (default 16 on a CPU, 4 on a GPU; the result does\n"
-          "not depend on it); PoCL reads its own (POCL_CACHE_DIR, POCL_CPU_MAX_CU_NUM, ...).\n"
+          "not depend on it); LSQT_GPU_PATH=1 runs the GPU code path on any device (vector\n"
+          "width 4, work-groups of 64, one RNG block at a time: how the tests check it on a\n"
+          "CPU), =0 the CPU's; PoCL reads its own (POCL_CACHE_DIR, POCL_CPU_MAX_CU_NUM, ...).\n"
           "Exit status: 0 success, 1 failure, 2 bad input or flags, 3 no usable OpenCL device.\n",
           f);
 }

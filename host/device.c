@@ -45,6 +45,7 @@ static void device_fill(lsqt_device_info *d, cl_platform_id p, cl_device_id id)
     clGetDeviceInfo(id, CL_DEVICE_ENDIAN_LITTLE, sizeof little, &little, NULL);
     d->little_endian = little == CL_TRUE;
     clGetDeviceInfo(id, CL_DEVICE_MAX_COMPUTE_UNITS, sizeof d->compute_units, &d->compute_units, NULL);
+    clGetDeviceInfo(id, CL_DEVICE_LOCAL_MEM_SIZE, sizeof d->local_mem, &d->local_mem, NULL);
     size_t n = 0;
     clGetDeviceInfo(id, CL_DEVICE_EXTENSIONS, 0, NULL, &n);
     char *ext = calloc(n + 1, 1);

@@ -13,14 +13,27 @@ static cl_mem make_buffer(lsqt_context *cx, cl_mem_flags fl, size_t size, void *
     return clCreateBuffer(cx->ctx, fl | (host ? CL_MEM_COPY_HOST_PTR : 0), size, host, e);
 }
 
+/* The code path: a CPU's (wide vectors, one work-item per work-group, the four-block
+ * RNG) or a GPU's (vector width 4, work-groups of 64, one RNG block at a time).
+ * LSQT_GPU_PATH=1 takes the GPU's on any device, so the tests run it on a CPU;
+ * LSQT_GPU_PATH=0 the CPU's. Returns 1 (GPU), 0 (CPU) or -1 (bad value, err set). */
+static int gpu_path(const lsqt_context *cx, char *err, size_t errcap)
+{
+    const char *env = getenv("LSQT_GPU_PATH");
+    if (!env || !*env) return !cx->dev.is_cpu;
+    if (!strcmp(env, "0") || !strcmp(env, "1")) return atoi(env);
+    snprintf(err, errcap, "LSQT_GPU_PATH is '%s': expected 0 or 1", env);
+    return -1;
+}
+
 /* The next-event loops take vw directions at a time: 16 on a CPU (AVX-512 holds 16
  * floats; at 4, Substr's next-event work took 1.6x the time), 4 on a GPU, where a
  * work-item's vector is sequential work and registers. Per-direction values do not
  * depend on it; the vector maths of some builtins may round differently per width. */
-static int vector_width(const lsqt_context *cx, char *err, size_t errcap)
+static int vector_width(int gpu, char *err, size_t errcap)
 {
     const char *env = getenv("LSQT_VECTOR_WIDTH"); /* for tuning a device, and the tests */
-    if (!env || !*env) return cx->dev.is_cpu ? 16 : 4;
+    if (!env || !*env) return gpu ? 4 : 16;
     if (!strcmp(env, "2") || !strcmp(env, "4") || !strcmp(env, "8") || !strcmp(env, "16")) return atoi(env);
     snprintf(err, errcap, "LSQT_VECTOR_WIDTH is '%s': expected 2, 4, 8 or 16", env);
     return 0;
@@ -34,7 +47,7 @@ static size_t kernel_nwi(const lsqt_state *st, int group, int vw)
 }
 
 static int build_options(lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st, int group, int vw,
-                         char *opt, size_t cap, char *err, size_t errcap)
+                         int gpu, char *opt, size_t cap, char *err, size_t errcap)
 {
     size_t n = lsqt_assembly_build_options(a, opt, cap);
     if (n >= cap) {
@@ -45,7 +58,7 @@ static int build_options(lsqt_context *cx, const lsqt_assembly *a, const lsqt_st
     if (group > 1) n += (size_t)snprintf(opt + n, cap - n, " -DLSQT_GROUP_NWI=%d", st->n_wi);
     if (lsqt_device_check(&cx->dev, st->use_double, err, errcap)) return 1;
     if (st->use_double) n += (size_t)snprintf(opt + n, cap - n, " -DLSQT_DOUBLE=1");
-    if (cx->dev.is_cpu) n += (size_t)snprintf(opt + n, cap - n, " -DLSQT_RNG_WIDE=1"); /* philox.cl */
+    if (!gpu) n += (size_t)snprintf(opt + n, cap - n, " -DLSQT_RNG_WIDE=1"); /* philox.cl */
     if (!cx->dev.has_int64_atomics) snprintf(opt + n, cap - n, " -DLSQT_NO_INT64_ATOMICS=1");
     return 0;
 }
@@ -160,6 +173,33 @@ done:
     return rc;
 }
 
+/* Each kernel's local memory against the device's (the kernels bound theirs: 4.2 KB for
+ * any direction count, walk.cl's LSQT_ACC_TILE), so a device that cannot hold them says
+ * so here rather than failing a launch with CL_OUT_OF_RESOURCES. */
+static int check_kernel_memory(lsqt_session *s, int verbose, char *err, size_t errcap)
+{
+    const lsqt_device_info *d = &s->cx->dev;
+    const struct {
+        cl_kernel k;
+        const char *name;
+    } ks[] = {{s->walk, "lsqt_walk"}, {s->exits, "lsqt_exits"}, {s->prepare, "lsqt_prepare"}};
+    for (size_t i = 0; i < sizeof ks / sizeof ks[0]; i++) {
+        cl_ulong local = 0, priv = 0;
+        clGetKernelWorkGroupInfo(ks[i].k, d->id, CL_KERNEL_LOCAL_MEM_SIZE, sizeof local, &local, NULL);
+        clGetKernelWorkGroupInfo(ks[i].k, d->id, CL_KERNEL_PRIVATE_MEM_SIZE, sizeof priv, &priv, NULL);
+        if (verbose)
+            fprintf(stderr, "kernel %s: %llu bytes of local memory (device: %llu), %llu private per work-item\n",
+                    ks[i].name, (unsigned long long)local, (unsigned long long)d->local_mem, (unsigned long long)priv);
+        if (d->local_mem && local > d->local_mem) {
+            snprintf(err, errcap,
+                     "the kernel %s needs %llu bytes of local memory and %s has %llu: this device cannot run it",
+                     ks[i].name, (unsigned long long)local, d->name, (unsigned long long)d->local_mem);
+            return 1;
+        }
+    }
+    return 0;
+}
+
 int lsqt_session_open(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st,
                       const char *extra_options, size_t local_size, int verbose, char *err, size_t errcap)
 {
@@ -197,9 +237,11 @@ int lsqt_session_open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_asse
         return 1;
     }
     char opt[1024];
-    s->vw = vector_width(cx, err, errcap);
+    const int gpu = gpu_path(cx, err, errcap);
+    if (gpu < 0) return 1;
+    s->vw = vector_width(gpu, err, errcap);
     if (!s->vw) return 1;
-    if (build_options(cx, a, st, s->slice_group, s->vw, opt, sizeof opt, err, errcap)) return 1;
+    if (build_options(cx, a, st, s->slice_group, s->vw, gpu, opt, sizeof opt, err, errcap)) return 1;
     if (extra_options && strlen(opt) + strlen(extra_options) + 2 < sizeof opt) {
         strcat(opt, " ");
         strcat(opt, extra_options);
@@ -227,10 +269,14 @@ int lsqt_session_open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_asse
      * item does the chunk's 256 paths and the end-of-chunk sums (items x directions, a
      * locked add each) are made once: Slab 5 % and Substr 4 % less CPU than with 8 items
      * (12 % less with 8 than with 64); a GPU wants wide groups. */
-    size_t ls = local_size ? local_size : cx->dev.is_cpu ? 1 : 64, kmax = 0;
+    size_t ls = local_size ? local_size : gpu ? 64 : 1, kmax = 0;
     clGetKernelWorkGroupInfo(s->walk, cx->dev.id, CL_KERNEL_WORK_GROUP_SIZE, sizeof kmax, &kmax, NULL);
     if (kmax && ls > kmax) ls = kmax;
     s->local_size = ls;
+    if (check_kernel_memory(s, verbose, err, errcap)) {
+        lsqt_session_close(s);
+        return 1;
+    }
     if (upload(s, a, st, err, errcap)) {
         lsqt_session_close(s);
         return 1;

@@ -53,7 +53,7 @@ typedef LSQT_CAT(int, LSQT_VW) maskv;
  * weight / LSQT_RR_WEIGHT and then carries exactly LSQT_RR_WEIGHT (unbiased). */
 #define LSQT_RR_WEIGHT R(0.25)
 
-inline real3 make_real3(real x, real y, real z) { return (real3)(x, y, z); }
+static inline real3 make_real3(real x, real y, real z) { return (real3)(x, y, z); }
 
 /* any() and all() of a comparison of LSQT_VW lanes (lanes -1 or 0), by OR / AND of
  * halves: PoCL's builtins test lane after lane with a branch each (a fifth of the path
@@ -83,7 +83,7 @@ inline real3 make_real3(real x, real y, real z) { return (real3)(x, y, z); }
  * 1 / sqrt. (Used where the divider bounds the loop, the medium's next-event loop; in
  * the microfacet models' loops it and a Newton reciprocal measured no faster.) In
  * double: the library's. */
-inline realv rsqrt_fastv(realv x)
+static inline realv rsqrt_fastv(realv x)
 {
 #ifdef LSQT_DOUBLE
     return rsqrt(x);
@@ -99,7 +99,7 @@ inline realv rsqrt_fastv(realv x)
 
 /* x^(-3/2) for 0 < x < 2^84: the Henyey-Greenstein value without a division or square
  * root, which were most of a medium vertex's next-event loop. */
-inline realv inv_pow15v(realv x)
+static inline realv inv_pow15v(realv x)
 {
     realv r = rsqrt_fastv(x);
     return r * r * r;
@@ -111,7 +111,7 @@ inline realv inv_pow15v(realv x)
  * polynomial fitted for relative error (7.5e-8, 2.3e-7 with float's roundings;
  * test_fast_math), and n added to the exponent bits. PoCL's exp is longer (range checks
  * for both signs). In double: the library's. */
-inline realv exp2_negv(realv x)
+static inline realv exp2_negv(realv x)
 {
 #ifdef LSQT_DOUBLE
     return exp2(x);
@@ -136,17 +136,17 @@ typedef struct {
     realv x, y, z;
 } dirv;
 
-inline dirv dirv_broadcast(real3 d)
+static inline dirv dirv_broadcast(real3 d)
 {
     dirv r = {(realv)(d.x), (realv)(d.y), (realv)(d.z)};
     return r;
 }
 
-inline real sqr(real x) { return x * x; }
+static inline real sqr(real x) { return x * x; }
 
 /* sqrt that never returns NaN for round-off negatives */
-inline real safe_sqrt(real x) { return sqrt(fmax(x, R(0.0))); }
-inline realv safe_sqrtv(realv x) { return sqrt(fmax(x, (realv)(R(0.0)))); }
+static inline real safe_sqrt(real x) { return sqrt(fmax(x, R(0.0))); }
+static inline realv safe_sqrtv(realv x) { return sqrt(fmax(x, (realv)(R(0.0)))); }
 
 /* Point-estimate directions per slice (the host passes -DLSQT_NWI=n), padded to a
  * multiple of LSQT_VW. */
@@ -165,7 +165,7 @@ inline realv safe_sqrtv(realv x) { return sqrt(fmax(x, (realv)(R(0.0)))); }
 /* lgamma(x) for x >= 1, LSQT_VW at once, without the library's general (and, on PoCL,
  * scalar) lgamma: the Stirling series to 1/x^7 for x >= 8, error below 3e-11, after
  * lgamma(x) = lgamma(x + 6) - log(x (x+1) ... (x+5)) for smaller x. */
-inline realv lgamma_ge1_v(realv x)
+static inline realv lgamma_ge1_v(realv x)
 {
     maskv small = x < R(8.0);
     realv p = x * (x + R(1.0)) * (x + R(2.0)) * (x + R(3.0)) * (x + R(4.0)) * (x + R(5.0));

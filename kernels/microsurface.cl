@@ -26,7 +26,7 @@ typedef struct {
 } ms_sink;
 
 /* Directions are in `real`: --double is double end to end (the host normalises them). */
-inline dirv load_dirv(__global const real *wi, int k)
+static inline dirv load_dirv(__global const real *wi, int k)
 {
     dirv d = {vloadv(0, wi + k), vloadv(0, wi + LSQT_NWI_PAD + k), vloadv(0, wi + 2 * LSQT_NWI_PAD + k)};
     return d;
@@ -51,7 +51,7 @@ inline dirv load_dirv(__global const real *wi, int k)
 
 /* A walk vertex: the facet's phase function times G1 = C1^Lambda(u) to this side,
  * (1 - C1)^Lambda(u) to the other. */
-inline void ms_nee_vertex(__global const lsqt_dev_layer *l, const ms_vtx *x, real side, real w, const ms_sink *k)
+static inline void ms_nee_vertex(__global const lsqt_dev_layer *l, const ms_vtx *x, real side, real w, const ms_sink *k)
 {
 #define MS_G1 exp(lam * select((realv)(x->log_cbar), (realv)(x->log_c), u.z > R(0.0)))
     switch (l->kind) {
@@ -70,7 +70,7 @@ inline void ms_nee_vertex(__global const lsqt_dev_layer *l, const ms_vtx *x, rea
 }
 
 /* The analytic single-scattering term at the first hit (v.z > 0). */
-inline void ms_nee_single(__global const lsqt_dev_layer *l, const ms_vtx *x, real side, real w, const ms_sink *k)
+static inline void ms_nee_single(__global const lsqt_dev_layer *l, const ms_vtx *x, real side, real w, const ms_sink *k)
 {
     switch (l->kind) {
 #ifdef LSQT_HAS_BSDF_MS_CONDUCTIVE
@@ -86,7 +86,7 @@ inline void ms_nee_single(__global const lsqt_dev_layer *l, const ms_vtx *x, rea
 /* The first vertex of a walk on Lambertian facets: its height is independent of its
  * facet, so the chance of escaping is replaced by its mean over the first hit's height,
  * ms_single_escapev (the same expectation, less noise, most at grazing u). */
-inline void ms_nee_first(__global const lsqt_dev_layer *l, const ms_vtx *x, real side, real w, const ms_sink *k)
+static inline void ms_nee_first(__global const lsqt_dev_layer *l, const ms_vtx *x, real side, real w, const ms_sink *k)
 {
 #ifdef LSQT_HAS_BSDF_MS_LAMBERTIAN
     MS_NEE_LOOP(mslambert_phasev(l, x, u) * ms_single_escapev(x, u.z > R(0.0), lam, lg))
@@ -94,12 +94,12 @@ inline void ms_nee_first(__global const lsqt_dev_layer *l, const ms_vtx *x, real
 }
 
 /* Relative index across the facets from side s (only the dielectric refracts). */
-inline real ms_index(__global const lsqt_dev_layer *l, real s)
+static inline real ms_index(__global const lsqt_dev_layer *l, real s)
 {
     return l->kind == LSQT_BSDF_MS_DIELECTRIC ? (s > R(0.0) ? l->p[1] : R(1.0) / l->p[1]) : R(1.0);
 }
 
-inline real ms_scatter(__global const lsqt_dev_layer *l, const ms_vtx *x, rng_t *rng, real3 *r, int *cross)
+static inline real ms_scatter(__global const lsqt_dev_layer *l, const ms_vtx *x, rng_t *rng, real3 *r, int *cross)
 {
     *cross = 0;
     switch (l->kind) {
@@ -123,7 +123,7 @@ inline real ms_scatter(__global const lsqt_dev_layer *l, const ms_vtx *x, rng_t 
  * weighted w, to the sink. With max_order 1 (single scattering only) the walk stops after
  * its first vertex and the weight takes the chance of escaping from there. Returns the
  * exit weight (product of the albedos) and sets *out to the exit direction (world). */
-inline real ms_walk(__global const lsqt_dev_layer *l, real3 d, rng_t *rng, int max_order, int nee_from, real w,
+static inline real ms_walk(__global const lsqt_dev_layer *l, real3 d, rng_t *rng, int max_order, int nee_from, real w,
                     const ms_sink *k, real3 *out)
 {
     const real alpha = l->p[0];
@@ -162,7 +162,7 @@ inline real ms_walk(__global const lsqt_dev_layer *l, real3 d, rng_t *rng, int m
 }
 
 /* The analytic single scatterers' samplers (use_multiple_scattering=false). */
-inline real ms_single_sample(__global const lsqt_dev_layer *l, real3 wo, rng_t *rng, real3 *wi)
+static inline real ms_single_sample(__global const lsqt_dev_layer *l, real3 wo, rng_t *rng, real3 *wi)
 {
     real u0 = rng_uniform(rng), u1 = rng_uniform(rng), u2 = rng_uniform(rng);
     switch (l->kind) {
@@ -176,13 +176,13 @@ inline real ms_single_sample(__global const lsqt_dev_layer *l, real3 wo, rng_t *
     }
 }
 
-inline int ms_analytic(__global const lsqt_dev_layer *l) { return l->kind != LSQT_BSDF_MS_LAMBERTIAN; }
+static inline int ms_analytic(__global const lsqt_dev_layer *l) { return l->kind != LSQT_BSDF_MS_LAMBERTIAN; }
 
 /* A microsurface vertex reached along d with weight w: iter_count walks each add their
  * terms (weighted w / iter_count) to every direction of the sink, after the analytic
  * single scattering where there is one; walk 0's exit continues the path. Returns the
  * factor for the path's weight and sets *out. With nee 0 only the sample is made. */
-inline real ms_vertex_walks(__global const lsqt_dev_layer *l, real3 d, rng_t *rng, real w, int nee,
+static inline real ms_vertex_walks(__global const lsqt_dev_layer *l, real3 d, rng_t *rng, real w, int nee,
                             const ms_sink *k, real3 *out)
 {
     const int ms = l->multiple_scattering, analytic = ms_analytic(l);
@@ -206,7 +206,7 @@ inline real ms_vertex_walks(__global const lsqt_dev_layer *l, real3 d, rng_t *rn
 }
 
 /* Sampling alone (a vertex with no point estimate, and the test harness). */
-inline real ms_sample(__global const lsqt_dev_layer *l, real3 wo, rng_t *rng, real3 *wi)
+static inline real ms_sample(__global const lsqt_dev_layer *l, real3 wo, rng_t *rng, real3 *wi)
 {
     ms_sink none = {0, 0, 0};
     return ms_vertex_walks(l, -wo, rng, R(0.0), 0, &none, wi);

@@ -5,12 +5,15 @@
  * left the stack (reflection), one that enters medium n going down has too (transmission).
  * Inside an interior medium the position is the height h above its bottom boundary, so a
  * thin medium far from z = 0 is as exact as one near it. */
-/* Work-group accumulators of the tallies: ACC_N 128-bit sums (tally.cl's acc_word).
+/* Work-group accumulators of the tallies (tally.cl's acc_word, 128-bit sums): the
+ * LSQT_T_COUNT scalars for the whole chunk, and the directions' sums in tiles of
+ * LSQT_ACC_TILE at the chunk's end, so local memory does not grow with the direction
+ * count (16 (LSQT_ACC_TILE + LSQT_T_COUNT) bytes: 4.2 KB, within every device's 32 KB).
  * A path's point estimates are summed per direction in floating point (`sum`, in the
  * path's own fixed order) and converted to fixed point once per path; the work-item keeps
  * those in private integers (no atomics on the hot path), and adds them once into the
  * work-group's. Integer sums keep the result independent of order. */
-#define ACC_N (LSQT_NWI + LSQT_T_COUNT)
+#define LSQT_ACC_TILE (LSQT_NWI < 256 ? LSQT_NWI : 256)
 
 /* A work-item's work counters, in the order of the LSQT_T_LAYER_EVENTS... tallies. */
 #define WORK_LAYER (LSQT_T_LAYER_EVENTS - LSQT_T_LAYER_EVENTS)
@@ -27,13 +30,26 @@ typedef struct {
     real *sum;                         /* the current path's point estimates */
     ulong *nee;                        /* this work-item's point-estimate sums, low words */
     ulong *work;                       /* this work-item's work counters (LSQT_T_LAYER_EVENTS ...) */
-    volatile __local acc_word *acc;    /* the work-group's tallies, LSQT_ACC_WORDS each */
+    volatile __local acc_word *acc;    /* the work-group's scalar tallies, LSQT_ACC_WORDS each */
+    __global ulong *nee_g;             /* the tallies of the chunk's batch (nee_word) */
+    uint v;                            /* the first state slice of this walk */
+    int batch;
     volatile __global uint *flags;
     int nee_on;                        /* 0: no point estimates (the RRSS candidate walks) */
     __global real *exit_dir;           /* non-0: the path only writes its exit direction here */
 } walk_ctx;
 
-inline void acc_add(const walk_ctx *c, int k, real v)
+/* Direction k's tally of the walk's batch (state slice v + k / LSQT_GROUP_PAD), or 0 for
+ * the padding between a grouped session's blocks. */
+static inline __global ulong *nee_word(__global ulong *nee, uint v, int batch, int k)
+{
+    const uint b = (uint)k / LSQT_GROUP_PAD, j = (uint)k % LSQT_GROUP_PAD;
+    if (j >= LSQT_GROUP_NWI) return 0;
+    return nee + 2 * (((ulong)(v + b) * LSQT_BATCHES + (ulong)batch) * LSQT_GROUP_NWI + j);
+}
+
+/* Adds v to scalar tally k (LSQT_T_R ...). */
+static inline void acc_add(const walk_ctx *c, int k, real v)
 {
     if (v != R(0.0)) {
         fix1 q = to_fixed(v, c->flags);
@@ -59,14 +75,14 @@ inline void acc_add(const walk_ctx *c, int k, real v)
  * and saves the work at the deep vertices of optically thick media. */
 #define LSQT_NEE_TAU_MAX R(60.0)
 
-inline int nee_visible(real tau_up, real tau_down, int up, int down)
+static inline int nee_visible(real tau_up, real tau_down, int up, int down)
 {
     return (up && tau_up < LSQT_NEE_TAU_MAX) || (down && tau_down < LSQT_NEE_TAU_MAX);
 }
 
 /* Transmittance towards directions z (inv_az = 1 / |z|, from the slice's table), 0 where
  * leaving that way is not allowed. */
-inline realv nee_transmittancev(realv z, realv inv_az, real tau_up, real tau_down, int up, int down)
+static inline realv nee_transmittancev(realv z, realv inv_az, real tau_up, real tau_down, int up, int down)
 {
     realv t = (realv)(R(1.0));
     if (tau_up > R(0.0) || tau_down > R(0.0))
@@ -105,15 +121,15 @@ __kernel void lsqt_prepare(__constant lsqt_dev_scene *scene, __global const lsqt
 
 /* Adds f * t to the path's sums of directions k..k+LSQT_VW-1 (t = 0: nothing, even where f is
  * not finite, as for the zero vectors that pad the directions). */
-inline void nee_addv(real *sum, int k, realv f, realv t)
+static inline void nee_addv(real *sum, int k, realv f, realv t)
 {
     VBLOCK(realv, sum, k) += select((realv)(R(0.0)), f * t, t > R(0.0));
 }
 
 /* Converts the path's sums to fixed point and adds them to the work-item's (then clears
  * them). A work-item keeps only the low 64-bit words; a high word (a sum above 2^63
- * units, 8e6, or a carry out of the low word) is rare and goes straight to the
- * work-group's 128-bit sum, where it counts the same.
+ * units, 8e6, or a carry out of the low word) is rare and goes straight to the batch's
+ * 128-bit sum in global memory, where it counts the same.
  * The common case by one test per block: every lane in [0, 2^15) is below 2^55 units,
  * and a work-item adds at most LSQT_CHUNK (2^8) paths' sums to its low words before
  * they go to the work-group's, so no carry can leave them; the general conversion of
@@ -123,7 +139,7 @@ inline void nee_addv(real *sum, int k, realv f, realv t)
 #if LSQT_CHUNK > 256
 #error "nee_flush's carry-free case assumes at most 256 paths per work-item and chunk"
 #endif
-inline void nee_flush(const walk_ctx *c)
+static inline void nee_flush(const walk_ctx *c)
 {
     for (int k = 0; k < LSQT_NWI_PAD; k += LSQT_VW) {
         realv v = VBLOCK(realv, c->sum, k);
@@ -139,13 +155,15 @@ inline void nee_flush(const walk_ctx *c)
             ulongv h = q.hi + select((ulongv)(0), (ulongv)(1), sum < old);
             ulong hs[LSQT_VW];
             vstorev(h, 0, hs);
-            for (int i = 0; i < LSQT_VW; i++)
-                if (hs[i]) local_add128(c->acc + LSQT_ACC_WORDS * (k + i), 0, hs[i], c->flags);
+            for (int i = 0; i < LSQT_VW; i++) {
+                __global ulong *p = hs[i] ? nee_word(c->nee_g, c->v, c->batch, k + i) : 0;
+                if (p) global_add128(p, 0, hs[i], c->flags);
+            }
         }
     }
 }
 
-inline int layer_is_micro(__global const lsqt_dev_layer *l)
+static inline int layer_is_micro(__global const lsqt_dev_layer *l)
 {
     return l->kind == LSQT_BSDF_MS_LAMBERTIAN || l->kind == LSQT_BSDF_MS_DIELECTRIC ||
            l->kind == LSQT_BSDF_MS_CONDUCTIVE;
@@ -154,7 +172,7 @@ inline int layer_is_micro(__global const lsqt_dev_layer *l)
 /* A vertex on layer li reached along d with weight w: next-event estimates towards upward
  * directions if it is the topmost non-null layer, downward if the bottommost, then the
  * sample that continues the path. Returns the weight factor and sets *wi. */
-inline real layer_vertex(const walk_ctx *c, int li, real3 d, real w, rng_t *rng, real3 *wi)
+static inline real layer_vertex(const walk_ctx *c, int li, real3 d, real w, rng_t *rng, real3 *wi)
 {
     const int up = li == c->scene->top_nonnull, down = li == c->scene->bottom_nonnull;
     __global const lsqt_dev_layer *l = &c->layers[li];
@@ -178,7 +196,7 @@ inline real layer_vertex(const walk_ctx *c, int li, real3 d, real w, rng_t *rng,
 }
 
 /* Next-event estimates from a scattering vertex at height h in interior medium mi. */
-inline void nee_medium(const walk_ctx *c, int mi, real h, real3 d, real w, const phase_vtx *pv)
+static inline void nee_medium(const walk_ctx *c, int mi, real h, real3 d, real w, const phase_vtx *pv)
 {
     __global const lsqt_dev_medium *m = &c->media[mi];
     const int top = c->scene->top_nonnull, bottom = c->scene->bottom_nonnull;
@@ -210,7 +228,7 @@ inline void nee_medium(const walk_ctx *c, int mi, real h, real3 d, real w, const
 #if LSQT_HIST_NPHI != 16
 #error "hist_phi_bin assumes 16 phi bins"
 #endif
-inline int hist_phi_bin(real x, real ay)
+static inline int hist_phi_bin(real x, real ay)
 {
     const float16 c = (float16)(
         0.000000000f, 0.980785280f, 0.923879533f, 0.831469612f,
@@ -232,7 +250,7 @@ inline int hist_phi_bin(real x, real ay)
 /* Equal-solid-angle bin of an exit direction: |cos theta| x phi folded to [0, pi]. The
  * hemisphere is the side the path left by (d.z may round to 0); the clamps keep even a
  * NaN direction inside the table. */
-inline int hist_bin(real3 d, int up)
+static inline int hist_bin(real3 d, int up)
 {
     real mu = fabs(d.z);
     int bm = clamp((int)(mu * LSQT_HIST_NMU), 0, LSQT_HIST_NMU - 1);
@@ -241,7 +259,7 @@ inline int hist_bin(real3 d, int up)
 }
 
 /* Russian roulette; returns 0 when the path ends. */
-inline int roulette(real *w, rng_t *rng)
+static inline int roulette(real *w, rng_t *rng)
 {
     if (*w >= LSQT_RR_WEIGHT) return 1;
     if (rng_uniform(rng) * LSQT_RR_WEIGHT >= *w) return 0;
@@ -249,7 +267,7 @@ inline int roulette(real *w, rng_t *rng)
     return 1;
 }
 
-inline void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulong *hist)
+static inline void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulong *hist)
 {
     const int n = c->scene->n_layers;
     real3 d = -wo;
@@ -257,7 +275,7 @@ inline void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulong *hi
     int scattered = 0, at_layer = 1, layer = 0, medium = 0;
     for (int events = 0;; events++) {
         if (events >= LSQT_MAX_EVENTS) {
-            local_add128(c->acc + LSQT_ACC_WORDS * (LSQT_NWI + LSQT_T_CUT), 1, 0, c->flags);
+            local_add128(c->acc + LSQT_ACC_WORDS * LSQT_T_CUT, 1, 0, c->flags);
             return;
         }
         if (at_layer) {
@@ -287,7 +305,7 @@ inline void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulong *hi
                     vstore4(scattered ? (real4)(d.x, d.y, d.z, R(1.0)) : (real4)(R(0.0)), 0, c->exit_dir);
                     return;
                 }
-                acc_add(c, LSQT_NWI + (up ? LSQT_T_R : LSQT_T_T), w);
+                acc_add(c, up ? LSQT_T_R : LSQT_T_T, w);
                 if (scattered) {
                     /* every block of a grouped session holds the same paths' exits */
                     fix1 q = to_fixed(w, c->flags);
@@ -295,7 +313,7 @@ inline void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulong *hi
                     for (int b = 0; b < g; b++)
                         global_add128(hist + 2 * ((size_t)b * LSQT_BATCHES * LSQT_HIST_BINS + bin), q.lo, q.hi, c->flags);
                 } else {
-                    acc_add(c, LSQT_NWI + LSQT_T_DELTA_T, w);
+                    acc_add(c, LSQT_T_DELTA_T, w);
                 }
                 return;
             }
@@ -341,14 +359,14 @@ __kernel void lsqt_exits(__constant lsqt_dev_scene *scene, __global const lsqt_d
                          __global const real *wi_dirs, __global const real *tab, ulong path_begin, uint n,
                          __global real *out, volatile __global uint *flags)
 {
-    __local acc_word acc[LSQT_ACC_WORDS * ACC_N]; /* the safety cap's count, unused */
+    __local acc_word acc[LSQT_ACC_WORDS * LSQT_T_COUNT]; /* the safety cap's count, unused */
     const uint i = (uint)get_global_id(0), slice = (uint)get_global_id(1);
     const uint v = slice * (uint)max(scene->slice_group, 1);
     /* no point estimates, so no sums (they would fill a CPU worker's stack: a work-group
      * of 256 at the pilot's 4 x 300 directions is 3.7 MB) */
     ulong work[WORK_N] = {0, 0, 0};
     walk_ctx c = {scene, media, layers, wi_dirs + 3 * LSQT_NWI_PAD * slice, tab + (size_t)slice * LSQT_SLICE_TAB(scene->n_layers),
-                  0, 0, work, acc, flags, 0, out + 4 * ((size_t)slice * n + i)};
+                  0, 0, work, acc, 0, 0, 0, flags, 0, out + 4 * ((size_t)slice * n + i)};
     if (i >= n) return;
     real3 wo = make_real3(wo_dirs[4 * v], wo_dirs[4 * v + 1], wo_dirs[4 * v + 2]);
     rng_t rng = rng_init(scene->seed_lo, scene->seed_hi, slice, path_begin + i, RNG_PURPOSE_CANDIDATES | scene->rng_side);
@@ -371,7 +389,7 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
                         __global ulong *nee, __global ulong *scalars, __global ulong *hist,
                         volatile __global uint *flags)
 {
-    __local acc_word acc[LSQT_ACC_WORDS * ACC_N];
+    __local acc_word acc[LSQT_ACC_WORDS * LSQT_T_COUNT], acc_t[LSQT_ACC_WORDS * LSQT_ACC_TILE];
     const int lid = (int)get_local_id(0), lsz = (int)get_local_size(0);
     const uint slice = (uint)get_global_id(1);
     const ulong chunk = chunk_first + get_group_id(0);
@@ -379,7 +397,7 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
     const ulong end = min((chunk + 1) * LSQT_CHUNK, path_end);
     const int batch = (int)(chunk % LSQT_BATCHES);
 
-    for (int k = lid; k < LSQT_ACC_WORDS * ACC_N; k += lsz) acc[k] = 0;
+    for (int k = lid; k < LSQT_ACC_WORDS * LSQT_T_COUNT; k += lsz) acc[k] = 0;
     barrier(CLK_LOCAL_MEM_FENCE);
 
     ulongv nee_v[LSQT_NWI_PAD / LSQT_VW]; /* vectors, for aligned blocks (VBLOCK) */
@@ -387,32 +405,38 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
     ulong *nee_priv = (ulong *)nee_v, work[WORK_N] = {0, 0, 0};
     real *path_sum = (real *)sum_v;
     for (int k = 0; k < LSQT_NWI_PAD; k++) nee_priv[k] = 0, path_sum[k] = R(0.0);
-    walk_ctx c = {scene, media, layers, wi_dirs + 3 * LSQT_NWI_PAD * slice,
-                  tab + (size_t)slice * LSQT_SLICE_TAB(scene->n_layers), path_sum, nee_priv, work, acc, flags, 1, 0};
     const uint g = (uint)max(scene->slice_group, 1), v = slice * g; /* v: the first state slice */
+    walk_ctx c = {scene, media, layers, wi_dirs + 3 * LSQT_NWI_PAD * slice,
+                  tab + (size_t)slice * LSQT_SLICE_TAB(scene->n_layers), path_sum, nee_priv, work, acc,
+                  nee, v, batch, flags, 1, 0};
     real3 wo = make_real3(wo_dirs[4 * v], wo_dirs[4 * v + 1], wo_dirs[4 * v + 2]);
     for (ulong p = begin + (ulong)lid; p < end; p += (ulong)lsz) {
         rng_t rng = rng_init(scene->seed_lo, scene->seed_hi, slice, p, RNG_PURPOSE_WALK | scene->rng_side);
         run_path(&c, wo, &rng, hist + 2 * ((ulong)v * LSQT_BATCHES + (ulong)batch) * LSQT_HIST_BINS);
         nee_flush(&c);
     }
-    for (int k = 0; k < LSQT_NWI; k++)
-        if (nee_priv[k]) local_add128(acc + LSQT_ACC_WORDS * k, nee_priv[k], 0, flags);
     for (int k = 0; k < WORK_N; k++)
-        if (work[k]) local_add128(acc + LSQT_ACC_WORDS * (LSQT_NWI + LSQT_T_LAYER_EVENTS + k), work[k], 0, flags);
-    barrier(CLK_LOCAL_MEM_FENCE);
-
-    for (int k = lid; k < ACC_N; k += lsz) {
+        if (work[k]) local_add128(acc + LSQT_ACC_WORDS * (LSQT_T_LAYER_EVENTS + k), work[k], 0, flags);
+    /* The directions' sums, a tile at a time. */
+    for (int t0 = 0; t0 < LSQT_NWI; t0 += LSQT_ACC_TILE) {
+        const int tn = min(LSQT_ACC_TILE, LSQT_NWI - t0);
+        for (int k = lid; k < LSQT_ACC_WORDS * tn; k += lsz) acc_t[k] = 0;
+        barrier(CLK_LOCAL_MEM_FENCE);
+        for (int k = 0; k < tn; k++)
+            if (nee_priv[t0 + k]) local_add128(acc_t + LSQT_ACC_WORDS * k, nee_priv[t0 + k], 0, flags);
+        barrier(CLK_LOCAL_MEM_FENCE);
+        for (int k = lid; k < tn; k += lsz) {
+            fix1 a = acc_read(acc_t + LSQT_ACC_WORDS * k);
+            __global ulong *p = nee_word(nee, v, batch, t0 + k);
+            if (p) global_add128(p, a.lo, a.hi, flags);
+        }
+        barrier(CLK_LOCAL_MEM_FENCE);
+    }
+    for (int k = lid; k < LSQT_T_COUNT; k += lsz) {
         fix1 a = acc_read(acc + LSQT_ACC_WORDS * k);
-        if (k < LSQT_NWI) {
-            const uint b = (uint)k / LSQT_GROUP_PAD, j = (uint)k % LSQT_GROUP_PAD;
+        for (uint b = 0; b < g; b++) {
             const ulong base = (ulong)(v + b) * LSQT_BATCHES + (ulong)batch;
-            if (j < LSQT_GROUP_NWI) global_add128(nee + 2 * (base * LSQT_GROUP_NWI + j), a.lo, a.hi, flags);
-        } else {
-            for (uint b = 0; b < g; b++) {
-                const ulong base = (ulong)(v + b) * LSQT_BATCHES + (ulong)batch;
-                global_add128(scalars + 2 * (base * LSQT_T_COUNT + (k - LSQT_NWI)), a.lo, a.hi, flags);
-            }
+            global_add128(scalars + 2 * (base * LSQT_T_COUNT + k), a.lo, a.hi, flags);
         }
     }
 }

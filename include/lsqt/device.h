@@ -21,6 +21,7 @@ typedef struct lsqt_device_info {
     int has_int64_atomics;
     int little_endian;
     cl_uint compute_units;
+    cl_ulong local_mem; /* CL_DEVICE_LOCAL_MEM_SIZE, bytes */
 } lsqt_device_info;
 
 /* All devices of all platforms, in a stable order (platform, then device). Returns the
