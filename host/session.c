@@ -41,25 +41,28 @@ static int vector_width(int gpu, char *err, size_t errcap)
 
 /* A grouped session's kernels see each simulated slice's slice_group blocks of n_wi
  * directions as one set of slice_group x PAD(n_wi, vw) (the padding inside is zero). */
-static size_t kernel_nwi(const lsqt_state *st, int group, int vw)
+int lsqt_kernel_options(const lsqt_assembly *a, int n_wi, int group, int vw, int gpu, int use_double,
+                        int int64_atomics, char *opt, size_t cap)
 {
-    return group > 1 ? (size_t)group * LSQT_PAD((size_t)st->n_wi, (size_t)vw) : (size_t)st->n_wi;
+    size_t n = lsqt_assembly_build_options(a, opt, cap);
+    if (n >= cap) return 1;
+    const size_t nwi = group > 1 ? (size_t)group * LSQT_PAD((size_t)n_wi, (size_t)vw) : (size_t)n_wi;
+    n += (size_t)snprintf(opt + n, cap - n, " -cl-std=CL1.2 -DLSQT_NWI=%zu -DLSQT_VW=%d", nwi, vw);
+    if (group > 1) n += (size_t)snprintf(opt + n, cap - n, " -DLSQT_GROUP_NWI=%d", n_wi);
+    if (use_double) n += (size_t)snprintf(opt + n, cap - n, " -DLSQT_DOUBLE=1");
+    if (!gpu) n += (size_t)snprintf(opt + n, cap - n, " -DLSQT_RNG_WIDE=1"); /* philox.cl */
+    if (!int64_atomics) n += (size_t)snprintf(opt + n, cap - n, " -DLSQT_NO_INT64_ATOMICS=1");
+    return n >= cap;
 }
 
 static int build_options(lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st, int group, int vw,
                          int gpu, char *opt, size_t cap, char *err, size_t errcap)
 {
-    size_t n = lsqt_assembly_build_options(a, opt, cap);
-    if (n >= cap) {
+    if (lsqt_device_check(&cx->dev, st->use_double, err, errcap)) return 1;
+    if (lsqt_kernel_options(a, st->n_wi, group, vw, gpu, st->use_double, cx->dev.has_int64_atomics, opt, cap)) {
         snprintf(err, errcap, "kernel build options too long");
         return 1;
     }
-    n += (size_t)snprintf(opt + n, cap - n, " -cl-std=CL1.2 -DLSQT_NWI=%zu -DLSQT_VW=%d", kernel_nwi(st, group, vw), vw);
-    if (group > 1) n += (size_t)snprintf(opt + n, cap - n, " -DLSQT_GROUP_NWI=%d", st->n_wi);
-    if (lsqt_device_check(&cx->dev, st->use_double, err, errcap)) return 1;
-    if (st->use_double) n += (size_t)snprintf(opt + n, cap - n, " -DLSQT_DOUBLE=1");
-    if (!gpu) n += (size_t)snprintf(opt + n, cap - n, " -DLSQT_RNG_WIDE=1"); /* philox.cl */
-    if (!cx->dev.has_int64_atomics) snprintf(opt + n, cap - n, " -DLSQT_NO_INT64_ATOMICS=1");
     return 0;
 }
 

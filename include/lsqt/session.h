@@ -27,6 +27,13 @@ typedef struct lsqt_session {
     size_t n_nee, n_scalars, n_hist; /* tally counts (lsqt_u128 each) */
 } lsqt_session;
 
+/* The OpenCL build options of A's program for n_wi directions per slice in groups of
+ * GROUP (1; rx for the RRSS pilot), vw directions per vector, the GPU code path or the
+ * CPU's, the precision, and whether the device has 64-bit atomics (the kernels' text is
+ * lsqt_kernel_text). Returns 0, or 1 when cap is too small. */
+int lsqt_kernel_options(const lsqt_assembly *a, int n_wi, int group, int vw, int gpu, int use_double,
+                        int int64_atomics, char *opt, size_t cap);
+
 /* Builds the program for assembly A and state ST (its precision and direction count),
  * uploads the tables, directions and ST's tallies, and fills the direction tables.
  * extra_options: appended to the build options (tests, tuning); local_size 0 = automatic.
