@@ -51,6 +51,7 @@ int lsqt_kernel_options(const lsqt_assembly *a, int n_wi, int group, int vw, int
     if (group > 1) n += (size_t)snprintf(opt + n, cap - n, " -DLSQT_GROUP_NWI=%d", n_wi);
     if (use_double) n += (size_t)snprintf(opt + n, cap - n, " -DLSQT_DOUBLE=1");
     if (!gpu) n += (size_t)snprintf(opt + n, cap - n, " -DLSQT_RNG_WIDE=1"); /* philox.cl */
+    if (gpu) n += (size_t)snprintf(opt + n, cap - n, " -DLSQT_NEE_RECORDS=1"); /* walk.cl */
     if (!int64_atomics) n += (size_t)snprintf(opt + n, cap - n, " -DLSQT_NO_INT64_ATOMICS=1");
     return n >= cap;
 }
@@ -154,6 +155,16 @@ static int upload(lsqt_session *s, const lsqt_assembly *a, const lsqt_state *st,
     e |= clSetKernelArg(s->walk, 10, sizeof(cl_mem), &s->scalars);
     e |= clSetKernelArg(s->walk, 11, sizeof(cl_mem), &s->hist);
     e |= clSetKernelArg(s->walk, 12, sizeof(cl_mem), &s->flags);
+    /* The CPU path ignores the records' arguments: any buffer will do. */
+    cl_int zero = 0;
+    e |= clSetKernelArg(s->walk, 13, sizeof(cl_mem), &s->flags);
+    e |= clSetKernelArg(s->walk, 14, sizeof(cl_mem), &s->flags);
+    e |= clSetKernelArg(s->walk, 15, sizeof zero, &zero);
+    if (s->records) {
+        for (cl_uint i = 0; i < 5; i++) e |= clSetKernelArg(s->estimate, i, sizeof(cl_mem), args[i == 3 ? 4 : i == 4 ? 5 : i]);
+        e |= clSetKernelArg(s->estimate, 10, sizeof(cl_mem), &s->nee);
+        e |= clSetKernelArg(s->estimate, 11, sizeof(cl_mem), &s->flags);
+    }
     cl_mem *pargs[] = {&s->scene, &s->media, &s->layers, &s->wi, &s->tab};
     for (cl_uint i = 0; i < 5; i++) e |= clSetKernelArg(s->prepare, i, sizeof(cl_mem), pargs[i]);
     if (e == CL_SUCCESS) {
@@ -185,8 +196,9 @@ static int check_kernel_memory(lsqt_session *s, int verbose, char *err, size_t e
     const struct {
         cl_kernel k;
         const char *name;
-    } ks[] = {{s->walk, "lsqt_walk"}, {s->exits, "lsqt_exits"}, {s->prepare, "lsqt_prepare"}};
+    } ks[] = {{s->walk, "lsqt_walk"}, {s->exits, "lsqt_exits"}, {s->prepare, "lsqt_prepare"}, {s->estimate, "lsqt_estimate"}};
     for (size_t i = 0; i < sizeof ks / sizeof ks[0]; i++) {
+        if (!ks[i].k) continue;
         cl_ulong local = 0, priv = 0;
         clGetKernelWorkGroupInfo(ks[i].k, d->id, CL_KERNEL_LOCAL_MEM_SIZE, sizeof local, &local, NULL);
         clGetKernelWorkGroupInfo(ks[i].k, d->id, CL_KERNEL_PRIVATE_MEM_SIZE, sizeof priv, &priv, NULL);
@@ -262,6 +274,9 @@ int lsqt_session_open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_asse
     s->prepare = clCreateKernel(s->prog, "lsqt_prepare", &e2);
     cl_int e3 = CL_SUCCESS;
     s->exits = clCreateKernel(s->prog, "lsqt_exits", &e3);
+    s->records = gpu;
+    s->rec_size = 16 * (st->use_double ? sizeof(double) : sizeof(float));
+    if (gpu && e3 == CL_SUCCESS) s->estimate = clCreateKernel(s->prog, "lsqt_estimate", &e3);
     if (e != CL_SUCCESS || e2 != CL_SUCCESS || e3 != CL_SUCCESS) {
         if (e == CL_SUCCESS) e = e2 != CL_SUCCESS ? e2 : e3;
         snprintf(err, errcap, "clCreateKernel: %s (%d)", lsqt_cl_error_name(e), (int)e);
@@ -287,19 +302,124 @@ int lsqt_session_open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_asse
     return 0;
 }
 
+/* Enqueues kernel k over the chunks of paths [begin, end) of every simulated slice
+ * (arguments 6, 7, 8 of lsqt_walk; 5, 6, 7 of lsqt_estimate) and waits for it. */
+static cl_int run_chunks(lsqt_session *s, cl_kernel k, cl_uint arg0, uint64_t begin, uint64_t end)
+{
+    cl_ulong b = begin, en = end, chunk0 = begin / LSQT_CHUNK;
+    cl_ulong nchunks = (end - 1) / LSQT_CHUNK - chunk0 + 1;
+    cl_int e = clSetKernelArg(k, arg0, sizeof b, &b);
+    e |= clSetKernelArg(k, arg0 + 1, sizeof en, &en);
+    e |= clSetKernelArg(k, arg0 + 2, sizeof chunk0, &chunk0);
+    size_t global[2] = {(size_t)nchunks * s->local_size, (size_t)(s->n_slices / s->slice_group)}, local[2] = {s->local_size, 1};
+    if (e == CL_SUCCESS) e = clEnqueueNDRangeKernel(s->cx->queue, k, 2, NULL, global, local, 0, NULL, NULL);
+    if (e == CL_SUCCESS) e = clFinish(s->cx->queue);
+    return e;
+}
+
+/* A buffer of at least n elements of size sz (grown, contents dropped). */
+static cl_int ensure_buffer(lsqt_session *s, cl_mem *m, size_t *cap, size_t n, size_t sz)
+{
+    if (*m && *cap >= n) return CL_SUCCESS;
+    if (*m) clReleaseMemObject(*m);
+    cl_int e = CL_SUCCESS;
+    *cap = n + n / 4 + 1024;
+    *m = clCreateBuffer(s->cx->ctx, CL_MEM_READ_WRITE, *cap * sz, NULL, &e);
+    if (e != CL_SUCCESS) *m = NULL, *cap = 0;
+    return e;
+}
+
+/* The records' budget: LSQT_NEE_RECORD_CAP records (the tests make it small to split
+ * launches), else a quarter of the device's largest buffer, at most 512 MB. */
+static size_t record_budget(const lsqt_session *s)
+{
+    const char *env = getenv("LSQT_NEE_RECORD_CAP");
+    if (env && *env && atol(env) > 0) return (size_t)atol(env);
+    cl_ulong max_alloc = 0;
+    clGetDeviceInfo(s->cx->dev.id, CL_DEVICE_MAX_MEM_ALLOC_SIZE, sizeof max_alloc, &max_alloc, NULL);
+    size_t bytes = max_alloc ? (size_t)(max_alloc / 4) : (size_t)64 << 20;
+    if (bytes > ((size_t)512 << 20)) bytes = (size_t)512 << 20;
+    return bytes / s->rec_size;
+}
+
+/* The GPU path: for each part of [begin, end) the walk counts each path's next-event
+ * records, the host turns the counts into offsets and parts the paths so their records
+ * fit the budget, then per part the walk writes the records (and tallies the rest) and
+ * lsqt_estimate evaluates them. Counting walks the paths twice; the same random numbers
+ * make the same paths. */
+static cl_int launch_records(lsqt_session *s, uint64_t begin, uint64_t end, int *no_memory)
+{
+    const size_t n_sim = (size_t)(s->n_slices / s->slice_group), budget = record_budget(s);
+    const uint64_t span = (uint64_t)((((size_t)1 << 20) / n_sim) > LSQT_CHUNK ? ((size_t)1 << 20) / n_sim : LSQT_CHUNK);
+    cl_int e = CL_SUCCESS;
+    cl_ulong *counts = NULL, *off = NULL, *per_path = NULL;
+    for (uint64_t pos = begin; pos < end && e == CL_SUCCESS;) {
+        const uint64_t stop = end - pos > span ? pos + span : end;
+        const size_t n = (size_t)(stop - pos);
+        cl_ulong *c2 = realloc(counts, n * n_sim * sizeof *counts), *o2 = c2 ? realloc(off, (n * n_sim + 1) * sizeof *off) : NULL;
+        cl_ulong *p2 = o2 ? realloc(per_path, n * sizeof *per_path) : NULL;
+        counts = c2 ? c2 : counts, off = o2 ? o2 : off, per_path = p2 ? p2 : per_path;
+        if (!p2) {
+            *no_memory = 1;
+            e = CL_OUT_OF_HOST_MEMORY;
+            break;
+        }
+        e = ensure_buffer(s, &s->rec_off, &s->off_cap, n * n_sim + 1, sizeof(cl_ulong));
+        if (e == CL_SUCCESS) e = ensure_buffer(s, &s->rec, &s->rec_cap, 1, s->rec_size);
+        if (e == CL_SUCCESS) {
+            cl_int one = 1;
+            e = clSetKernelArg(s->walk, 13, sizeof(cl_mem), &s->rec);
+            e |= clSetKernelArg(s->walk, 14, sizeof(cl_mem), &s->rec_off);
+            e |= clSetKernelArg(s->walk, 15, sizeof one, &one);
+        }
+        if (e == CL_SUCCESS) e = run_chunks(s, s->walk, 6, pos, stop);
+        if (e == CL_SUCCESS)
+            e = clEnqueueReadBuffer(s->cx->queue, s->rec_off, CL_TRUE, 0, n * n_sim * sizeof *counts, counts, 0, NULL, NULL);
+        for (size_t i = 0; i < n; i++) {
+            per_path[i] = 0;
+            for (size_t j = 0; j < n_sim; j++) per_path[i] += counts[j * n + i];
+        }
+        /* Parts of consecutive paths whose records fit the budget (one path at least). */
+        for (size_t p0 = 0; p0 < n && e == CL_SUCCESS;) {
+            size_t p1 = p0 + 1;
+            cl_ulong total = per_path[p0];
+            while (p1 < n && total + per_path[p1] <= budget) total += per_path[p1++];
+            const size_t m = p1 - p0;
+            cl_ulong at = 0;
+            for (size_t j = 0; j < n_sim; j++)
+                for (size_t i = p0; i < p1; i++) off[j * m + (i - p0)] = at, at += counts[j * n + i];
+            off[m * n_sim] = at;
+            e = ensure_buffer(s, &s->rec, &s->rec_cap, at ? (size_t)at : 1, s->rec_size);
+            if (e == CL_SUCCESS)
+                e = clEnqueueWriteBuffer(s->cx->queue, s->rec_off, CL_TRUE, 0, (m * n_sim + 1) * sizeof *off, off, 0, NULL, NULL);
+            if (e == CL_SUCCESS) {
+                cl_int zero = 0;
+                e = clSetKernelArg(s->walk, 13, sizeof(cl_mem), &s->rec);
+                e |= clSetKernelArg(s->walk, 14, sizeof(cl_mem), &s->rec_off);
+                e |= clSetKernelArg(s->walk, 15, sizeof zero, &zero);
+                e |= clSetKernelArg(s->estimate, 8, sizeof(cl_mem), &s->rec);
+                e |= clSetKernelArg(s->estimate, 9, sizeof(cl_mem), &s->rec_off);
+            }
+            if (e == CL_SUCCESS) e = run_chunks(s, s->walk, 6, pos + p0, pos + p1);
+            if (e == CL_SUCCESS) e = run_chunks(s, s->estimate, 5, pos + p0, pos + p1);
+            p0 = p1;
+        }
+        pos = stop;
+    }
+    free(counts);
+    free(off);
+    free(per_path);
+    return e;
+}
+
 int lsqt_session_launch(lsqt_session *s, uint64_t begin, uint64_t end, char *err, size_t errcap)
 {
     if (end <= begin) return 0;
-    cl_ulong b = begin, en = end, chunk0 = begin / LSQT_CHUNK;
-    cl_ulong nchunks = (end - 1) / LSQT_CHUNK - chunk0 + 1;
-    cl_int e = clSetKernelArg(s->walk, 6, sizeof b, &b);
-    e |= clSetKernelArg(s->walk, 7, sizeof en, &en);
-    e |= clSetKernelArg(s->walk, 8, sizeof chunk0, &chunk0);
-    size_t global[2] = {(size_t)nchunks * s->local_size, (size_t)(s->n_slices / s->slice_group)}, local[2] = {s->local_size, 1};
-    if (e == CL_SUCCESS) e = clEnqueueNDRangeKernel(s->cx->queue, s->walk, 2, NULL, global, local, 0, NULL, NULL);
-    if (e == CL_SUCCESS) e = clFinish(s->cx->queue);
+    int no_memory = 0;
+    cl_int e = s->records ? launch_records(s, begin, end, &no_memory) : run_chunks(s, s->walk, 6, begin, end);
     if (e != CL_SUCCESS) {
-        snprintf(err, errcap, "kernel launch failed: %s (%d)", lsqt_cl_error_name(e), (int)e);
+        if (no_memory) snprintf(err, errcap, "out of memory for the next-event records' offsets");
+        else snprintf(err, errcap, "kernel launch failed: %s (%d)", lsqt_cl_error_name(e), (int)e);
         return 1;
     }
     return 0;
@@ -381,12 +501,13 @@ int lsqt_session_exits(lsqt_session *s, uint64_t begin, uint32_t n, float *out, 
 void lsqt_session_close(lsqt_session *s)
 {
     cl_mem *all[] = {&s->scene, &s->media, &s->layers, &s->wo, &s->wi, &s->tab,
-                     &s->nee, &s->scalars, &s->hist, &s->flags};
+                     &s->nee, &s->scalars, &s->hist, &s->flags, &s->rec, &s->rec_off};
     for (size_t i = 0; i < sizeof all / sizeof *all; i++)
         if (*all[i]) clReleaseMemObject(*all[i]);
     if (s->walk) clReleaseKernel(s->walk);
     if (s->prepare) clReleaseKernel(s->prepare);
     if (s->exits) clReleaseKernel(s->exits);
+    if (s->estimate) clReleaseKernel(s->estimate);
     if (s->prog) clReleaseProgram(s->prog);
     memset(s, 0, sizeof *s);
 }

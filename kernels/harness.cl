@@ -108,6 +108,7 @@ __kernel void harness_tally(__global const float *v, __global ulong *out, volati
     }
 }
 
+#ifndef LSQT_NEE_RECORDS /* the CPU code path's sums (the tests build it) */
 /* Stochastic evaluation of a microsurface (layer 0) for fixed wo towards the LSQT_NWI
  * directions wi (x[pad], y[pad], z[pad]), with the slice's direction tables tab that
  * lsqt_prepare makes for a one-layer scene (its layer's after the media's rows): each
@@ -130,6 +131,7 @@ __kernel void harness_ms_eval(__global const lsqt_dev_layer *layers, float wox, 
     }
     for (int k = 0; k < LSQT_NWI_PAD; k++) out[(size_t)i * LSQT_NWI_PAD + k] = (float)sum[k];
 }
+#endif
 
 /* Stochastic phase evaluation (diffuse SGGX): work-item i averages `reps` vertices (each
  * one visible normal, as the path loop draws) towards direction i; out[i] = the mean. */

@@ -15,14 +15,41 @@
 /* A walk longer than this is cut (absorbed): in the furnace tests no walk comes close. */
 #define LSQT_MS_MAX_ORDER 1024
 
+#ifdef LSQT_NEE_RECORDS
+/* The GPU code path's next-event vertices (-DLSQT_NEE_RECORDS): the walk writes each
+ * vertex's direction-independent state as a record, in the path's order, and
+ * lsqt_estimate evaluates the records towards every direction, a work-group sharing the
+ * directions (walk.cl). q[3] = (weight, side, NEE_* kind, layer or medium index); the rest
+ * depends on the kind (nee_rec_block). */
+typedef struct {
+    real4 q[4];
+} nee_rec;
+#define NEE_LAYER 0     /* a layer's BSDF: q[0].xyz = wo */
+#define NEE_MEDIUM 1    /* a medium's phase: q[0].xyz = wo, q[1] = (phase_vtx m, tau up), q[2].x = tau down */
+#define NEE_MS_VERTEX 2 /* a microsurface walk's vertex (ms_vtx in q[0..2]) */
+#define NEE_MS_SINGLE 3 /* the analytic single scattering */
+#define NEE_MS_FIRST 4  /* a Lambertian microsurface's first vertex */
+
+/* Where a path's records go: rec[0 ...] (rec 0: only counted). */
+typedef struct {
+    __global nee_rec *rec;
+    uint n;
+} nee_out;
+#endif
+
 /* Where a vertex's terms go: per-direction sums, the slice's directions and this
  * layer's table (transmittance T, 0 where light may not leave that way; Lambda;
- * lgamma(1 + Lambda)), each LSQT_NWI_PAD long. */
+ * lgamma(1 + Lambda)), each LSQT_NWI_PAD long. On the GPU path the terms are records
+ * instead (out, for layer `layer`). */
 typedef struct {
     real *sum;
     __global const real *wi;
     __global const real *tab;
     ulong *count; /* vertices evaluated (work counter), or 0 */
+#ifdef LSQT_NEE_RECORDS
+    nee_out *out;
+    int layer;
+#endif
 } ms_sink;
 
 /* Directions are in `real`: --double is double end to end (the host normalises them). */
@@ -32,64 +59,143 @@ static inline dirv load_dirv(__global const real *wi, int k)
     return d;
 }
 
-/* sum += w * T * EXPR over every block of LSQT_VW directions that light may leave by;
- * u (this side's frame), lam and lg are in scope for EXPR. Lanes with T = 0 add nothing
- * even where EXPR is not finite (the zero vectors that pad the directions). */
+/* The terms w * T * EXPR of the block of LSQT_VW directions at b, into v; u (this
+ * side's frame), lam and lg are in scope for EXPR. Lanes with T = 0 (t) add nothing even
+ * where EXPR is not finite (the zero vectors that pad the directions). */
+#define MS_NEE_BLOCK(EXPR)                                                       \
+    {                                                                            \
+        dirv u = load_dirv(wi, b);                                               \
+        u.z *= side;                                                             \
+        realv lam = vloadv(0, tab + LSQT_NWI_PAD + b);                           \
+        realv lg = vloadv(0, tab + 2 * LSQT_NWI_PAD + b);                        \
+        (void)lg;                                                                \
+        v = select((realv)(R(0.0)), (w * t) * (EXPR), t > R(0.0));               \
+    }
+
+/* sum += the terms over every block that light may leave by. */
 #define MS_NEE_LOOP(EXPR)                                                        \
     if (k->count) (*k->count)++;                                                 \
     for (int b = 0; b < LSQT_NWI_PAD; b += LSQT_VW) {                            \
-        realv t = vloadv(0, k->tab + b);                                         \
-        if (!anyv(t > R(0.0))) continue;                                          \
-        dirv u = load_dirv(k->wi, b);                                            \
-        u.z *= side;                                                             \
-        realv lam = vloadv(0, k->tab + LSQT_NWI_PAD + b);                        \
-        realv lg = vloadv(0, k->tab + 2 * LSQT_NWI_PAD + b);                     \
-        (void)lg;                                                                \
-        realv v = select((realv)(R(0.0)), (w * t) * (EXPR), t > R(0.0));         \
+        __global const real *wi = k->wi, *tab = k->tab;                          \
+        realv t = vloadv(0, tab + b), v;                                         \
+        if (!anyv(t > R(0.0))) continue;                                         \
+        MS_NEE_BLOCK(EXPR)                                                       \
         VBLOCK(realv, k->sum, b) += v;                                           \
     }
 
-/* A walk vertex: the facet's phase function times G1 = C1^Lambda(u) to this side,
- * (1 - C1)^Lambda(u) to the other. */
+/* Each kind's terms, one text for both code paths: a walk vertex's is the facet's phase
+ * function times G1 = C1^Lambda(u) to this side, (1 - C1)^Lambda(u) to the other; the
+ * analytic single scattering's; a Lambertian walk's first vertex's, whose height is
+ * independent of its facet, so the chance of escaping is replaced by its mean over the
+ * first hit's height, ms_single_escapev (the same expectation, less noise, most at
+ * grazing u). */
+#define MS_G1 exp(lam * select((realv)(x->log_cbar), (realv)(x->log_c), u.z > R(0.0)))
+#define MS_VERTEX_CONDUCTIVE (conductor_phasev(l, x, u) * MS_G1)
+#define MS_VERTEX_DIELECTRIC (dielectric_phasev(l, x, u) * MS_G1)
+#define MS_VERTEX_LAMBERTIAN (mslambert_phasev(l, x, u) * MS_G1)
+#define MS_SINGLE_CONDUCTIVE (conductor_singlev(l, x, u, lam))
+#define MS_SINGLE_DIELECTRIC (dielectric_singlev(l, x, u, lam, lg))
+#define MS_FIRST_LAMBERTIAN (mslambert_phasev(l, x, u) * ms_single_escapev(x, u.z > R(0.0), lam, lg))
+
+#ifdef LSQT_NEE_RECORDS
+/* The GPU path: the vertex becomes a record (and counts as evaluated). */
+static inline void ms_record(const ms_sink *k, int kind, const ms_vtx *x, real side, real w)
+{
+    if (k->count) (*k->count)++;
+    if (k->out->rec) {
+        __global nee_rec *r = k->out->rec + k->out->n;
+        r->q[0] = (real4)(x->v, x->inv_area);
+        r->q[1] = (real4)(x->m, x->lam_v);
+        r->q[2] = (real4)(x->lg_v, x->log_c, x->log_cbar, x->e);
+        r->q[3] = (real4)(w, side, (real)kind, (real)k->layer);
+    }
+    k->out->n++;
+}
+
+/* A record's terms for the block of directions at b (the layer's table tab). */
+static inline realv ms_nee_block(__global const lsqt_dev_layer *l, int kind, const ms_vtx *x, real side, real w,
+                                 __global const real *wi, __global const real *tab, int b)
+{
+    realv t = vloadv(0, tab + b), v = (realv)(R(0.0));
+    if (!anyv(t > R(0.0))) return v;
+    if (kind == NEE_MS_VERTEX) {
+        switch (l->kind) {
+#ifdef LSQT_HAS_BSDF_MS_CONDUCTIVE
+        case LSQT_BSDF_MS_CONDUCTIVE: MS_NEE_BLOCK(MS_VERTEX_CONDUCTIVE) break;
+#endif
+#ifdef LSQT_HAS_BSDF_MS_DIELECTRIC
+        case LSQT_BSDF_MS_DIELECTRIC: MS_NEE_BLOCK(MS_VERTEX_DIELECTRIC) break;
+#endif
+#ifdef LSQT_HAS_BSDF_MS_LAMBERTIAN
+        case LSQT_BSDF_MS_LAMBERTIAN: MS_NEE_BLOCK(MS_VERTEX_LAMBERTIAN) break;
+#endif
+        default: break;
+        }
+    } else if (kind == NEE_MS_SINGLE) {
+        switch (l->kind) {
+#ifdef LSQT_HAS_BSDF_MS_CONDUCTIVE
+        case LSQT_BSDF_MS_CONDUCTIVE: MS_NEE_BLOCK(MS_SINGLE_CONDUCTIVE) break;
+#endif
+#ifdef LSQT_HAS_BSDF_MS_DIELECTRIC
+        case LSQT_BSDF_MS_DIELECTRIC: MS_NEE_BLOCK(MS_SINGLE_DIELECTRIC) break;
+#endif
+        default: break;
+        }
+    } else {
+#ifdef LSQT_HAS_BSDF_MS_LAMBERTIAN
+        MS_NEE_BLOCK(MS_FIRST_LAMBERTIAN)
+#endif
+    }
+    return v;
+}
+#endif
+
 static inline void ms_nee_vertex(__global const lsqt_dev_layer *l, const ms_vtx *x, real side, real w, const ms_sink *k)
 {
-#define MS_G1 exp(lam * select((realv)(x->log_cbar), (realv)(x->log_c), u.z > R(0.0)))
+#ifdef LSQT_NEE_RECORDS
+    (void)l;
+    ms_record(k, NEE_MS_VERTEX, x, side, w);
+#else
     switch (l->kind) {
 #ifdef LSQT_HAS_BSDF_MS_CONDUCTIVE
-    case LSQT_BSDF_MS_CONDUCTIVE: MS_NEE_LOOP(conductor_phasev(l, x, u) * MS_G1) break;
+    case LSQT_BSDF_MS_CONDUCTIVE: MS_NEE_LOOP(MS_VERTEX_CONDUCTIVE) break;
 #endif
 #ifdef LSQT_HAS_BSDF_MS_DIELECTRIC
-    case LSQT_BSDF_MS_DIELECTRIC: MS_NEE_LOOP(dielectric_phasev(l, x, u) * MS_G1) break;
+    case LSQT_BSDF_MS_DIELECTRIC: MS_NEE_LOOP(MS_VERTEX_DIELECTRIC) break;
 #endif
 #ifdef LSQT_HAS_BSDF_MS_LAMBERTIAN
-    case LSQT_BSDF_MS_LAMBERTIAN: MS_NEE_LOOP(mslambert_phasev(l, x, u) * MS_G1) break;
+    case LSQT_BSDF_MS_LAMBERTIAN: MS_NEE_LOOP(MS_VERTEX_LAMBERTIAN) break;
 #endif
     default: break;
     }
-#undef MS_G1
+#endif
 }
 
-/* The analytic single-scattering term at the first hit (v.z > 0). */
 static inline void ms_nee_single(__global const lsqt_dev_layer *l, const ms_vtx *x, real side, real w, const ms_sink *k)
 {
+#ifdef LSQT_NEE_RECORDS
+    (void)l;
+    ms_record(k, NEE_MS_SINGLE, x, side, w);
+#else
     switch (l->kind) {
 #ifdef LSQT_HAS_BSDF_MS_CONDUCTIVE
-    case LSQT_BSDF_MS_CONDUCTIVE: MS_NEE_LOOP(conductor_singlev(l, x, u, lam)) break;
+    case LSQT_BSDF_MS_CONDUCTIVE: MS_NEE_LOOP(MS_SINGLE_CONDUCTIVE) break;
 #endif
 #ifdef LSQT_HAS_BSDF_MS_DIELECTRIC
-    case LSQT_BSDF_MS_DIELECTRIC: MS_NEE_LOOP(dielectric_singlev(l, x, u, lam, lg)) break;
+    case LSQT_BSDF_MS_DIELECTRIC: MS_NEE_LOOP(MS_SINGLE_DIELECTRIC) break;
 #endif
     default: break;
     }
+#endif
 }
 
-/* The first vertex of a walk on Lambertian facets: its height is independent of its
- * facet, so the chance of escaping is replaced by its mean over the first hit's height,
- * ms_single_escapev (the same expectation, less noise, most at grazing u). */
 static inline void ms_nee_first(__global const lsqt_dev_layer *l, const ms_vtx *x, real side, real w, const ms_sink *k)
 {
-#ifdef LSQT_HAS_BSDF_MS_LAMBERTIAN
-    MS_NEE_LOOP(mslambert_phasev(l, x, u) * ms_single_escapev(x, u.z > R(0.0), lam, lg))
+#ifdef LSQT_NEE_RECORDS
+    (void)l;
+    ms_record(k, NEE_MS_FIRST, x, side, w);
+#elif defined(LSQT_HAS_BSDF_MS_LAMBERTIAN)
+    MS_NEE_LOOP(MS_FIRST_LAMBERTIAN)
 #endif
 }
 

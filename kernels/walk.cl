@@ -37,6 +37,10 @@ typedef struct {
     volatile __global uint *flags;
     int nee_on;                        /* 0: no point estimates (the RRSS candidate walks) */
     __global real *exit_dir;           /* non-0: the path only writes its exit direction here */
+#ifdef LSQT_NEE_RECORDS
+    nee_out *out;                      /* the path's next-event records (GPU path) */
+    int count_only;                    /* 1: count the records, tally nothing */
+#endif
 } walk_ctx;
 
 /* Direction k's tally of the walk's batch (state slice v + k / LSQT_GROUP_PAD), or 0 for
@@ -119,49 +123,85 @@ __kernel void lsqt_prepare(__constant lsqt_dev_scene *scene, __global const lsqt
     }
 }
 
-/* Adds f * t to the path's sums of directions k..k+LSQT_VW-1 (t = 0: nothing, even where f is
- * not finite, as for the zero vectors that pad the directions). */
-static inline void nee_addv(real *sum, int k, realv f, realv t)
+/* The next-event terms of one vertex for the block of LSQT_VW directions at b, the same
+ * text for both code paths (the CPU's sums per path, the GPU's records). Lanes with
+ * t = 0 add nothing, even where the model is not finite (the zero vectors that pad the
+ * directions). A layer's BSDF (tab: its table, T first): */
+static inline realv nee_layer_block(__global const lsqt_dev_layer *l, real3 wo, real w, __global const real *dirs,
+                                    __global const real *tab, int b)
 {
-    VBLOCK(realv, sum, k) += select((realv)(R(0.0)), f * t, t > R(0.0));
+    const realv t = vloadv(0, tab + b);
+    return select((realv)(R(0.0)), (w * bsdf_evalv(l, wo, load_dirv(dirs, b))) * t, t > R(0.0));
 }
 
-/* Converts the path's sums to fixed point and adds them to the work-item's (then clears
- * them). A work-item keeps only the low 64-bit words; a high word (a sum above 2^63
- * units, 8e6, or a carry out of the low word) is rare and goes straight to the batch's
- * 128-bit sum in global memory, where it counts the same.
+/* A medium's phase function at optical depths tu above and td below the vertex (a_up,
+ * a_down: the slice's media rows). */
+static inline realv nee_medium_block(__global const lsqt_dev_medium *m, const phase_vtx *pv, real3 wo, real w, real tu,
+                                     real td, __global const real *dirs, __global const real *a_up,
+                                     __global const real *a_down, int b)
+{
+    const realv t = exp2_negv(-(tu * vloadv(0, a_up + b) + td * vloadv(0, a_down + b)));
+    return select((realv)(R(0.0)), (w * phase_evalv(m, pv, wo, load_dirv(dirs, b))) * t, t > R(0.0));
+}
+
+/* Converts one path's sums of the block at k to fixed point and adds them to *lo, the
+ * low 64-bit words of the block's tallies. A high word (a sum above 2^63 units, 8e6, or
+ * a carry out of the low word) is rare and goes straight to the batch's 128-bit sum in
+ * global memory (nee_word of nee, state slice vs, batch), where it counts the same.
  * The common case by one test per block: every lane in [0, 2^15) is below 2^55 units,
- * and a work-item adds at most LSQT_CHUNK (2^8) paths' sums to its low words before
- * they go to the work-group's, so no carry can leave them; the general conversion of
- * such lanes is the same (to_fixedv). A block of zeros takes it too: testing for one
- * cost as much as converting it. */
+ * and at most LSQT_CHUNK (2^8) paths' sums go to the low words before they go to the
+ * batch's, so no carry can leave them; the general conversion of such lanes is the same
+ * (to_fixedv). A block of zeros takes it too: testing for one cost as much as converting
+ * it. */
 #define LSQT_FLUSH_FAST_MAX R(32768.0)
 #if LSQT_CHUNK > 256
-#error "nee_flush's carry-free case assumes at most 256 paths per work-item and chunk"
+#error "nee_flush_block's carry-free case assumes at most 256 paths per chunk"
 #endif
+static inline void nee_flush_block(realv v, ulongv *lo, __global ulong *nee, uint vs, int batch, int k,
+                                   volatile __global uint *flags)
+{
+    if (allv((v >= R(0.0)) & (v < LSQT_FLUSH_FAST_MAX))) {
+        *lo += as_ulongv(convert_longv(v * (real)LSQT_FIX_SCALE + R(0.5)));
+        return;
+    }
+    fixv q = to_fixedv(v, flags);
+    ulongv old = *lo, sum = old + q.lo;
+    *lo = sum;
+    if (anyv((q.hi != 0) | (sum < old))) {
+        ulongv h = q.hi + select((ulongv)(0), (ulongv)(1), sum < old);
+        ulong hs[LSQT_VW];
+        vstorev(h, 0, hs);
+        for (int i = 0; i < LSQT_VW; i++) {
+            __global ulong *p = hs[i] ? nee_word(nee, vs, batch, k + i) : 0;
+            if (p) global_add128(p, 0, hs[i], flags);
+        }
+    }
+}
+
+#ifndef LSQT_NEE_RECORDS
+/* The CPU path: the path's sums to the work-item's low words (then cleared). */
 static inline void nee_flush(const walk_ctx *c)
 {
     for (int k = 0; k < LSQT_NWI_PAD; k += LSQT_VW) {
         realv v = VBLOCK(realv, c->sum, k);
         VBLOCK(realv, c->sum, k) = (realv)(R(0.0));
-        if (allv((v >= R(0.0)) & (v < LSQT_FLUSH_FAST_MAX))) {
-            VBLOCK(ulongv, c->nee, k) += as_ulongv(convert_longv(v * (real)LSQT_FIX_SCALE + R(0.5)));
-            continue;
-        }
-        fixv q = to_fixedv(v, c->flags);
-        ulongv old = VBLOCK(ulongv, c->nee, k), sum = old + q.lo;
-        VBLOCK(ulongv, c->nee, k) = sum;
-        if (anyv((q.hi != 0) | (sum < old))) {
-            ulongv h = q.hi + select((ulongv)(0), (ulongv)(1), sum < old);
-            ulong hs[LSQT_VW];
-            vstorev(h, 0, hs);
-            for (int i = 0; i < LSQT_VW; i++) {
-                __global ulong *p = hs[i] ? nee_word(c->nee_g, c->v, c->batch, k + i) : 0;
-                if (p) global_add128(p, 0, hs[i], c->flags);
-            }
-        }
+        nee_flush_block(v, &VBLOCK(ulongv, c->nee, k), c->nee_g, c->v, c->batch, k, c->flags);
     }
 }
+#else
+/* The GPU path: a vertex's record (kind NEE_LAYER or NEE_MEDIUM; q1, q2x as nee_rec says). */
+static inline void nee_put(const walk_ctx *c, int kind, int index, real3 wo, real w, real4 q1, real q2x)
+{
+    if (c->out->rec) {
+        __global nee_rec *r = c->out->rec + c->out->n;
+        r->q[0] = (real4)(wo, R(0.0));
+        r->q[1] = q1;
+        r->q[2] = (real4)(q2x, R(0.0), R(0.0), R(0.0));
+        r->q[3] = (real4)(w, R(0.0), (real)kind, (real)index);
+    }
+    c->out->n++;
+}
+#endif
 
 static inline int layer_is_micro(__global const lsqt_dev_layer *l)
 {
@@ -184,14 +224,22 @@ static inline real layer_vertex(const walk_ctx *c, int li, real3 d, real w, rng_
     c->work[WORK_LAYER]++;
 #if defined(LSQT_HAS_BSDF_MS_LAMBERTIAN) || defined(LSQT_HAS_BSDF_MS_DIELECTRIC) || defined(LSQT_HAS_BSDF_MS_CONDUCTIVE)
     if (layer_is_micro(l)) {
+#ifdef LSQT_NEE_RECORDS
+        ms_sink k = {0, c->wi, tab, c->work + WORK_NEE, c->out, li};
+#else
         ms_sink k = {c->sum, c->wi, tab, c->work + WORK_NEE};
+#endif
         return ms_vertex_walks(l, d, rng, w, visible, &k, wi);
     }
 #endif
     if (visible) c->work[WORK_NEE]++;
+#ifdef LSQT_NEE_RECORDS
+    if (visible) nee_put(c, NEE_LAYER, li, -d, w, (real4)(R(0.0)), R(0.0));
+#else
     if (visible)
         for (int k = 0; k < LSQT_NWI_PAD; k += LSQT_VW)
-            nee_addv(c->sum, k, w * bsdf_evalv(l, -d, load_dirv(c->wi, k)), vloadv(0, tab + k));
+            VBLOCK(realv, c->sum, k) += nee_layer_block(l, -d, w, c->wi, tab, k);
+#endif
     return bsdf_sample(l, -d, rng, wi);
 }
 
@@ -205,20 +253,21 @@ static inline void nee_medium(const walk_ctx *c, int mi, real h, real3 d, real w
     real tau_down = m->tau_below + m->mut * h;
     if (!c->nee_on || !nee_visible(tau_up, tau_down, up, down)) return;
     c->work[WORK_NEE]++;
+    /* A side light may not leave by, or too deep to count, is as good as infinitely deep
+     * (2^-huge is 0; 1e30 times a 0 of the tables is still 0, never NaN). */
+    const real tu = up && tau_up < LSQT_NEE_TAU_MAX ? tau_up : R(1e30);
+    const real td = down && tau_down < LSQT_NEE_TAU_MAX ? tau_down : R(1e30);
+#ifdef LSQT_NEE_RECORDS
+    nee_put(c, NEE_MEDIUM, mi, -d, w, (real4)(pv->m, tu), td);
+#else
     /* The pointers in locals: on a CPU, PoCL's private and global memory are one address
      * space, so the compiler cannot tell the sums' stores from the context's fields and
      * would load them again at every block. */
     __global const real *dirs = c->wi, *a_up = c->tab, *a_down = c->tab + LSQT_NWI_PAD;
     real *sum = c->sum;
-    /* A side light may not leave by, or too deep to count, is as good as infinitely deep
-     * (2^-huge is 0; 1e30 times a 0 of the tables is still 0, never NaN). */
-    const real tu = up && tau_up < LSQT_NEE_TAU_MAX ? tau_up : R(1e30);
-    const real td = down && tau_down < LSQT_NEE_TAU_MAX ? tau_down : R(1e30);
-    for (int k = 0; k < LSQT_NWI_PAD; k += LSQT_VW) {
-        dirv wi = load_dirv(dirs, k);
-        realv t = exp2_negv(-(tu * vloadv(0, a_up + k) + td * vloadv(0, a_down + k)));
-        nee_addv(sum, k, w * phase_evalv(m, pv, -d, wi), t);
-    }
+    for (int k = 0; k < LSQT_NWI_PAD; k += LSQT_VW)
+        VBLOCK(realv, sum, k) += nee_medium_block(m, pv, -d, w, tu, td, dirs, a_up, a_down, k);
+#endif
 }
 
 /* The phi bin of (x, |y|), phi = atan2(|y|, x) in [0, pi], without atan2 (a tenth of a
@@ -306,6 +355,9 @@ static inline void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ul
                     return;
                 }
                 acc_add(c, up ? LSQT_T_R : LSQT_T_T, w);
+#ifdef LSQT_NEE_RECORDS
+                if (c->count_only) return;
+#endif
                 if (scattered) {
                     /* every block of a grouped session holds the same paths' exits */
                     fix1 q = to_fixed(w, c->flags);
@@ -379,7 +431,12 @@ __kernel void lsqt_exits(__constant lsqt_dev_scene *scene, __global const lsqt_d
  * fall in [path_begin, path_end), sums in local memory and adds once per chunk to the
  * batch. In a grouped session (the RRSS pilot) one walk serves every block of the slice:
  * block b's directions are [b LSQT_GROUP_PAD, + LSQT_GROUP_NWI), and its tallies are
- * state slice slice * slice_group + b, whose R, T, work and histogram are the walk's. */
+ * state slice slice * slice_group + b, whose R, T, work and histogram are the walk's.
+ * On the GPU path (LSQT_NEE_RECORDS) the walk makes no estimates: path p's next-event
+ * records go to rec from rec_off[slice * (path_end - path_begin) + p - path_begin] on,
+ * and lsqt_estimate evaluates them; with count_only it only writes each path's record
+ * count there (the host turns the counts into offsets) and tallies nothing. The CPU path
+ * ignores rec, rec_off and count_only. */
 __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
                         __global const lsqt_dev_medium *media,
                         __global const lsqt_dev_layer *layers,
@@ -387,9 +444,9 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
                         __global const real *wi_dirs, __global const real *tab,
                         ulong path_begin, ulong path_end, ulong chunk_first,
                         __global ulong *nee, __global ulong *scalars, __global ulong *hist,
-                        volatile __global uint *flags)
+                        volatile __global uint *flags, __global real4 *rec, __global ulong *rec_off, int count_only)
 {
-    __local acc_word acc[LSQT_ACC_WORDS * LSQT_T_COUNT], acc_t[LSQT_ACC_WORDS * LSQT_ACC_TILE];
+    __local acc_word acc[LSQT_ACC_WORDS * LSQT_T_COUNT];
     const int lid = (int)get_local_id(0), lsz = (int)get_local_size(0);
     const uint slice = (uint)get_global_id(1);
     const ulong chunk = chunk_first + get_group_id(0);
@@ -400,23 +457,42 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
     for (int k = lid; k < LSQT_ACC_WORDS * LSQT_T_COUNT; k += lsz) acc[k] = 0;
     barrier(CLK_LOCAL_MEM_FENCE);
 
+    ulong work[WORK_N] = {0, 0, 0};
+    const uint g = (uint)max(scene->slice_group, 1), v = slice * g; /* v: the first state slice */
+    walk_ctx c;
+    c.scene = scene, c.media = media, c.layers = layers, c.wi = wi_dirs + 3 * LSQT_NWI_PAD * slice;
+    c.tab = tab + (size_t)slice * LSQT_SLICE_TAB(scene->n_layers);
+    c.work = work, c.acc = acc, c.nee_g = nee, c.v = v, c.batch = batch, c.flags = flags;
+    c.nee_on = 1, c.exit_dir = 0;
+    real3 wo = make_real3(wo_dirs[4 * v], wo_dirs[4 * v + 1], wo_dirs[4 * v + 2]);
+    __global ulong *hist_b = hist + 2 * ((ulong)v * LSQT_BATCHES + (ulong)batch) * LSQT_HIST_BINS;
+#ifdef LSQT_NEE_RECORDS
+    nee_out out;
+    c.sum = 0, c.nee = 0, c.out = &out, c.count_only = count_only;
+    for (ulong p = begin + (ulong)lid; p < end; p += (ulong)lsz) {
+        const ulong at = (ulong)slice * (path_end - path_begin) + (p - path_begin);
+        out.rec = count_only ? 0 : (__global nee_rec *)rec + rec_off[at];
+        out.n = 0;
+        rng_t rng = rng_init(scene->seed_lo, scene->seed_hi, slice, p, RNG_PURPOSE_WALK | scene->rng_side);
+        run_path(&c, wo, &rng, hist_b);
+        if (count_only) rec_off[at] = out.n;
+    }
+    barrier(CLK_LOCAL_MEM_FENCE);
+    if (count_only) return;
+#else
+    (void)rec, (void)rec_off, (void)count_only;
+    __local acc_word acc_t[LSQT_ACC_WORDS * LSQT_ACC_TILE];
     ulongv nee_v[LSQT_NWI_PAD / LSQT_VW]; /* vectors, for aligned blocks (VBLOCK) */
     realv sum_v[LSQT_NWI_PAD / LSQT_VW];
-    ulong *nee_priv = (ulong *)nee_v, work[WORK_N] = {0, 0, 0};
+    ulong *nee_priv = (ulong *)nee_v;
     real *path_sum = (real *)sum_v;
     for (int k = 0; k < LSQT_NWI_PAD; k++) nee_priv[k] = 0, path_sum[k] = R(0.0);
-    const uint g = (uint)max(scene->slice_group, 1), v = slice * g; /* v: the first state slice */
-    walk_ctx c = {scene, media, layers, wi_dirs + 3 * LSQT_NWI_PAD * slice,
-                  tab + (size_t)slice * LSQT_SLICE_TAB(scene->n_layers), path_sum, nee_priv, work, acc,
-                  nee, v, batch, flags, 1, 0};
-    real3 wo = make_real3(wo_dirs[4 * v], wo_dirs[4 * v + 1], wo_dirs[4 * v + 2]);
+    c.sum = path_sum, c.nee = nee_priv;
     for (ulong p = begin + (ulong)lid; p < end; p += (ulong)lsz) {
         rng_t rng = rng_init(scene->seed_lo, scene->seed_hi, slice, p, RNG_PURPOSE_WALK | scene->rng_side);
-        run_path(&c, wo, &rng, hist + 2 * ((ulong)v * LSQT_BATCHES + (ulong)batch) * LSQT_HIST_BINS);
+        run_path(&c, wo, &rng, hist_b);
         nee_flush(&c);
     }
-    for (int k = 0; k < WORK_N; k++)
-        if (work[k]) local_add128(acc + LSQT_ACC_WORDS * (LSQT_T_LAYER_EVENTS + k), work[k], 0, flags);
     /* The directions' sums, a tile at a time. */
     for (int t0 = 0; t0 < LSQT_NWI; t0 += LSQT_ACC_TILE) {
         const int tn = min(LSQT_ACC_TILE, LSQT_NWI - t0);
@@ -432,6 +508,10 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
         }
         barrier(CLK_LOCAL_MEM_FENCE);
     }
+#endif
+    for (int k = 0; k < WORK_N; k++)
+        if (work[k]) local_add128(acc + LSQT_ACC_WORDS * (LSQT_T_LAYER_EVENTS + k), work[k], 0, flags);
+    barrier(CLK_LOCAL_MEM_FENCE);
     for (int k = lid; k < LSQT_T_COUNT; k += lsz) {
         fix1 a = acc_read(acc + LSQT_ACC_WORDS * k);
         for (uint b = 0; b < g; b++) {
@@ -440,3 +520,65 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
         }
     }
 }
+
+#ifdef LSQT_NEE_RECORDS
+/* A record's terms for the block of directions at b (dirs, st: the slice's directions
+ * and tables). */
+static inline realv nee_rec_block(__global const nee_rec *r, __global const lsqt_dev_medium *media,
+                                  __global const lsqt_dev_layer *layers, __global const real *dirs,
+                                  __global const real *st, int b)
+{
+    const real4 q0 = r->q[0], q1 = r->q[1], q2 = r->q[2], q3 = r->q[3];
+    const int kind = (int)q3.z, i = (int)q3.w;
+    if (kind == NEE_LAYER) return nee_layer_block(&layers[i], q0.xyz, q3.x, dirs, st + LSQT_LAYER_TAB(i), b);
+    if (kind == NEE_MEDIUM) {
+        phase_vtx pv = {q1.xyz};
+        return nee_medium_block(&media[i], &pv, q0.xyz, q3.x, q1.w, q2.x, dirs, st, st + LSQT_NWI_PAD, b);
+    }
+    ms_vtx x;
+    x.v = q0.xyz, x.inv_area = q0.w, x.m = q1.xyz, x.lam_v = q1.w;
+    x.lg_v = q2.x, x.log_c = q2.y, x.log_cbar = q2.z, x.e = q2.w;
+    return ms_nee_block(&layers[i], kind, &x, q3.y, q3.x, dirs, st + LSQT_LAYER_TAB(i), b);
+}
+
+/* The GPU path's next-event estimates: one work-group per (chunk, simulated slice), as
+ * lsqt_walk's, sharing the slice's directions: work-item i owns the blocks of LSQT_VW
+ * directions at i LSQT_VW, (i + size) LSQT_VW, ... For each block it sums every path's
+ * records in the path's order (the CPU path's order, so the same sums), converts each
+ * path's sum to fixed point and adds it to the block's tallies: a sum and a 64-bit word
+ * per lane in registers, whatever the direction count. Every work-item reads the same
+ * record at once. */
+__kernel void lsqt_estimate(__constant lsqt_dev_scene *scene, __global const lsqt_dev_medium *media,
+                            __global const lsqt_dev_layer *layers, __global const real *wi_dirs,
+                            __global const real *tab, ulong path_begin, ulong path_end, ulong chunk_first,
+                            __global const real4 *rec_raw, __global const ulong *rec_off, __global ulong *nee,
+                            volatile __global uint *flags)
+{
+    const int lid = (int)get_local_id(0), lsz = (int)get_local_size(0);
+    const uint slice = (uint)get_global_id(1);
+    const ulong chunk = chunk_first + get_group_id(0);
+    const ulong begin = max(chunk * LSQT_CHUNK, path_begin);
+    const ulong end = min((chunk + 1) * LSQT_CHUNK, path_end);
+    const int batch = (int)(chunk % LSQT_BATCHES);
+    const uint v = slice * (uint)max(scene->slice_group, 1);
+    __global const real *dirs = wi_dirs + 3 * LSQT_NWI_PAD * slice;
+    __global const real *st = tab + (size_t)slice * LSQT_SLICE_TAB(scene->n_layers);
+    __global const nee_rec *rec = (__global const nee_rec *)rec_raw;
+    const ulong first = (ulong)slice * (path_end - path_begin) - path_begin;
+    for (int b = lid * LSQT_VW; b < LSQT_NWI_PAD; b += lsz * LSQT_VW) {
+        ulongv lo = (ulongv)(0);
+        for (ulong p = begin; p < end; p++) {
+            realv sum = (realv)(R(0.0));
+            const ulong r1 = rec_off[first + p + 1];
+            for (ulong r = rec_off[first + p]; r < r1; r++) sum += nee_rec_block(rec + r, media, layers, dirs, st, b);
+            nee_flush_block(sum, &lo, nee, v, batch, b, flags);
+        }
+        ulong ls[LSQT_VW];
+        vstorev(lo, 0, ls);
+        for (int i = 0; i < LSQT_VW; i++) {
+            __global ulong *p = ls[i] ? nee_word(nee, v, batch, b + i) : 0;
+            if (p) global_add128(p, ls[i], 0, flags);
+        }
+    }
+}
+#endif

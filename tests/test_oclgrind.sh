@@ -5,7 +5,8 @@
 # default), its data-race checks (--data-races: unsynchronised accesses of two work-items
 # to one local or global location, atomics excepted) and its API checks (--check-api).
 # Small runs of a slab, Rough and Substr (with their RRSS pilot: the candidate-walk
-# kernel) and a two-sided transmitting stack (--from-below):
+# kernel), a two-sided transmitting stack (--from-below), and Substr again with the
+# next-event records' budget so small that launches are cut into parts (walk.cl):
 #   - oclgrind reports nothing (any "Invalid ...", "data race" or error line fails);
 #   - in double the RAW is byte-identical to PoCL's (CPU code path, no LSQT_GPU_PATH):
 #     the tallies are integers, so work-group size, vector width and the RNG form change
@@ -92,4 +93,7 @@ run slab slab.lsqt -p 512 -wo 4 -wi 16 --wi-spread
 run Rough Rough.lsqt -p 256 -wo 4 -wi 16
 run Substr Substr.lsqt -p 256 -wo 4 -wi 16
 run two two.lsqt -p 256 -wo 4 -wi 16 --wi-spread --from-below
+# A record budget of 40 parts every launch (and grows the buffer for a path with more):
+# the same bytes.
+LSQT_NEE_RECORD_CAP=40 run Substr-parts Substr.lsqt -p 256 -wo 4 -wi 16 --wi-spread
 finish test_oclgrind

@@ -17,8 +17,14 @@ extern "C" {
 typedef struct lsqt_session {
     lsqt_context *cx;
     cl_program prog;
-    cl_kernel walk, prepare, exits;
+    cl_kernel walk, prepare, exits, estimate;
     cl_mem scene, media, layers, wo, wi, tab, nee, scalars, hist, flags;
+    /* The GPU path's next-event records (walk.cl, LSQT_NEE_RECORDS): the records of a
+     * launch's paths and their offsets, grown as launches need. */
+    int records;
+    cl_mem rec, rec_off;
+    size_t rec_cap, off_cap;  /* records, offsets the buffers hold */
+    size_t rec_size;          /* bytes per record */
     size_t local_size; /* work-group size of the walk */
     int n_slices, n_wi;
     int slice_group;   /* launch slices per simulated slice (1; rx for the RRSS pilot) */
