@@ -12,7 +12,7 @@
  * closed form of the complex-index Fresnel equations)
  *   Rs = (a2b2 - 2 a c + c^2) / (a2b2 + 2 a c + c^2),
  *   Rp = Rs (a2b2 c^2 - 2 a c s^2 + s^4) / (a2b2 c^2 + 2 a c s^2 + s^4). */
-static inline realv fresnel_conductorv(real eta, real k, realv c)
+LSQT_INLINE realv fresnel_conductorv(real eta, real k, realv c)
 {
     c = clamp(c, (realv)(R(0.0)), (realv)(R(1.0)));
     realv c2 = c * c, s2 = R(1.0) - c2;
@@ -27,7 +27,7 @@ static inline realv fresnel_conductorv(real eta, real k, realv c)
 /* The facets' phase function towards u (the ray's side's frame): F D_v(m) / (4 v.m) =
  * F D(m) / (4 A(v)), m = normalize(v + u); 0 towards the other side (a reflection that
  * points into the surface hits it again). */
-static inline realv conductor_phasev(__global const lsqt_dev_layer *l, const ms_vtx *x, dirv u)
+LSQT_INLINE realv conductor_phasev(__global const lsqt_dev_layer *l, const ms_vtx *x, dirv u)
 {
     dirv m;
     ms_halfv(x->v, u, (realv)(R(1.0)), &m);
@@ -37,7 +37,7 @@ static inline realv conductor_phasev(__global const lsqt_dev_layer *l, const ms_
 }
 
 /* Reflects about the vertex's visible normal; returns the facet albedo F. */
-static inline real conductor_scatter(__global const lsqt_dev_layer *l, const ms_vtx *x, real3 *r)
+LSQT_INLINE real conductor_scatter(__global const lsqt_dev_layer *l, const ms_vtx *x, real3 *r)
 {
     real vm = dot(x->v, x->m);
     *r = normalize(R(2.0) * vm * x->m - x->v);
@@ -46,12 +46,12 @@ static inline real conductor_scatter(__global const lsqt_dev_layer *l, const ms_
 
 /* Single scattering: the phase function times the chance the reflected light escapes,
  * averaged over the first hit's height: (1 + Lambda(v)) / (1 + Lambda(v) + Lambda(u)). */
-static inline realv conductor_singlev(__global const lsqt_dev_layer *l, const ms_vtx *x, dirv u, realv lam_u)
+LSQT_INLINE realv conductor_singlev(__global const lsqt_dev_layer *l, const ms_vtx *x, dirv u, realv lam_u)
 {
     return conductor_phasev(l, x, u) * ((R(1.0) + x->lam_v) / (R(1.0) + x->lam_v + lam_u));
 }
 
-static inline realv conductor_evalv(__global const lsqt_dev_layer *l, real3 wo, dirv wi)
+LSQT_INLINE realv conductor_evalv(__global const lsqt_dev_layer *l, real3 wo, dirv wi)
 {
     if (!(wo.z > R(0.0))) return (realv)(R(0.0));
     ms_vtx x = ms_vertex_single(l->p[0], wo, R(1.0));
@@ -60,7 +60,7 @@ static inline realv conductor_evalv(__global const lsqt_dev_layer *l, real3 wo, 
 
 /* Density of conductor_sample's directions (reflections of visible normals, also those
  * that point below the surface, which carry weight 0): G1(wo) D(h) / (4 wo.z). */
-static inline real conductor_pdf(__global const lsqt_dev_layer *l, real3 wo, real3 wi)
+LSQT_INLINE real conductor_pdf(__global const lsqt_dev_layer *l, real3 wo, real3 wi)
 {
     const real alpha = l->p[0];
     if (!(wo.z > R(0.0))) return R(0.0);
@@ -74,7 +74,7 @@ static inline real conductor_pdf(__global const lsqt_dev_layer *l, real3 wo, rea
 
 /* Single scattering: reflects wo about a visible normal; the weight f/pdf is
  * F (1 + Lo) / (1 + Lo + Li), 0 when the reflection points below the surface. */
-static inline real conductor_sample(__global const lsqt_dev_layer *l, real3 wo, real u1, real u2, real3 *wi)
+LSQT_INLINE real conductor_sample(__global const lsqt_dev_layer *l, real3 wo, real u1, real u2, real3 *wi)
 {
     const real alpha = l->p[0];
     if (!(wo.z > R(0.0))) return R(0.0);

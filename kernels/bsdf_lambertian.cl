@@ -1,13 +1,13 @@
 /* Lambertian reflector/transmitter: f = fR |cos(wi)| / pi on the side of wo, fT |cos| / pi
  * on the other (cosine of wi included, SPEC section 4). Parameters p[0] = fR, p[1] = fT. */
 
-static inline realv lambertian_evalv(__global const lsqt_dev_layer *l, real3 wo, dirv wi)
+LSQT_INLINE realv lambertian_evalv(__global const lsqt_dev_layer *l, real3 wo, dirv wi)
 {
     realv k = select((realv)((real)l->p[1]), (realv)((real)l->p[0]), wo.z * wi.z > R(0.0));
     return k * fabs(wi.z) * LSQT_INV_PI;
 }
 
-static inline real lambertian_pdf(__global const lsqt_dev_layer *l, real3 wo, real3 wi)
+LSQT_INLINE real lambertian_pdf(__global const lsqt_dev_layer *l, real3 wo, real3 wi)
 {
     real fr = l->p[0], ft = l->p[1];
     real pr = fr / fmax(fr + ft, R(1e-30));
@@ -16,7 +16,7 @@ static inline real lambertian_pdf(__global const lsqt_dev_layer *l, real3 wo, re
 
 /* Picks reflection or transmission in proportion to fR : fT; returns the weight
  * f / pdf = fR + fT (0 when the layer absorbs everything). */
-static inline real lambertian_sample(__global const lsqt_dev_layer *l, real3 wo, real u0, real u1,
+LSQT_INLINE real lambertian_sample(__global const lsqt_dev_layer *l, real3 wo, real u0, real u1,
                               real u2, real3 *wi)
 {
     real fr = l->p[0], ft = l->p[1];

@@ -17,7 +17,7 @@
 
 /* Unpolarised Fresnel reflectance of a dielectric interface for cos(incidence) c >= 0 on
  * the incident side and relative index e = n2 / n1; 1 under total internal reflection. */
-static inline realv fresnel_dielectricv(real e, realv c)
+LSQT_INLINE realv fresnel_dielectricv(real e, realv c)
 {
     c = clamp(c, (realv)(R(0.0)), (realv)(R(1.0)));
     realv g2 = e * e - R(1.0) + c * c;
@@ -30,7 +30,7 @@ static inline realv fresnel_dielectricv(real e, realv c)
 /* The facets' phase function towards u, in the frame of the ray's side (z up): towards
  * this side reflection kR F D_v(m) / (4 v.m), towards the other side refraction
  * kT (1 - F) D_v(m) e^2 |u.m| / (v.m + e u.m)^2, m the half vector of each. */
-static inline realv dielectric_phasev(__global const lsqt_dev_layer *l, const ms_vtx *x, dirv u)
+LSQT_INLINE realv dielectric_phasev(__global const lsqt_dev_layer *l, const ms_vtx *x, dirv u)
 {
     const real e = x->e;
     maskv up = u.z > R(0.0);
@@ -48,7 +48,7 @@ static inline realv dielectric_phasev(__global const lsqt_dev_layer *l, const ms
 
 /* Reflects or refracts at the vertex's visible normal, in proportion kR F : kT (1 - F);
  * returns the albedo kR F + kT (1 - F) and sets *cross when the ray went through. */
-static inline real dielectric_scatter(__global const lsqt_dev_layer *l, const ms_vtx *x, real u, real3 *r, int *cross)
+LSQT_INLINE real dielectric_scatter(__global const lsqt_dev_layer *l, const ms_vtx *x, real u, real3 *r, int *cross)
 {
     const real e = x->e, vm = dot(x->v, x->m);
     if (!(vm > R(0.0))) return R(0.0);
@@ -65,19 +65,19 @@ static inline real dielectric_scatter(__global const lsqt_dev_layer *l, const ms
     return tot;
 }
 
-static inline realv dielectric_singlev(__global const lsqt_dev_layer *l, const ms_vtx *x, dirv u, realv lam_u, realv lg_u)
+LSQT_INLINE realv dielectric_singlev(__global const lsqt_dev_layer *l, const ms_vtx *x, dirv u, realv lam_u, realv lg_u)
 {
     return dielectric_phasev(l, x, u) * ms_single_escapev(x, u.z > R(0.0), lam_u, lg_u);
 }
 
 /* The frame of wo's side: z flipped below, and the relative index seen from there. */
-static inline real ms_side(real3 wo) { return wo.z >= R(0.0) ? R(1.0) : R(-1.0); }
-static inline real dielectric_index(__global const lsqt_dev_layer *l, real side)
+LSQT_INLINE real ms_side(real3 wo) { return wo.z >= R(0.0) ? R(1.0) : R(-1.0); }
+LSQT_INLINE real dielectric_index(__global const lsqt_dev_layer *l, real side)
 {
     return side > R(0.0) ? l->p[1] : R(1.0) / l->p[1];
 }
 
-static inline realv dielectric_evalv(__global const lsqt_dev_layer *l, real3 wo, dirv wi)
+LSQT_INLINE realv dielectric_evalv(__global const lsqt_dev_layer *l, real3 wo, dirv wi)
 {
     const real s = ms_side(wo), alpha = l->p[0];
     ms_vtx x = ms_vertex_single(alpha, make_real3(wo.x, wo.y, s * wo.z), dielectric_index(l, s));
@@ -89,7 +89,7 @@ static inline realv dielectric_evalv(__global const lsqt_dev_layer *l, real3 wo,
 /* Density of dielectric_sample's directions: both branches (a reflection may point into
  * the surface and a refraction out of it; those carry weight 0), each D_v(m) times its
  * Jacobian times the chance of choosing it. */
-static inline real dielectric_pdf(__global const lsqt_dev_layer *l, real3 wo, real3 wi)
+LSQT_INLINE real dielectric_pdf(__global const lsqt_dev_layer *l, real3 wo, real3 wi)
 {
     const real s = ms_side(wo), alpha = l->p[0], e = dielectric_index(l, s);
     real3 v = make_real3(wo.x, wo.y, s * wo.z), u = make_real3(wi.x, wi.y, s * wi.z);
@@ -113,7 +113,7 @@ static inline real dielectric_pdf(__global const lsqt_dev_layer *l, real3 wo, re
 
 /* Single scattering: a visible normal, reflection or refraction by kR F : kT (1 - F), and
  * the escape averaged over heights; 0 when the direction points the wrong way. */
-static inline real dielectric_sample(__global const lsqt_dev_layer *l, real3 wo, real u0, real u1, real u2, real3 *wi)
+LSQT_INLINE real dielectric_sample(__global const lsqt_dev_layer *l, real3 wo, real u0, real u1, real u2, real3 *wi)
 {
     const real s = ms_side(wo), alpha = l->p[0];
     ms_vtx x = ms_vertex(alpha, make_real3(wo.x, wo.y, s * wo.z), R(1.0), dielectric_index(l, s), u1, u2);

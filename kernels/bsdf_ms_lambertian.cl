@@ -5,7 +5,7 @@
 
 /* Phase function of the vertex's facet (normal x->m) towards u: fR max(0, u.m) / pi
  * to this side, fT max(0, -u.m) / pi to the other. */
-static inline realv mslambert_phasev(__global const lsqt_dev_layer *l, const ms_vtx *x, dirv u)
+LSQT_INLINE realv mslambert_phasev(__global const lsqt_dev_layer *l, const ms_vtx *x, dirv u)
 {
     realv um = u.x * x->m.x + u.y * x->m.y + u.z * x->m.z;
     return select(l->p[2] * fmax(-um, (realv)(R(0.0))), l->p[1] * fmax(um, (realv)(R(0.0))), u.z > R(0.0)) *
@@ -14,7 +14,7 @@ static inline realv mslambert_phasev(__global const lsqt_dev_layer *l, const ms_
 
 /* Diffuse reflection about m or transmission about -m, in proportion fR : fT; returns
  * the albedo fR + fT. */
-static inline real mslambert_scatter(__global const lsqt_dev_layer *l, const ms_vtx *x, real u0, real u1, real u2,
+LSQT_INLINE real mslambert_scatter(__global const lsqt_dev_layer *l, const ms_vtx *x, real u0, real u1, real u2,
                               real3 *r, int *cross)
 {
     real fr = l->p[1], tot = fr + l->p[2];

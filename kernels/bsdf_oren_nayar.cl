@@ -6,11 +6,11 @@
  * reproduced as published: it is not energy conserving at grazing angles (albedo about
  * 1.005 at sigma 0.1, 80 degrees), and nothing is clamped. p[0] = fR, p[1] = sigma. */
 
-static inline real oren_nayar_a(real s) { return R(1.0) - R(0.5) * s * s / (s * s + R(0.33)); }
-static inline real oren_nayar_b(real s) { return R(0.45) * s * s / (s * s + R(0.09)); }
+LSQT_INLINE real oren_nayar_a(real s) { return R(1.0) - R(0.5) * s * s / (s * s + R(0.33)); }
+LSQT_INLINE real oren_nayar_b(real s) { return R(0.45) * s * s / (s * s + R(0.09)); }
 
 /* The bracket [A + B ...] for LSQT_VW directions on wo's side. */
-static inline realv oren_nayar_bracketv(__global const lsqt_dev_layer *l, real3 wo, dirv wi)
+LSQT_INLINE realv oren_nayar_bracketv(__global const lsqt_dev_layer *l, real3 wo, dirv wi)
 {
     const real s = l->p[1];
     realv t = fmax(wo.x * wi.x + wo.y * wi.y, (realv)(R(0.0)));
@@ -18,20 +18,20 @@ static inline realv oren_nayar_bracketv(__global const lsqt_dev_layer *l, real3 
     return oren_nayar_a(s) + oren_nayar_b(s) * t / fmax(mx, (realv)(R(1e-30)));
 }
 
-static inline realv oren_nayar_evalv(__global const lsqt_dev_layer *l, real3 wo, dirv wi)
+LSQT_INLINE realv oren_nayar_evalv(__global const lsqt_dev_layer *l, real3 wo, dirv wi)
 {
     realv f = l->p[0] * fabs(wi.z) * LSQT_INV_PI * oren_nayar_bracketv(l, wo, wi);
     return select((realv)(R(0.0)), f, wo.z * wi.z > R(0.0));
 }
 
-static inline real oren_nayar_pdf(__global const lsqt_dev_layer *l, real3 wo, real3 wi)
+LSQT_INLINE real oren_nayar_pdf(__global const lsqt_dev_layer *l, real3 wo, real3 wi)
 {
     (void)l;
     return wo.z * wi.z > R(0.0) ? fabs(wi.z) * LSQT_INV_PI : R(0.0);
 }
 
 /* Cosine-weighted on wo's side; the weight f / pdf = fR [A + B ...]. */
-static inline real oren_nayar_sample(__global const lsqt_dev_layer *l, real3 wo, real u1, real u2, real3 *wi)
+LSQT_INLINE real oren_nayar_sample(__global const lsqt_dev_layer *l, real3 wo, real u1, real u2, real3 *wi)
 {
     real3 w = sample_cosine_hemisphere(u1, u2);
     w.z *= wo.z >= R(0.0) ? R(1.0) : R(-1.0);

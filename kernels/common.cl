@@ -7,6 +7,19 @@
 #ifndef LSQT_VW
 #define LSQT_VW 4
 #endif
+
+/* Every helper is static, so no program depends on the compiler inlining it to link (a
+ * C99 plain inline function has no external definition: a GPU compiler at -O0 left 20
+ * symbols undefined). One is better compiled on its own on the CPU path: nee_medium,
+ * whose loop PoCL optimised worse inside the path loop (the MCX-like slab took a
+ * quarter longer); a call per medium vertex costs nothing beside its loop. The GPU
+ * path leaves every choice to the GPU's compiler. */
+#define LSQT_INLINE static inline
+#if !defined(LSQT_NEE_RECORDS) && defined(__clang__)
+#define LSQT_NOINLINE_CPU static __attribute__((noinline))
+#else
+#define LSQT_NOINLINE_CPU static inline
+#endif
 #define LSQT_CAT_(a, b) a##b
 #define LSQT_CAT(a, b) LSQT_CAT_(a, b)
 #define vloadv LSQT_CAT(vload, LSQT_VW)
@@ -53,7 +66,7 @@ typedef LSQT_CAT(int, LSQT_VW) maskv;
  * weight / LSQT_RR_WEIGHT and then carries exactly LSQT_RR_WEIGHT (unbiased). */
 #define LSQT_RR_WEIGHT R(0.25)
 
-static inline real3 make_real3(real x, real y, real z) { return (real3)(x, y, z); }
+LSQT_INLINE real3 make_real3(real x, real y, real z) { return (real3)(x, y, z); }
 
 /* any() and all() of a comparison of LSQT_VW lanes (lanes -1 or 0), by OR / AND of
  * halves: PoCL's builtins test lane after lane with a branch each (a fifth of the path
@@ -83,7 +96,7 @@ static inline real3 make_real3(real x, real y, real z) { return (real3)(x, y, z)
  * 1 / sqrt. (Used where the divider bounds the loop, the medium's next-event loop; in
  * the microfacet models' loops it and a Newton reciprocal measured no faster.) In
  * double: the library's. */
-static inline realv rsqrt_fastv(realv x)
+LSQT_INLINE realv rsqrt_fastv(realv x)
 {
 #ifdef LSQT_DOUBLE
     return rsqrt(x);
@@ -99,7 +112,7 @@ static inline realv rsqrt_fastv(realv x)
 
 /* x^(-3/2) for 0 < x < 2^84: the Henyey-Greenstein value without a division or square
  * root, which were most of a medium vertex's next-event loop. */
-static inline realv inv_pow15v(realv x)
+LSQT_INLINE realv inv_pow15v(realv x)
 {
     realv r = rsqrt_fastv(x);
     return r * r * r;
@@ -111,7 +124,7 @@ static inline realv inv_pow15v(realv x)
  * polynomial fitted for relative error (7.5e-8, 2.3e-7 with float's roundings;
  * test_fast_math), and n added to the exponent bits. PoCL's exp is longer (range checks
  * for both signs). In double: the library's. */
-static inline realv exp2_negv(realv x)
+LSQT_INLINE realv exp2_negv(realv x)
 {
 #ifdef LSQT_DOUBLE
     return exp2(x);
@@ -136,17 +149,17 @@ typedef struct {
     realv x, y, z;
 } dirv;
 
-static inline dirv dirv_broadcast(real3 d)
+LSQT_INLINE dirv dirv_broadcast(real3 d)
 {
     dirv r = {(realv)(d.x), (realv)(d.y), (realv)(d.z)};
     return r;
 }
 
-static inline real sqr(real x) { return x * x; }
+LSQT_INLINE real sqr(real x) { return x * x; }
 
 /* sqrt that never returns NaN for round-off negatives */
-static inline real safe_sqrt(real x) { return sqrt(fmax(x, R(0.0))); }
-static inline realv safe_sqrtv(realv x) { return sqrt(fmax(x, (realv)(R(0.0)))); }
+LSQT_INLINE real safe_sqrt(real x) { return sqrt(fmax(x, R(0.0))); }
+LSQT_INLINE realv safe_sqrtv(realv x) { return sqrt(fmax(x, (realv)(R(0.0)))); }
 
 /* Point-estimate directions per slice (the host passes -DLSQT_NWI=n), padded to a
  * multiple of LSQT_VW. */
@@ -165,7 +178,7 @@ static inline realv safe_sqrtv(realv x) { return sqrt(fmax(x, (realv)(R(0.0))));
 /* lgamma(x) for x >= 1, LSQT_VW at once, without the library's general (and, on PoCL,
  * scalar) lgamma: the Stirling series to 1/x^7 for x >= 8, error below 3e-11, after
  * lgamma(x) = lgamma(x + 6) - log(x (x+1) ... (x+5)) for smaller x. */
-static inline realv lgamma_ge1_v(realv x)
+LSQT_INLINE realv lgamma_ge1_v(realv x)
 {
     maskv small = x < R(8.0);
     realv p = x * (x + R(1.0)) * (x + R(2.0)) * (x + R(3.0)) * (x + R(4.0)) * (x + R(5.0));

@@ -5,20 +5,20 @@
  * unit vectors in the layer frame (z the macro normal), on the side of +z. */
 
 /* Lambda(w) = (-1 + sqrt(1 + alpha^2 tan^2 theta)) / 2, LSQT_VW directions at once (z = cos). */
-static inline realv ggx_lambdav(real alpha, realv z)
+LSQT_INLINE realv ggx_lambdav(real alpha, realv z)
 {
     realv z2 = fmax(z * z, (realv)(R(1e-30)));
     realv t2 = fmax(R(1.0) - z2, (realv)(R(0.0))) / z2; /* tan^2 */
     return R(0.5) * (sqrt(R(1.0) + alpha * alpha * t2) - R(1.0));
 }
 
-static inline real ggx_lambda(real alpha, real z) { return ggx_lambdav(alpha, (realv)(z)).s0; }
+LSQT_INLINE real ggx_lambda(real alpha, real z) { return ggx_lambdav(alpha, (realv)(z)).s0; }
 
 /* D(h) = alpha^2 / (pi ((alpha^2 - 1) cos^2 + 1)^2) for a unit normal h on the upper side,
  * written as alpha^2 / (pi (alpha^2 hz^2 + hx^2 + hy^2)^2): the same for unit h, but with
  * no cancellation, so a smooth surface (alpha 1e-4, alpha^2 below float's epsilon) keeps
  * its finite peak 1 / (pi alpha^2) instead of dividing by a rounded 0. */
-static inline realv ggx_dv(real alpha, realv hx, realv hy, realv hz)
+LSQT_INLINE realv ggx_dv(real alpha, realv hx, realv hy, realv hz)
 {
     real a2 = alpha * alpha;
     realv k = a2 * hz * hz + hx * hx + hy * hy;
@@ -28,7 +28,7 @@ static inline realv ggx_dv(real alpha, realv hx, realv hy, realv hz)
 /* A visible normal for wo (wo.z > 0), density D_wo(h) = G1(wo) max(0, wo.h) D(h) / wo.z
  * with G1 = 1 / (1 + Lambda(wo)): stretch to the unit-roughness configuration, sample
  * the projected hemisphere there, unstretch. */
-static inline real3 ggx_sample_vndf(real alpha, real3 wo, real u1, real u2)
+LSQT_INLINE real3 ggx_sample_vndf(real alpha, real3 wo, real u1, real u2)
 {
     real3 vh = normalize(make_real3(alpha * wo.x, alpha * wo.y, wo.z));
     real lensq = vh.x * vh.x + vh.y * vh.y;
@@ -46,7 +46,7 @@ static inline real3 ggx_sample_vndf(real alpha, real3 wo, real u1, real u2)
  * A(v) = (v.z + sqrt(v.z^2 + alpha^2 (1 - v.z^2))) / 2, which is (1 + Lambda) v.z above
  * the surface and Lambda(-v) |v.z| below it. The visible normals' density is
  * D_v(m) = max(0, v.m) D(m) / A(v). */
-static inline real ggx_area(real alpha, real vz)
+LSQT_INLINE real ggx_area(real alpha, real vz)
 {
     real z2 = vz * vz;
     return R(0.5) * (vz + sqrt(z2 + alpha * alpha * fmax(R(1.0) - z2, R(0.0))));
@@ -62,7 +62,7 @@ static inline real ggx_area(real alpha, real vz)
  * either escapes (returns 0) or hits the microsurface at a new c (returns 1). Going down
  * it always hits: C1(h') = C1(h) u^(1/(1 + Lambda)); going up it escapes with G1, else
  * C1(h') = C1(h) u^(-1/Lambda) for u in (G1, 1] (inverting the Smith masking in height). */
-static inline int ms_next_height(real alpha, real3 r, real *c, real u)
+LSQT_INLINE int ms_next_height(real alpha, real3 r, real *c, real u)
 {
     real lam = ggx_lambda(alpha, r.z), lu = log(u);
     if (r.z > R(0.0)) {
@@ -87,7 +87,7 @@ typedef struct {
     real e;           /* relative index across the facets seen from this side */
 } ms_vtx;
 
-static inline ms_vtx ms_vertex(real alpha, real3 v, real c, real e, real u1, real u2)
+LSQT_INLINE ms_vtx ms_vertex(real alpha, real3 v, real c, real e, real u1, real u2)
 {
     ms_vtx x;
     x.v = v;
@@ -102,7 +102,7 @@ static inline ms_vtx ms_vertex(real alpha, real3 v, real c, real e, real u1, rea
 
 /* The first hit of light arriving along -v from above (c = 1), for the analytic single
  * scattering terms. */
-static inline ms_vtx ms_vertex_single(real alpha, real3 v, real e)
+LSQT_INLINE ms_vtx ms_vertex_single(real alpha, real3 v, real e)
 {
     ms_vtx x = ms_vertex(alpha, v, R(1.0), e, R(0.5), R(0.5));
     x.lam_v = ggx_lambda(alpha, v.z);
@@ -113,7 +113,7 @@ static inline ms_vtx ms_vertex_single(real alpha, real3 v, real e)
 /* Escape of the single-scattered light, averaged over the first hit's height:
  * (1 + Lv) / (1 + Lv + Lu) to this side, (1 + Lv) B(1 + Lv, 1 + Lu) to the other
  * (lg_u = lgamma(1 + Lu), from the per-direction table). */
-static inline realv ms_single_escapev(const ms_vtx *x, maskv up, realv lam_u, realv lg_u)
+LSQT_INLINE realv ms_single_escapev(const ms_vtx *x, maskv up, realv lam_u, realv lg_u)
 {
     realv a = R(1.0) + x->lam_v, r = a / (a + lam_u);
     if (!allv(up)) /* the Beta function only where some light goes through */
@@ -123,7 +123,7 @@ static inline realv ms_single_escapev(const ms_vtx *x, maskv up, realv lam_u, re
 
 /* Half vector of wo and u for reflection (k = 1) or refraction (k = relative index),
  * oriented up: q = v + k u, m = q / |q|; returns |q|^2. LSQT_VW directions at once. */
-static inline realv ms_halfv(real3 v, dirv u, realv k, dirv *m)
+LSQT_INLINE realv ms_halfv(real3 v, dirv u, realv k, dirv *m)
 {
     realv qx = v.x + k * u.x, qy = v.y + k * u.y, qz = v.z + k * u.z;
     realv n2 = fmax(qx * qx + qy * qy + qz * qz, (realv)(R(1e-30)));

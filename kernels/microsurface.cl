@@ -53,7 +53,7 @@ typedef struct {
 } ms_sink;
 
 /* Directions are in `real`: --double is double end to end (the host normalises them). */
-static inline dirv load_dirv(__global const real *wi, int k)
+LSQT_INLINE dirv load_dirv(__global const real *wi, int k)
 {
     dirv d = {vloadv(0, wi + k), vloadv(0, wi + LSQT_NWI_PAD + k), vloadv(0, wi + 2 * LSQT_NWI_PAD + k)};
     return d;
@@ -99,7 +99,7 @@ static inline dirv load_dirv(__global const real *wi, int k)
 
 #ifdef LSQT_NEE_RECORDS
 /* The GPU path: the vertex becomes a record (and counts as evaluated). */
-static inline void ms_record(const ms_sink *k, int kind, const ms_vtx *x, real side, real w)
+LSQT_INLINE void ms_record(const ms_sink *k, int kind, const ms_vtx *x, real side, real w)
 {
     if (k->count) (*k->count)++;
     if (k->out->rec) {
@@ -113,7 +113,7 @@ static inline void ms_record(const ms_sink *k, int kind, const ms_vtx *x, real s
 }
 
 /* A record's terms for the block of directions at b (the layer's table tab). */
-static inline realv ms_nee_block(__global const lsqt_dev_layer *l, int kind, const ms_vtx *x, real side, real w,
+LSQT_INLINE realv ms_nee_block(__global const lsqt_dev_layer *l, int kind, const ms_vtx *x, real side, real w,
                                  __global const real *wi, __global const real *tab, int b)
 {
     realv t = vloadv(0, tab + b), v = (realv)(R(0.0));
@@ -150,7 +150,7 @@ static inline realv ms_nee_block(__global const lsqt_dev_layer *l, int kind, con
 }
 #endif
 
-static inline void ms_nee_vertex(__global const lsqt_dev_layer *l, const ms_vtx *x, real side, real w, const ms_sink *k)
+LSQT_INLINE void ms_nee_vertex(__global const lsqt_dev_layer *l, const ms_vtx *x, real side, real w, const ms_sink *k)
 {
 #ifdef LSQT_NEE_RECORDS
     (void)l;
@@ -171,7 +171,7 @@ static inline void ms_nee_vertex(__global const lsqt_dev_layer *l, const ms_vtx 
 #endif
 }
 
-static inline void ms_nee_single(__global const lsqt_dev_layer *l, const ms_vtx *x, real side, real w, const ms_sink *k)
+LSQT_INLINE void ms_nee_single(__global const lsqt_dev_layer *l, const ms_vtx *x, real side, real w, const ms_sink *k)
 {
 #ifdef LSQT_NEE_RECORDS
     (void)l;
@@ -189,7 +189,7 @@ static inline void ms_nee_single(__global const lsqt_dev_layer *l, const ms_vtx 
 #endif
 }
 
-static inline void ms_nee_first(__global const lsqt_dev_layer *l, const ms_vtx *x, real side, real w, const ms_sink *k)
+LSQT_INLINE void ms_nee_first(__global const lsqt_dev_layer *l, const ms_vtx *x, real side, real w, const ms_sink *k)
 {
 #ifdef LSQT_NEE_RECORDS
     (void)l;
@@ -200,12 +200,12 @@ static inline void ms_nee_first(__global const lsqt_dev_layer *l, const ms_vtx *
 }
 
 /* Relative index across the facets from side s (only the dielectric refracts). */
-static inline real ms_index(__global const lsqt_dev_layer *l, real s)
+LSQT_INLINE real ms_index(__global const lsqt_dev_layer *l, real s)
 {
     return l->kind == LSQT_BSDF_MS_DIELECTRIC ? (s > R(0.0) ? l->p[1] : R(1.0) / l->p[1]) : R(1.0);
 }
 
-static inline real ms_scatter(__global const lsqt_dev_layer *l, const ms_vtx *x, rng_t *rng, real3 *r, int *cross)
+LSQT_INLINE real ms_scatter(__global const lsqt_dev_layer *l, const ms_vtx *x, rng_t *rng, real3 *r, int *cross)
 {
     *cross = 0;
     switch (l->kind) {
@@ -229,7 +229,7 @@ static inline real ms_scatter(__global const lsqt_dev_layer *l, const ms_vtx *x,
  * weighted w, to the sink. With max_order 1 (single scattering only) the walk stops after
  * its first vertex and the weight takes the chance of escaping from there. Returns the
  * exit weight (product of the albedos) and sets *out to the exit direction (world). */
-static inline real ms_walk(__global const lsqt_dev_layer *l, real3 d, rng_t *rng, int max_order, int nee_from, real w,
+LSQT_INLINE real ms_walk(__global const lsqt_dev_layer *l, real3 d, rng_t *rng, int max_order, int nee_from, real w,
                     const ms_sink *k, real3 *out)
 {
     const real alpha = l->p[0];
@@ -268,7 +268,7 @@ static inline real ms_walk(__global const lsqt_dev_layer *l, real3 d, rng_t *rng
 }
 
 /* The analytic single scatterers' samplers (use_multiple_scattering=false). */
-static inline real ms_single_sample(__global const lsqt_dev_layer *l, real3 wo, rng_t *rng, real3 *wi)
+LSQT_INLINE real ms_single_sample(__global const lsqt_dev_layer *l, real3 wo, rng_t *rng, real3 *wi)
 {
     real u0 = rng_uniform(rng), u1 = rng_uniform(rng), u2 = rng_uniform(rng);
     switch (l->kind) {
@@ -282,13 +282,13 @@ static inline real ms_single_sample(__global const lsqt_dev_layer *l, real3 wo, 
     }
 }
 
-static inline int ms_analytic(__global const lsqt_dev_layer *l) { return l->kind != LSQT_BSDF_MS_LAMBERTIAN; }
+LSQT_INLINE int ms_analytic(__global const lsqt_dev_layer *l) { return l->kind != LSQT_BSDF_MS_LAMBERTIAN; }
 
 /* A microsurface vertex reached along d with weight w: iter_count walks each add their
  * terms (weighted w / iter_count) to every direction of the sink, after the analytic
  * single scattering where there is one; walk 0's exit continues the path. Returns the
  * factor for the path's weight and sets *out. With nee 0 only the sample is made. */
-static inline real ms_vertex_walks(__global const lsqt_dev_layer *l, real3 d, rng_t *rng, real w, int nee,
+LSQT_INLINE real ms_vertex_walks(__global const lsqt_dev_layer *l, real3 d, rng_t *rng, real w, int nee,
                             const ms_sink *k, real3 *out)
 {
     const int ms = l->multiple_scattering, analytic = ms_analytic(l);
@@ -312,7 +312,7 @@ static inline real ms_vertex_walks(__global const lsqt_dev_layer *l, real3 d, rn
 }
 
 /* Sampling alone (a vertex with no point estimate, and the test harness). */
-static inline real ms_sample(__global const lsqt_dev_layer *l, real3 wo, rng_t *rng, real3 *wi)
+LSQT_INLINE real ms_sample(__global const lsqt_dev_layer *l, real3 wo, rng_t *rng, real3 *wi)
 {
     ms_sink none = {0, 0, 0};
     return ms_vertex_walks(l, -wo, rng, R(0.0), 0, &none, wi);

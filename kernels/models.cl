@@ -7,7 +7,7 @@
  * microsurfaces it is the analytic single-scattering term (conductor, dielectric; 0 for
  * Lambertian facets): their full value is the walks' (microsurface.cl), which the path
  * loop runs itself. */
-static inline realv bsdf_evalv(__global const lsqt_dev_layer *l, real3 wo, dirv wi)
+LSQT_INLINE realv bsdf_evalv(__global const lsqt_dev_layer *l, real3 wo, dirv wi)
 {
     switch (l->kind) {
 #ifdef LSQT_HAS_BSDF_LAMBERTIAN
@@ -26,13 +26,13 @@ static inline realv bsdf_evalv(__global const lsqt_dev_layer *l, real3 wo, dirv 
     }
 }
 
-static inline real bsdf_eval(__global const lsqt_dev_layer *l, real3 wo, real3 wi)
+LSQT_INLINE real bsdf_eval(__global const lsqt_dev_layer *l, real3 wo, real3 wi)
 {
     return bsdf_evalv(l, wo, dirv_broadcast(wi)).s0;
 }
 
 /* Samples wi given wo; returns the weight f / pdf, 0 when the path is absorbed. */
-static inline real bsdf_sample(__global const lsqt_dev_layer *l, real3 wo, rng_t *rng, real3 *wi)
+LSQT_INLINE real bsdf_sample(__global const lsqt_dev_layer *l, real3 wo, rng_t *rng, real3 *wi)
 {
 #if defined(LSQT_HAS_BSDF_MS_LAMBERTIAN) || defined(LSQT_HAS_BSDF_MS_DIELECTRIC) || defined(LSQT_HAS_BSDF_MS_CONDUCTIVE)
     if (l->kind == LSQT_BSDF_MS_LAMBERTIAN || l->kind == LSQT_BSDF_MS_DIELECTRIC || l->kind == LSQT_BSDF_MS_CONDUCTIVE)
@@ -50,7 +50,7 @@ static inline real bsdf_sample(__global const lsqt_dev_layer *l, real3 wo, rng_t
     }
 }
 
-static inline real bsdf_pdf(__global const lsqt_dev_layer *l, real3 wo, real3 wi)
+LSQT_INLINE real bsdf_pdf(__global const lsqt_dev_layer *l, real3 wo, real3 wi)
 {
     switch (l->kind) {
 #ifdef LSQT_HAS_BSDF_LAMBERTIAN
@@ -76,7 +76,7 @@ typedef struct {
     real3 m;
 } phase_vtx;
 
-static inline phase_vtx phase_vertex(__global const lsqt_dev_medium *m, real3 wo, rng_t *rng)
+LSQT_INLINE phase_vtx phase_vertex(__global const lsqt_dev_medium *m, real3 wo, rng_t *rng)
 {
     phase_vtx v = {make_real3(R(0.0), R(0.0), R(1.0))};
 #ifdef LSQT_HAS_PHASE_SGGX
@@ -90,7 +90,7 @@ static inline phase_vtx phase_vertex(__global const lsqt_dev_medium *m, real3 wo
     return v;
 }
 
-static inline realv phase_evalv(__global const lsqt_dev_medium *m, const phase_vtx *v, real3 wo, dirv wi)
+LSQT_INLINE realv phase_evalv(__global const lsqt_dev_medium *m, const phase_vtx *v, real3 wo, dirv wi)
 {
     (void)v;
     switch (m->phase_kind) {
@@ -110,14 +110,14 @@ static inline realv phase_evalv(__global const lsqt_dev_medium *m, const phase_v
     }
 }
 
-static inline real phase_eval(__global const lsqt_dev_medium *m, const phase_vtx *v, real3 wo, real3 wi)
+LSQT_INLINE real phase_eval(__global const lsqt_dev_medium *m, const phase_vtx *v, real3 wo, real3 wi)
 {
     return phase_evalv(m, v, wo, dirv_broadcast(wi)).s0;
 }
 
 /* Density of phase_sample's directions: the phase function itself for the exact
  * samplers; 0 for diffuse SGGX, whose density has no closed form. */
-static inline real phase_pdf(__global const lsqt_dev_medium *m, real3 wo, real3 wi)
+LSQT_INLINE real phase_pdf(__global const lsqt_dev_medium *m, real3 wo, real3 wi)
 {
     phase_vtx none = {make_real3(R(0.0), R(0.0), R(1.0))};
     if (m->phase_kind == LSQT_PHASE_SGGX && m->pp[2] > R(0.5)) return R(0.0);
@@ -125,7 +125,7 @@ static inline real phase_pdf(__global const lsqt_dev_medium *m, real3 wo, real3 
 }
 
 /* Samples wi given wo; returns the weight p / pdf (1: every sampler here is exact). */
-static inline real phase_sample(__global const lsqt_dev_medium *m, const phase_vtx *v, real3 wo, rng_t *rng, real3 *wi)
+LSQT_INLINE real phase_sample(__global const lsqt_dev_medium *m, const phase_vtx *v, real3 wo, rng_t *rng, real3 *wi)
 {
     /* Every phase function draws two (HG2 picks its lobe by splitting u1, so with b = 0
      * it is HG sample for sample: test_phases); with the free flight's, a scattering

@@ -6,7 +6,7 @@
  * nothing at the peak, so it is written (1 - |g|)^2 + 2 |g| q with q = 1 -+ cos t taken
  * from the vectors, q = |wo +- wi|^2 / 2, exact to rounding near the peak. */
 
-static inline realv hg_evalv(real g, real3 wo, dirv wi)
+LSQT_INLINE realv hg_evalv(real g, real3 wo, dirv wi)
 {
     const real ag = fabs(g), s = g >= R(0.0) ? R(1.0) : R(-1.0);
     realv qx = wo.x + s * wi.x, qy = wo.y + s * wi.y, qz = wo.z + s * wi.z;
@@ -16,14 +16,14 @@ static inline realv hg_evalv(real g, real3 wo, dirv wi)
     return LSQT_INV_4PI * ((R(1.0) - ag) * (R(1.0) + ag)) * inv_pow15v(denom);
 }
 
-static inline real hg_pdf(real g, real3 wo, real3 wi) { return hg_evalv(g, wo, dirv_broadcast(wi)).s0; }
+LSQT_INLINE real hg_pdf(real g, real3 wo, real3 wi) { return hg_evalv(g, wo, dirv_broadcast(wi)).s0; }
 
 /* Samples wi exactly proportional to the phase function (weight 1): the inverse CDF of
  * the standard form, cos t = (1 + g^2 - s^2) / (2 g), s = (1 - g^2) / (1 - g + 2 g u),
  * rewritten for q = 1 - cos t about the peak, q = (1 - g)(1 - u)(s + 1 - g) / (1 - g + 2 g u)
  * (|g| in place of g, the peak axis reversed for g < 0), which keeps angles down to
  * (1 - g) 2^-12 rad in float. */
-static inline real3 hg_sample(real g, real3 wo, real u1, real u2)
+LSQT_INLINE real3 hg_sample(real g, real3 wo, real u1, real u2)
 {
     const real ag = fabs(g);
     real3 axis = g >= R(0.0) ? -wo : wo;
@@ -41,13 +41,13 @@ static inline real3 hg_sample(real g, real3 wo, real u1, real u2)
 /* Two lobes: (1 - b) HG(g0) + b HG(g1); pp = {g0, g1, b}. The sampler picks lobe 1 with
  * probability b, so the weight is exactly 1: lobe 1 when u1 < b, and u1 rescaled to the
  * chosen part of [0, 1) is again uniform, for the lobe's own sample. */
-static inline realv hg2_evalv(__global const lsqt_dev_medium *m, real3 wo, dirv wi)
+LSQT_INLINE realv hg2_evalv(__global const lsqt_dev_medium *m, real3 wo, dirv wi)
 {
     const real b = m->pp[2];
     return (R(1.0) - b) * hg_evalv(m->pp[0], wo, wi) + b * hg_evalv(m->pp[1], wo, wi);
 }
 
-static inline real3 hg2_sample(__global const lsqt_dev_medium *m, real3 wo, real u1, real u2)
+LSQT_INLINE real3 hg2_sample(__global const lsqt_dev_medium *m, real3 wo, real u1, real u2)
 {
     const real b = m->pp[2];
     if (u1 < b) return hg_sample(m->pp[1], wo, u1 / b, u2);

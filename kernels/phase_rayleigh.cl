@@ -3,7 +3,7 @@
  * normalised over the sphere for every gamma in [-1/3, 1] (rho in [-1, 1]); gamma = 1 is
  * isotropic, gamma = -1/3 (rho = -1) is pure cos^2. pp = {gamma}. cos t = -dot(wo, wi)
  * as for HG. */
-static inline realv rayleigh_evalv(__global const lsqt_dev_medium *m, real3 wo, dirv wi)
+LSQT_INLINE realv rayleigh_evalv(__global const lsqt_dev_medium *m, real3 wo, dirv wi)
 {
     const real gam = m->pp[0];
     realv c = wo.x * wi.x + wo.y * wi.y + wo.z * wi.z;
@@ -17,7 +17,7 @@ static inline realv rayleigh_evalv(__global const lsqt_dev_medium *m, real3 wo, 
  * Cardano's solution, mu = -2 sqrt(a / b) sinh(asinh(3 c / (2 a) sqrt(b / a)) / 3), or its
  * limits b -> 0 (mu = -c / a) and a -> 0 (mu = cbrt(-3 c / b)); then two Newton steps on
  * the cubic polish the rounding. */
-static inline real rayleigh_cos(real gam, real u)
+LSQT_INLINE real rayleigh_cos(real gam, real u)
 {
     const real a = R(1.0) + R(3.0) * gam, b = R(1.0) - gam, c = (a + b / R(3.0)) * (R(1.0) - R(2.0) * u);
     real mu;
@@ -31,7 +31,7 @@ static inline real rayleigh_cos(real gam, real u)
     return clamp(mu, R(-1.0), R(1.0));
 }
 
-static inline real3 rayleigh_sample(__global const lsqt_dev_medium *m, real3 wo, real u1, real u2)
+LSQT_INLINE real3 rayleigh_sample(__global const lsqt_dev_medium *m, real3 wo, real u1, real u2)
 {
     return direction_around(-wo, rayleigh_cos(m->pp[0], u1), u2);
 }

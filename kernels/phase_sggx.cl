@@ -9,12 +9,12 @@
  * under y -> -y (and rotations about z), so the phi = 0 slices and the y-mirroring of RAW
  * stay valid. Flakes are two-sided: D(m) = D(-m). */
 
-static inline real sggx_sigma(real sxx, real szz, real3 w)
+LSQT_INLINE real sggx_sigma(real sxx, real szz, real3 w)
 {
     return sqrt(sxx * (w.x * w.x + w.y * w.y) + szz * w.z * w.z);
 }
 
-static inline realv sggx_dv(real sxx, real szz, realv mx, realv my, realv mz)
+LSQT_INLINE realv sggx_dv(real sxx, real szz, realv mx, realv my, realv mz)
 {
     realv q = (mx * mx + my * my) / sxx + mz * mz / szz; /* sqrt|S| = sxx sqrt(szz) */
     /* A unit m has q >= min(1/sxx, 1/szz); m = 0 (the half vector of wi = -wo, which has
@@ -28,7 +28,7 @@ static inline realv sggx_dv(real sxx, real szz, realv mx, realv my, realv mz)
  * S^-1/2 y is along S^1/2 y: a uniform point of the unit sphere's disk as seen from
  * S^1/2 w, lifted onto the sphere, maps to a uniform point of the ellipsoid's projection
  * (a linear map has a constant Jacobian), so m = normalize(S^1/2 y). */
-static inline real3 sggx_sample_vndf(real sxx, real szz, real3 w, real u1, real u2)
+LSQT_INLINE real3 sggx_sample_vndf(real sxx, real szz, real3 w, real u1, real u2)
 {
     const real sp = sqrt(sxx), sn = sqrt(szz);
     real3 v = normalize(make_real3(sp * w.x, sp * w.y, sn * w.z)), t, b;
@@ -39,7 +39,7 @@ static inline real3 sggx_sample_vndf(real sxx, real szz, real3 w, real u1, real 
     return normalize(make_real3(sp * p.x, sp * p.y, sn * p.z));
 }
 
-static inline realv sggx_specular_evalv(__global const lsqt_dev_medium *m, real3 wo, dirv wi)
+LSQT_INLINE realv sggx_specular_evalv(__global const lsqt_dev_medium *m, real3 wo, dirv wi)
 {
     const real sxx = m->pp[0], szz = m->pp[1];
     realv hx = wo.x + wi.x, hy = wo.y + wi.y, hz = wo.z + wi.z;
@@ -49,14 +49,14 @@ static inline realv sggx_specular_evalv(__global const lsqt_dev_medium *m, real3
 
 /* Diffuse flakes: the value towards wi given the vertex's visible normal m (one sample
  * serves every direction of the point estimate, and the path's next direction). */
-static inline realv sggx_diffuse_evalv(real3 m, dirv wi)
+LSQT_INLINE realv sggx_diffuse_evalv(real3 m, dirv wi)
 {
     return fmax(wi.x * m.x + wi.y * m.y + wi.z * m.z, (realv)(R(0.0))) * LSQT_INV_PI;
 }
 
 /* Specular: reflect wo about a visible normal (weight 1). Diffuse: a cosine lobe about
  * the vertex's normal (weight 1). */
-static inline real3 sggx_sample(__global const lsqt_dev_medium *m, real3 wo, real3 normal, real u1, real u2)
+LSQT_INLINE real3 sggx_sample(__global const lsqt_dev_medium *m, real3 wo, real3 normal, real u1, real u2)
 {
     if (m->pp[2] > R(0.5)) {
         real3 t, b;

@@ -10,7 +10,7 @@
  * 16-bit pieces (it was most of the cost of a scattering event), and a GPU compiles this
  * form to its native high multiply too. The state is four scalars, not a uint4: as a
  * vector every round extracted and inserted lanes, a quarter of a scattering event. */
-static inline uint4 philox4x32_rounds(uint4 c, uint2 k, int rounds)
+LSQT_INLINE uint4 philox4x32_rounds(uint4 c, uint2 k, int rounds)
 {
     uint c0 = c.x, c1 = c.y, c2 = c.z, c3 = c.w, k0 = k.x, k1 = k.y;
     for (int r = 0; r < rounds; r++) {
@@ -22,7 +22,7 @@ static inline uint4 philox4x32_rounds(uint4 c, uint2 k, int rounds)
     return (uint4)(c0, c1, c2, c3);
 }
 
-static inline uint4 philox4x32_10(uint4 c, uint2 k) { return philox4x32_rounds(c, k, 10); }
+LSQT_INLINE uint4 philox4x32_10(uint4 c, uint2 k) { return philox4x32_rounds(c, k, 10); }
 
 /* The stream of one path: key = seed, counter = (draw block, path index low, path index
  * high 16 bits | purpose << 16, slice). A path is therefore a pure function of
@@ -32,7 +32,7 @@ static inline uint4 philox4x32_10(uint4 c, uint2 k) { return philox4x32_rounds(c
 /* LSQT_RNG_BELOW (device_layout.h) is OR'ed into either for the slices from below. */
 
 /* The counter of a path's first block (SPEC section 6). */
-static inline uint4 rng_counter(uint slice, ulong path, uint purpose)
+LSQT_INLINE uint4 rng_counter(uint slice, ulong path, uint purpose)
 {
     return (uint4)(0u, (uint)path, ((uint)(path >> 32) & 0xFFFFu) | (purpose << 16), slice);
 }
@@ -43,7 +43,7 @@ static inline uint4 rng_counter(uint slice, ulong path, uint purpose)
  * multiplies are two vector multiplies for four blocks; out[4 b + j] is word j of block b,
  * the order of the one-block form's draws. On a GPU a work-item's vectors are sequential
  * work and its 32-word buffers would be registers, so it keeps the one-block form. */
-static inline void philox4x32_10_x4(uint4 ctr, uint2 key, uint *out)
+LSQT_INLINE void philox4x32_10_x4(uint4 ctr, uint2 key, uint *out)
 {
     uint4 c0 = (uint4)(ctr.x) + (uint4)(0u, 1u, 2u, 3u), c1 = (uint4)(ctr.y), c2 = (uint4)(ctr.z), c3 = (uint4)(ctr.w);
     uint k0 = key.x, k1 = key.y;
@@ -67,7 +67,7 @@ typedef struct {
     int used, ahead;
 } rng_t;
 
-static inline rng_t rng_init(uint seed_lo, uint seed_hi, uint slice, ulong path, uint purpose)
+LSQT_INLINE rng_t rng_init(uint seed_lo, uint seed_hi, uint slice, ulong path, uint purpose)
 {
     rng_t r;
     r.key = (uint2)(seed_lo, seed_hi);
@@ -106,7 +106,7 @@ typedef struct {
     int used;
 } rng_t;
 
-static inline rng_t rng_init(uint seed_lo, uint seed_hi, uint slice, ulong path, uint purpose)
+LSQT_INLINE rng_t rng_init(uint seed_lo, uint seed_hi, uint slice, ulong path, uint purpose)
 {
     rng_t r;
     r.key = (uint2)(seed_lo, seed_hi);
@@ -123,7 +123,7 @@ static inline rng_t rng_init(uint seed_lo, uint seed_hi, uint slice, ulong path,
  * so its 10 rounds of multiplies overlap the scattering event that uses the current
  * block, instead of heading its chain of dependent work (a path makes one block more
  * than it uses). */
-static inline uint rng_next_u32(rng_t *r)
+LSQT_INLINE uint rng_next_u32(rng_t *r)
 {
     if (r->used == 4) {
         r->buf = r->next;
@@ -138,7 +138,7 @@ static inline uint rng_next_u32(rng_t *r)
 #endif
 
 /* Uniform in [0, 1). */
-static inline real rng_uniform(rng_t *r)
+LSQT_INLINE real rng_uniform(rng_t *r)
 {
 #ifdef LSQT_DOUBLE
     ulong a = rng_next_u32(r) >> 5, b = rng_next_u32(r) >> 6; /* 27 + 26 = 53 bits */

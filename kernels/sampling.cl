@@ -1,7 +1,7 @@
 /* Direction warps and frames used by several models. */
 
 /* Orthonormal basis around unit n (Duff et al. 2017, branchless). */
-static inline void make_frame(real3 n, real3 *t, real3 *b)
+LSQT_INLINE void make_frame(real3 n, real3 *t, real3 *b)
 {
     real s = n.z >= R(0.0) ? R(1.0) : R(-1.0);
     real a = R(-1.0) / (s + n.z);
@@ -17,7 +17,7 @@ static inline void make_frame(real3 n, real3 *t, real3 *b)
  * argument with branches and were a fifth of a scattering event. In double: cospi and
  * sinpi of 2u - 1 (|x| <= 1, no costly reduction of a radian argument; the point is the
  * same, rotated by pi, so the signs flip back). */
-static inline real2 azimuth_cs(real u)
+LSQT_INLINE real2 azimuth_cs(real u)
 {
 #ifdef LSQT_DOUBLE
     real x = R(2.0) * u - R(1.0);
@@ -42,7 +42,7 @@ static inline real2 azimuth_cs(real u)
  * |s| < 0.172, by its series to s^9 (truncation below 3e-9 relative; m - 1 is exact, so
  * x near 1 keeps its relative accuracy), without the library's call and special cases.
  * In double: the library's. */
-static inline real neg_log_unit(real x)
+LSQT_INLINE real neg_log_unit(real x)
 {
 #ifdef LSQT_DOUBLE
     return -log(x);
@@ -58,7 +58,7 @@ static inline real neg_log_unit(real x)
 }
 
 /* Cosine-weighted direction on the upper (+z) hemisphere; pdf = cos / pi. */
-static inline real3 sample_cosine_hemisphere(real u1, real u2)
+LSQT_INLINE real3 sample_cosine_hemisphere(real u1, real u2)
 {
     real r = sqrt(u1);
     real2 cs = azimuth_cs(u2);
@@ -70,10 +70,10 @@ static inline real3 sample_cosine_hemisphere(real u1, real u2)
  * 1/sqrt(1 + e) by 3e^2/8, below float's and double's rounding for the e of a few
  * roundings. No sqrt or division: the library's normalize guards against overflow that
  * cannot happen here, at several times the cost. */
-static inline real3 renormalize(real3 v) { return v * (R(1.5) - R(0.5) * dot(v, v)); }
+LSQT_INLINE real3 renormalize(real3 v) { return v * (R(1.5) - R(0.5) * dot(v, v)); }
 
 /* Direction with cosine mu to the axis n and uniform azimuth. */
-static inline real3 direction_around(real3 n, real mu, real u)
+LSQT_INLINE real3 direction_around(real3 n, real mu, real u)
 {
     real3 t, b;
     make_frame(n, &t, &b);
@@ -84,7 +84,7 @@ static inline real3 direction_around(real3 n, real mu, real u)
 
 /* Direction at angle t from the unit axis n, given q = 1 - cos t (accurate near t = 0,
  * where 1 - q would lose it: sin t = sqrt(q (2 - q))), and uniform azimuth. */
-static inline real3 direction_around_q(real3 n, real q, real u)
+LSQT_INLINE real3 direction_around_q(real3 n, real q, real u)
 {
     real3 t, b;
     make_frame(n, &t, &b);

@@ -26,7 +26,7 @@ typedef struct {
 /* LSQT_VW values at once, each rounded to the nearest unit (a float sum x + 0.5 that ties
  * may round up once more: at most one unit, 1e-7 relative, and the same every time);
  * non-finite or negative lanes raise a flag and count as 0. */
-static inline fixv to_fixedv(realv v, volatile __global uint *flags)
+LSQT_INLINE fixv to_fixedv(realv v, volatile __global uint *flags)
 {
     fixv r;
     /* The common case first, by two comparisons (NaN fails both): every lane non-negative
@@ -63,7 +63,7 @@ static inline fixv to_fixedv(realv v, volatile __global uint *flags)
 }
 
 /* One value: lane 0 of the same conversion. */
-static inline fix1 to_fixed(real v, volatile __global uint *flags)
+LSQT_INLINE fix1 to_fixed(real v, volatile __global uint *flags)
 {
     fixv q = to_fixedv((realv)(v), flags);
     fix1 r = {q.lo.s0, q.hi.s0};
@@ -97,7 +97,7 @@ typedef uint acc_word;
 #define LSQT_ACC_WORDS 4
 #endif
 
-static inline void local_add128(volatile __local acc_word *w, ulong lo, ulong hi, volatile __global uint *flags)
+LSQT_INLINE void local_add128(volatile __local acc_word *w, ulong lo, ulong hi, volatile __global uint *flags)
 {
 #ifdef LSQT_INT64_ATOMICS
     if (lo) {
@@ -114,7 +114,7 @@ static inline void local_add128(volatile __local acc_word *w, ulong lo, ulong hi
 }
 
 /* The 128-bit value of accumulator w (LSQT_ACC_WORDS words). */
-static inline fix1 acc_read(volatile __local acc_word *w)
+LSQT_INLINE fix1 acc_read(volatile __local acc_word *w)
 {
 #ifdef LSQT_INT64_ATOMICS
     fix1 r = {w[0], w[1]};
@@ -125,7 +125,7 @@ static inline fix1 acc_read(volatile __local acc_word *w)
 }
 
 /* p: two 64-bit words (low first). */
-static inline void global_add128(__global ulong *p, ulong lo, ulong hi, volatile __global uint *flags)
+LSQT_INLINE void global_add128(__global ulong *p, ulong lo, ulong hi, volatile __global uint *flags)
 {
     if (lo == 0 && hi == 0) return;
 #ifdef LSQT_INT64_ATOMICS

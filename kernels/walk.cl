@@ -45,7 +45,7 @@ typedef struct {
 
 /* Direction k's tally of the walk's batch (state slice v + k / LSQT_GROUP_PAD), or 0 for
  * the padding between a grouped session's blocks. */
-static inline __global ulong *nee_word(__global ulong *nee, uint v, int batch, int k)
+LSQT_INLINE __global ulong *nee_word(__global ulong *nee, uint v, int batch, int k)
 {
     const uint b = (uint)k / LSQT_GROUP_PAD, j = (uint)k % LSQT_GROUP_PAD;
     if (j >= LSQT_GROUP_NWI) return 0;
@@ -53,7 +53,7 @@ static inline __global ulong *nee_word(__global ulong *nee, uint v, int batch, i
 }
 
 /* Adds v to scalar tally k (LSQT_T_R ...). */
-static inline void acc_add(const walk_ctx *c, int k, real v)
+LSQT_INLINE void acc_add(const walk_ctx *c, int k, real v)
 {
     if (v != R(0.0)) {
         fix1 q = to_fixed(v, c->flags);
@@ -79,14 +79,14 @@ static inline void acc_add(const walk_ctx *c, int k, real v)
  * and saves the work at the deep vertices of optically thick media. */
 #define LSQT_NEE_TAU_MAX R(60.0)
 
-static inline int nee_visible(real tau_up, real tau_down, int up, int down)
+LSQT_INLINE int nee_visible(real tau_up, real tau_down, int up, int down)
 {
     return (up && tau_up < LSQT_NEE_TAU_MAX) || (down && tau_down < LSQT_NEE_TAU_MAX);
 }
 
 /* Transmittance towards directions z (inv_az = 1 / |z|, from the slice's table), 0 where
  * leaving that way is not allowed. */
-static inline realv nee_transmittancev(realv z, realv inv_az, real tau_up, real tau_down, int up, int down)
+LSQT_INLINE realv nee_transmittancev(realv z, realv inv_az, real tau_up, real tau_down, int up, int down)
 {
     realv t = (realv)(R(1.0));
     if (tau_up > R(0.0) || tau_down > R(0.0))
@@ -127,7 +127,7 @@ __kernel void lsqt_prepare(__constant lsqt_dev_scene *scene, __global const lsqt
  * text for both code paths (the CPU's sums per path, the GPU's records). Lanes with
  * t = 0 add nothing, even where the model is not finite (the zero vectors that pad the
  * directions). A layer's BSDF (tab: its table, T first): */
-static inline realv nee_layer_block(__global const lsqt_dev_layer *l, real3 wo, real w, __global const real *dirs,
+LSQT_INLINE realv nee_layer_block(__global const lsqt_dev_layer *l, real3 wo, real w, __global const real *dirs,
                                     __global const real *tab, int b)
 {
     const realv t = vloadv(0, tab + b);
@@ -136,7 +136,7 @@ static inline realv nee_layer_block(__global const lsqt_dev_layer *l, real3 wo, 
 
 /* A medium's phase function at optical depths tu above and td below the vertex (a_up,
  * a_down: the slice's media rows). */
-static inline realv nee_medium_block(__global const lsqt_dev_medium *m, const phase_vtx *pv, real3 wo, real w, real tu,
+LSQT_INLINE realv nee_medium_block(__global const lsqt_dev_medium *m, const phase_vtx *pv, real3 wo, real w, real tu,
                                      real td, __global const real *dirs, __global const real *a_up,
                                      __global const real *a_down, int b)
 {
@@ -157,7 +157,7 @@ static inline realv nee_medium_block(__global const lsqt_dev_medium *m, const ph
 #if LSQT_CHUNK > 256
 #error "nee_flush_block's carry-free case assumes at most 256 paths per chunk"
 #endif
-static inline void nee_flush_block(realv v, ulongv *lo, __global ulong *nee, uint vs, int batch, int k,
+LSQT_INLINE void nee_flush_block(realv v, ulongv *lo, __global ulong *nee, uint vs, int batch, int k,
                                    volatile __global uint *flags)
 {
     if (allv((v >= R(0.0)) & (v < LSQT_FLUSH_FAST_MAX))) {
@@ -180,7 +180,7 @@ static inline void nee_flush_block(realv v, ulongv *lo, __global ulong *nee, uin
 
 #ifndef LSQT_NEE_RECORDS
 /* The CPU path: the path's sums to the work-item's low words (then cleared). */
-static inline void nee_flush(const walk_ctx *c)
+LSQT_INLINE void nee_flush(const walk_ctx *c)
 {
     for (int k = 0; k < LSQT_NWI_PAD; k += LSQT_VW) {
         realv v = VBLOCK(realv, c->sum, k);
@@ -190,7 +190,7 @@ static inline void nee_flush(const walk_ctx *c)
 }
 #else
 /* The GPU path: a vertex's record (kind NEE_LAYER or NEE_MEDIUM; q1, q2x as nee_rec says). */
-static inline void nee_put(const walk_ctx *c, int kind, int index, real3 wo, real w, real4 q1, real q2x)
+LSQT_INLINE void nee_put(const walk_ctx *c, int kind, int index, real3 wo, real w, real4 q1, real q2x)
 {
     if (c->out->rec) {
         __global nee_rec *r = c->out->rec + c->out->n;
@@ -203,7 +203,7 @@ static inline void nee_put(const walk_ctx *c, int kind, int index, real3 wo, rea
 }
 #endif
 
-static inline int layer_is_micro(__global const lsqt_dev_layer *l)
+LSQT_INLINE int layer_is_micro(__global const lsqt_dev_layer *l)
 {
     return l->kind == LSQT_BSDF_MS_LAMBERTIAN || l->kind == LSQT_BSDF_MS_DIELECTRIC ||
            l->kind == LSQT_BSDF_MS_CONDUCTIVE;
@@ -212,7 +212,7 @@ static inline int layer_is_micro(__global const lsqt_dev_layer *l)
 /* A vertex on layer li reached along d with weight w: next-event estimates towards upward
  * directions if it is the topmost non-null layer, downward if the bottommost, then the
  * sample that continues the path. Returns the weight factor and sets *wi. */
-static inline real layer_vertex(const walk_ctx *c, int li, real3 d, real w, rng_t *rng, real3 *wi)
+LSQT_INLINE real layer_vertex(const walk_ctx *c, int li, real3 d, real w, rng_t *rng, real3 *wi)
 {
     const int up = li == c->scene->top_nonnull, down = li == c->scene->bottom_nonnull;
     __global const lsqt_dev_layer *l = &c->layers[li];
@@ -244,7 +244,7 @@ static inline real layer_vertex(const walk_ctx *c, int li, real3 d, real w, rng_
 }
 
 /* Next-event estimates from a scattering vertex at height h in interior medium mi. */
-static inline void nee_medium(const walk_ctx *c, int mi, real h, real3 d, real w, const phase_vtx *pv)
+LSQT_NOINLINE_CPU void nee_medium(const walk_ctx *c, int mi, real h, real3 d, real w, const phase_vtx *pv)
 {
     __global const lsqt_dev_medium *m = &c->media[mi];
     const int top = c->scene->top_nonnull, bottom = c->scene->bottom_nonnull;
@@ -277,7 +277,7 @@ static inline void nee_medium(const walk_ctx *c, int mi, real h, real3 d, real w
 #if LSQT_HIST_NPHI != 16
 #error "hist_phi_bin assumes 16 phi bins"
 #endif
-static inline int hist_phi_bin(real x, real ay)
+LSQT_INLINE int hist_phi_bin(real x, real ay)
 {
     const float16 c = (float16)(
         0.000000000f, 0.980785280f, 0.923879533f, 0.831469612f,
@@ -299,7 +299,7 @@ static inline int hist_phi_bin(real x, real ay)
 /* Equal-solid-angle bin of an exit direction: |cos theta| x phi folded to [0, pi]. The
  * hemisphere is the side the path left by (d.z may round to 0); the clamps keep even a
  * NaN direction inside the table. */
-static inline int hist_bin(real3 d, int up)
+LSQT_INLINE int hist_bin(real3 d, int up)
 {
     real mu = fabs(d.z);
     int bm = clamp((int)(mu * LSQT_HIST_NMU), 0, LSQT_HIST_NMU - 1);
@@ -308,7 +308,7 @@ static inline int hist_bin(real3 d, int up)
 }
 
 /* Russian roulette; returns 0 when the path ends. */
-static inline int roulette(real *w, rng_t *rng)
+LSQT_INLINE int roulette(real *w, rng_t *rng)
 {
     if (*w >= LSQT_RR_WEIGHT) return 1;
     if (rng_uniform(rng) * LSQT_RR_WEIGHT >= *w) return 0;
@@ -316,7 +316,7 @@ static inline int roulette(real *w, rng_t *rng)
     return 1;
 }
 
-static inline void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulong *hist)
+LSQT_INLINE void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulong *hist)
 {
     const int n = c->scene->n_layers;
     real3 d = -wo;
@@ -524,7 +524,7 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
 #ifdef LSQT_NEE_RECORDS
 /* A record's terms for the block of directions at b (dirs, st: the slice's directions
  * and tables). */
-static inline realv nee_rec_block(__global const nee_rec *r, __global const lsqt_dev_medium *media,
+LSQT_INLINE realv nee_rec_block(__global const nee_rec *r, __global const lsqt_dev_medium *media,
                                   __global const lsqt_dev_layer *layers, __global const real *dirs,
                                   __global const real *st, int b)
 {
