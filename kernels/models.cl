@@ -26,6 +26,22 @@ LSQT_INLINE realv bsdf_evalv(__global const lsqt_dev_layer *l, real3 wo, dirv wi
     }
 }
 
+/* The same for the layers a next-event estimate evaluates this way: every kind but the
+ * microsurfaces, whose terms are their walks' (a smaller switch: on a GPU the unused
+ * branches' registers would count). */
+LSQT_INLINE realv bsdf_evalv_closed(__global const lsqt_dev_layer *l, real3 wo, dirv wi)
+{
+    switch (l->kind) {
+#ifdef LSQT_HAS_BSDF_LAMBERTIAN
+    case LSQT_BSDF_LAMBERTIAN: return lambertian_evalv(l, wo, wi);
+#endif
+#ifdef LSQT_HAS_BSDF_OREN_NAYAR
+    case LSQT_BSDF_OREN_NAYAR: return oren_nayar_evalv(l, wo, wi);
+#endif
+    default: return (realv)(R(0.0));
+    }
+}
+
 LSQT_INLINE real bsdf_eval(__global const lsqt_dev_layer *l, real3 wo, real3 wi)
 {
     return bsdf_evalv(l, wo, dirv_broadcast(wi)).s0;

@@ -126,12 +126,13 @@ __kernel void lsqt_prepare(__constant lsqt_dev_scene *scene, __global const lsqt
 /* The next-event terms of one vertex for the block of LSQT_VW directions at b, the same
  * text for both code paths (the CPU's sums per path, the GPU's records). Lanes with
  * t = 0 add nothing, even where the model is not finite (the zero vectors that pad the
- * directions). A layer's BSDF (tab: its table, T first): */
+ * directions). A layer's closed-form BSDF (tab: its table, T first; microsurfaces take
+ * ms_vertex_walks): */
 LSQT_INLINE realv nee_layer_block(__global const lsqt_dev_layer *l, real3 wo, real w, __global const real *dirs,
                                     __global const real *tab, int b)
 {
     const realv t = vloadv(0, tab + b);
-    return select((realv)(R(0.0)), (w * bsdf_evalv(l, wo, load_dirv(dirs, b))) * t, t > R(0.0));
+    return select((realv)(R(0.0)), (w * bsdf_evalv_closed(l, wo, load_dirv(dirs, b))) * t, t > R(0.0));
 }
 
 /* A medium's phase function at optical depths tu above and td below the vertex (a_up,

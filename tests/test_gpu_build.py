@@ -59,9 +59,9 @@ CEILINGS = {
     "slab": {"lsqt_walk": 96, "lsqt_estimate": 94, "lsqt_exits": 64, "lsqt_prepare": 71},
     "Dust": {"lsqt_walk": 98, "lsqt_estimate": 96, "lsqt_exits": 74, "lsqt_prepare": 71},
     "Rough": {"lsqt_walk": 220, "lsqt_estimate": 142, "lsqt_exits": 119, "lsqt_prepare": 71},
-    "Substr": {"lsqt_walk": 222, "lsqt_estimate": 184, "lsqt_exits": 163, "lsqt_prepare": 71},
-    "Dusty": {"lsqt_walk": 227, "lsqt_estimate": 184, "lsqt_exits": 168, "lsqt_prepare": 71},
-    "Silver": {"lsqt_walk": 214, "lsqt_estimate": 141, "lsqt_exits": 114, "lsqt_prepare": 71},
+    "Substr": {"lsqt_walk": 222, "lsqt_estimate": 138, "lsqt_exits": 163, "lsqt_prepare": 71},
+    "Dusty": {"lsqt_walk": 227, "lsqt_estimate": 138, "lsqt_exits": 168, "lsqt_prepare": 71},
+    "Silver": {"lsqt_walk": 214, "lsqt_estimate": 136, "lsqt_exits": 114, "lsqt_prepare": 71},
     "SGGX": {"lsqt_walk": 121, "lsqt_estimate": 114, "lsqt_exits": 93, "lsqt_prepare": 71},
     "Rayleigh-ON": {"lsqt_walk": 101, "lsqt_estimate": 109, "lsqt_exits": 84, "lsqt_prepare": 71},
 }
