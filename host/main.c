@@ -332,9 +332,13 @@ int main(int argc, char **argv)
         return 0;
     }
     if (c.threads) {
+        /* PoCL's CPU devices read these when the first OpenCL call loads them: the
+         * pthread device of PoCL 3.x (Debian 12's) POCL_MAX_PTHREAD_COUNT, other
+         * versions and devices POCL_CPU_MAX_CU_NUM. Other OpenCL drivers read neither. */
         char n[32];
         snprintf(n, sizeof n, "%d", c.threads);
-        setenv("POCL_CPU_MAX_CU_NUM", n, 1); /* must precede the first OpenCL call */
+        setenv("POCL_CPU_MAX_CU_NUM", n, 1);
+        setenv("POCL_MAX_PTHREAD_COUNT", n, 1);
     }
     if (c.list_devices) {
         lsqt_devices_print(stdout);
