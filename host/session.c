@@ -187,9 +187,11 @@ done:
     return rc;
 }
 
-/* Each kernel's local memory against the device's (the kernels bound theirs: 4.2 KB for
- * any direction count, walk.cl's LSQT_ACC_TILE), so a device that cannot hold them says
- * so here rather than failing a launch with CL_OUT_OF_RESOURCES. */
+/* Each kernel's local memory against the device's, so a device that cannot hold it says
+ * so here rather than failing a launch with CL_OUT_OF_RESOURCES. The GPU path's kernels
+ * need 4.2 KB at most for any direction count (walk.cl's LSQT_ACC_TILE); the CPU path's
+ * walk also holds its items' direction sums (walk.cl's LSQT_ITEMS), 96 KB at the largest
+ * RRSS pilot, which a CPU device has (PoCL: 2 MB) and a GPU may not. */
 static int check_kernel_memory(lsqt_session *s, int verbose, char *err, size_t errcap)
 {
     const lsqt_device_info *d = &s->cx->dev;
@@ -207,8 +209,9 @@ static int check_kernel_memory(lsqt_session *s, int verbose, char *err, size_t e
                     ks[i].name, (unsigned long long)local, (unsigned long long)d->local_mem, (unsigned long long)priv);
         if (d->local_mem && local > d->local_mem) {
             snprintf(err, errcap,
-                     "the kernel %s needs %llu bytes of local memory and %s has %llu: this device cannot run it",
-                     ks[i].name, (unsigned long long)local, d->name, (unsigned long long)d->local_mem);
+                     "the kernel %s needs %llu bytes of local memory and %s has %llu: this device cannot run it%s",
+                     ks[i].name, (unsigned long long)local, d->name, (unsigned long long)d->local_mem,
+                     s->records ? "" : " (the GPU code path, LSQT_GPU_PATH=1, needs less)");
             return 1;
         }
     }
@@ -257,6 +260,15 @@ int lsqt_session_open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_asse
     s->vw = vector_width(gpu, err, errcap);
     if (!s->vw) return 1;
     if (build_options(cx, a, st, s->slice_group, s->vw, gpu, opt, sizeof opt, err, errcap)) return 1;
+    /* A CPU device runs a work-group's items one after another on one thread, so one
+     * item does the chunk's 256 paths and the end-of-chunk sums (items x directions, a
+     * locked add each) are made once: Slab 5 % and Substr 4 % less CPU than with 8 items
+     * (12 % less with 8 than with 64); a GPU wants wide groups. The CPU path's items keep
+     * their direction sums in the group's local memory, sized for the group (walk.cl's
+     * LSQT_ITEMS). */
+    size_t ls = local_size ? local_size : gpu ? 64 : 1, kmax = 0;
+    if (!gpu && ls > 1 && strlen(opt) + 32 < sizeof opt)
+        snprintf(opt + strlen(opt), sizeof opt - strlen(opt), " -DLSQT_ITEMS=%zu", ls);
     if (extra_options && strlen(opt) + strlen(extra_options) + 2 < sizeof opt) {
         strcat(opt, " ");
         strcat(opt, extra_options);
@@ -283,11 +295,6 @@ int lsqt_session_open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_asse
         lsqt_session_close(s);
         return 1;
     }
-    /* A CPU device runs a work-group's items one after another on one thread, so one
-     * item does the chunk's 256 paths and the end-of-chunk sums (items x directions, a
-     * locked add each) are made once: Slab 5 % and Substr 4 % less CPU than with 8 items
-     * (12 % less with 8 than with 64); a GPU wants wide groups. */
-    size_t ls = local_size ? local_size : gpu ? 64 : 1, kmax = 0;
     clGetKernelWorkGroupInfo(s->walk, cx->dev.id, CL_KERNEL_WORK_GROUP_SIZE, sizeof kmax, &kmax, NULL);
     if (kmax && ls > kmax) ls = kmax;
     s->local_size = ls;

@@ -26,11 +26,12 @@
 #define vstorev LSQT_CAT(vstore, LSQT_VW)
 typedef LSQT_CAT(ulong, LSQT_VW) ulongv;
 typedef LSQT_CAT(uint, LSQT_VW) uintv;
-/* The block of LSQT_VW values at p + k (k a multiple of LSQT_VW) of a private array
- * declared as vectors, so aligned: one vector load or store. Through vloadv/vstorev,
- * PoCL stores 16 lanes as four 4-lane pieces, and the next load of the block waits for
- * them (a store-forwarding stall on every next-event block). */
-#define VBLOCK(type, p, k) (*(type *)((p) + (k)))
+/* The block of LSQT_VW values at p + k (k a multiple of LSQT_VW) of the CPU path's
+ * direction sums (local memory declared as vectors, so aligned: one vector load or
+ * store). Through vloadv/vstorev, PoCL stores 16 lanes as four 4-lane pieces, and the
+ * next load of the block waits for them (a store-forwarding stall on every next-event
+ * block). */
+#define VBLOCK(type, p, k) (*(__local type *)((p) + (k)))
 #define as_ulongv LSQT_CAT(as_ulong, LSQT_VW)
 #define as_uintv LSQT_CAT(as_uint, LSQT_VW)
 #define as_floatv LSQT_CAT(as_float, LSQT_VW)

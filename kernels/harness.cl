@@ -115,14 +115,15 @@ __kernel void harness_tally(__global const float *v, __global ulong *out, volati
  * work-item averages `reps` vertex evaluations (each iter_count walks plus the analytic
  * single scattering, exactly as the path loop does) and writes its means,
  * out[item * LSQT_NWI_PAD + k]; the spread across work-items gives the noise. */
-__kernel void harness_ms_eval(__global const lsqt_dev_layer *layers, float wox, float woy, float woz,
-                              __global const real *wi, __global const real *tab, uint seed, int reps,
-                              __global float *out)
+__kernel __attribute__((reqd_work_group_size(1, 1, 1))) void
+harness_ms_eval(__global const lsqt_dev_layer *layers, float wox, float woy, float woz, __global const real *wi,
+                __global const real *tab, uint seed, int reps, __global float *out)
 {
     uint i = (uint)get_global_id(0);
     rng_t rng = rng_init(seed, 0u, 1u, i, 7u);
     real3 wo = normalize(make_real3(wox, woy, woz));
-    real sum[LSQT_NWI_PAD];
+    __local realv sum_v[LSQT_NWI_PAD / LSQT_VW]; /* the group's (one work-item's) sums */
+    __local real *sum = (__local real *)sum_v;
     for (int k = 0; k < LSQT_NWI_PAD; k++) sum[k] = R(0.0);
     ms_sink sink = {sum, wi, tab + LSQT_LAYER_TAB(0)};
     for (int r = 0; r < reps; r++) {

@@ -42,7 +42,7 @@ typedef struct {
  * lgamma(1 + Lambda)), each LSQT_NWI_PAD long. On the GPU path the terms are records
  * instead (out, for layer `layer`). */
 typedef struct {
-    real *sum;
+    __local real *sum;
     __global const real *wi;
     __global const real *tab;
     ulong *count; /* vertices evaluated (work counter), or 0 */

@@ -6,14 +6,25 @@
  * Inside an interior medium the position is the height h above its bottom boundary, so a
  * thin medium far from z = 0 is as exact as one near it. */
 /* Work-group accumulators of the tallies (tally.cl's acc_word, 128-bit sums): the
- * LSQT_T_COUNT scalars for the whole chunk, and the directions' sums in tiles of
- * LSQT_ACC_TILE at the chunk's end, so local memory does not grow with the direction
- * count (16 (LSQT_ACC_TILE + LSQT_T_COUNT) bytes: 4.2 KB, within every device's 32 KB).
- * A path's point estimates are summed per direction in floating point (`sum`, in the
- * path's own fixed order) and converted to fixed point once per path; the work-item keeps
- * those in private integers (no atomics on the hot path), and adds them once into the
- * work-group's. Integer sums keep the result independent of order. */
+ * LSQT_T_COUNT scalars for the whole chunk, and on the CPU path the directions' sums in
+ * tiles of LSQT_ACC_TILE at the chunk's end (16 (LSQT_ACC_TILE + LSQT_T_COUNT) bytes:
+ * 4.2 KB). A path's point estimates are summed per direction in floating point (`sum`,
+ * in the path's own fixed order) and converted to fixed point once per path; the
+ * work-item keeps those in integers of its own (no atomics on the hot path: on the CPU
+ * path in the group's local memory, LSQT_ITEMS; on the GPU path in registers,
+ * lsqt_estimate), and adds them once into the work-group's or the batch's. Integer sums
+ * keep the result independent of order. */
 #define LSQT_ACC_TILE (LSQT_NWI < 256 ? LSQT_NWI : 256)
+
+/* The CPU path's work-group size (the host passes -DLSQT_ITEMS when it is not 1). A CPU
+ * runs a group's work-items one after another on one thread, so a group of one is the
+ * fastest: its work-item keeps the path's sums and the chunk's low words of every
+ * direction in the group's local memory, LSQT_ITEMS x LSQT_NWI_PAD x (sizeof(real) + 8)
+ * bytes (12 KB at 1024 directions, 96 KB at the pilot's 8192; the host checks the
+ * device's limit). The GPU path keeps none (lsqt_estimate). */
+#ifndef LSQT_ITEMS
+#define LSQT_ITEMS 1
+#endif
 
 /* A work-item's work counters, in the order of the LSQT_T_LAYER_EVENTS... tallies. */
 #define WORK_LAYER (LSQT_T_LAYER_EVENTS - LSQT_T_LAYER_EVENTS)
@@ -27,8 +38,8 @@ typedef struct {
     __global const lsqt_dev_layer *layers;
     __global const real *wi;           /* this slice's directions: x[pad], y[pad], z[pad] */
     __global const real *tab;          /* this slice's direction tables (lsqt_prepare) */
-    real *sum;                         /* the current path's point estimates */
-    ulong *nee;                        /* this work-item's point-estimate sums, low words */
+    __local real *sum;                 /* the current path's point estimates (CPU path) */
+    __local ulong *nee;                /* this work-item's point-estimate sums, low words */
     ulong *work;                       /* this work-item's work counters (LSQT_T_LAYER_EVENTS ...) */
     volatile __local acc_word *acc;    /* the work-group's scalar tallies, LSQT_ACC_WORDS each */
     __global ulong *nee_g;             /* the tallies of the chunk's batch (nee_word) */
@@ -145,10 +156,10 @@ LSQT_INLINE realv nee_medium_block(__global const lsqt_dev_medium *m, const phas
     return select((realv)(R(0.0)), (w * phase_evalv(m, pv, wo, load_dirv(dirs, b))) * t, t > R(0.0));
 }
 
-/* Converts one path's sums of the block at k to fixed point and adds them to *lo, the
- * low 64-bit words of the block's tallies. A high word (a sum above 2^63 units, 8e6, or
- * a carry out of the low word) is rare and goes straight to the batch's 128-bit sum in
- * global memory (nee_word of nee, state slice vs, batch), where it counts the same.
+/* Converts one path's sums of the block at k to fixed point, adds them to lo, the low
+ * 64-bit words of the block's tallies, and returns the new low words. A high word (a sum
+ * above 2^63 units, 8e6, or a carry out of the low word) is rare and goes straight to the
+ * batch's 128-bit sum in global memory (nee_word of nee, state slice vs, batch), where it counts the same.
  * The common case by one test per block: every lane in [0, 2^15) is below 2^55 units,
  * and at most LSQT_CHUNK (2^8) paths' sums go to the low words before they go to the
  * batch's, so no carry can leave them; the general conversion of such lanes is the same
@@ -158,16 +169,13 @@ LSQT_INLINE realv nee_medium_block(__global const lsqt_dev_medium *m, const phas
 #if LSQT_CHUNK > 256
 #error "nee_flush_block's carry-free case assumes at most 256 paths per chunk"
 #endif
-LSQT_INLINE void nee_flush_block(realv v, ulongv *lo, __global ulong *nee, uint vs, int batch, int k,
-                                   volatile __global uint *flags)
+LSQT_INLINE ulongv nee_flush_block(realv v, ulongv lo, __global ulong *nee, uint vs, int batch, int k,
+                                     volatile __global uint *flags)
 {
-    if (allv((v >= R(0.0)) & (v < LSQT_FLUSH_FAST_MAX))) {
-        *lo += as_ulongv(convert_longv(v * (real)LSQT_FIX_SCALE + R(0.5)));
-        return;
-    }
+    if (allv((v >= R(0.0)) & (v < LSQT_FLUSH_FAST_MAX)))
+        return lo + as_ulongv(convert_longv(v * (real)LSQT_FIX_SCALE + R(0.5)));
     fixv q = to_fixedv(v, flags);
-    ulongv old = *lo, sum = old + q.lo;
-    *lo = sum;
+    ulongv old = lo, sum = old + q.lo;
     if (anyv((q.hi != 0) | (sum < old))) {
         ulongv h = q.hi + select((ulongv)(0), (ulongv)(1), sum < old);
         ulong hs[LSQT_VW];
@@ -177,6 +185,7 @@ LSQT_INLINE void nee_flush_block(realv v, ulongv *lo, __global ulong *nee, uint 
             if (p) global_add128(p, 0, hs[i], flags);
         }
     }
+    return sum;
 }
 
 #ifndef LSQT_NEE_RECORDS
@@ -186,7 +195,7 @@ LSQT_INLINE void nee_flush(const walk_ctx *c)
     for (int k = 0; k < LSQT_NWI_PAD; k += LSQT_VW) {
         realv v = VBLOCK(realv, c->sum, k);
         VBLOCK(realv, c->sum, k) = (realv)(R(0.0));
-        nee_flush_block(v, &VBLOCK(ulongv, c->nee, k), c->nee_g, c->v, c->batch, k, c->flags);
+        VBLOCK(ulongv, c->nee, k) = nee_flush_block(v, VBLOCK(ulongv, c->nee, k), c->nee_g, c->v, c->batch, k, c->flags);
     }
 }
 #else
@@ -261,11 +270,11 @@ LSQT_NOINLINE_CPU void nee_medium(const walk_ctx *c, int mi, real h, real3 d, re
 #ifdef LSQT_NEE_RECORDS
     nee_put(c, NEE_MEDIUM, mi, -d, w, (real4)(pv->m, tu), td);
 #else
-    /* The pointers in locals: on a CPU, PoCL's private and global memory are one address
-     * space, so the compiler cannot tell the sums' stores from the context's fields and
-     * would load them again at every block. */
+    /* The pointers in locals: on a CPU, PoCL's local, private and global memory are one
+     * address space, so the compiler cannot tell the sums' stores from the context's
+     * fields and would load them again at every block. */
     __global const real *dirs = c->wi, *a_up = c->tab, *a_down = c->tab + LSQT_NWI_PAD;
-    real *sum = c->sum;
+    __local real *sum = c->sum;
     for (int k = 0; k < LSQT_NWI_PAD; k += LSQT_VW)
         VBLOCK(realv, sum, k) += nee_medium_block(m, pv, -d, w, tu, td, dirs, a_up, a_down, k);
 #endif
@@ -483,10 +492,12 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
 #else
     (void)rec, (void)rec_off, (void)count_only;
     __local acc_word acc_t[LSQT_ACC_WORDS * LSQT_ACC_TILE];
-    ulongv nee_v[LSQT_NWI_PAD / LSQT_VW]; /* vectors, for aligned blocks (VBLOCK) */
-    realv sum_v[LSQT_NWI_PAD / LSQT_VW];
-    ulong *nee_priv = (ulong *)nee_v;
-    real *path_sum = (real *)sum_v;
+    /* The directions' sums of each of the group's LSQT_ITEMS work-items (declared as
+     * vectors, for aligned blocks: VBLOCK). */
+    __local ulongv nee_v[LSQT_ITEMS * (LSQT_NWI_PAD / LSQT_VW)];
+    __local realv sum_v[LSQT_ITEMS * (LSQT_NWI_PAD / LSQT_VW)];
+    __local ulong *nee_priv = (__local ulong *)(nee_v + lid * (LSQT_NWI_PAD / LSQT_VW));
+    __local real *path_sum = (__local real *)(sum_v + lid * (LSQT_NWI_PAD / LSQT_VW));
     for (int k = 0; k < LSQT_NWI_PAD; k++) nee_priv[k] = 0, path_sum[k] = R(0.0);
     c.sum = path_sum, c.nee = nee_priv;
     for (ulong p = begin + (ulong)lid; p < end; p += (ulong)lsz) {
@@ -572,7 +583,7 @@ __kernel void lsqt_estimate(__constant lsqt_dev_scene *scene, __global const lsq
             realv sum = (realv)(R(0.0));
             const ulong r1 = rec_off[first + p + 1];
             for (ulong r = rec_off[first + p]; r < r1; r++) sum += nee_rec_block(rec + r, media, layers, dirs, st, b);
-            nee_flush_block(sum, &lo, nee, v, batch, b, flags);
+            lo = nee_flush_block(sum, lo, nee, v, batch, b, flags);
         }
         ulong ls[LSQT_VW];
         vstorev(lo, 0, ls);

@@ -6,7 +6,8 @@
 # to one local or global location, atomics excepted) and its API checks (--check-api).
 # Small runs of a slab, Rough and Substr (with their RRSS pilot: the candidate-walk
 # kernel), a two-sided transmitting stack (--from-below), and Substr again with the
-# next-event records' budget so small that launches are cut into parts (walk.cl):
+# next-event records' budget so small that launches are cut into parts (walk.cl); then
+# the CPU code path's slab, and its refusal on a device with too little local memory:
 #   - oclgrind reports nothing (any "Invalid ...", "data race" or error line fails);
 #   - in double the RAW is byte-identical to PoCL's CPU code path at the same vector
 #     width (4): the tallies are integers, so work-group size, the RNG form and where the
@@ -96,4 +97,30 @@ run two two.lsqt -p 256 -wo 4 -wi 16 --wi-spread --from-below
 # A record budget of 40 parts every launch (and grows the buffer for a path with more):
 # the same bytes.
 LSQT_NEE_RECORD_CAP=40 run Substr-parts Substr.lsqt -p 256 -wo 4 -wi 16 --wi-spread
+
+# The CPU code path keeps each work-item's direction sums in the work-group's local
+# memory (walk.cl's LSQT_ITEMS): under oclgrind's checks it reports nothing and gives
+# PoCL's bytes (double) ...
+if LSQT_GPU_PATH=0 timeout -k 5 300 oclgrind --data-races --check-api "$BIN" -R -q slab.lsqt -p 512 -wo 4 -wi 16 \
+    --wi-spread --double -o cpu.og.raw --lss cpu.og.lss > cpu.log 2>&1 &&
+  LSQT_GPU_PATH=0 "$BIN" -R -q slab.lsqt -p 512 -wo 4 -wi 16 --wi-spread --double -o cpu.pocl.raw --lss cpu.pocl.lss; then
+  if grep -q -E -i 'invalid|data race|uninitiali|error|warning' cpu.log; then
+    bad "CPU path: oclgrind reports: $(grep -m 5 -E -i 'invalid|data race|uninitiali|error|warning' cpu.log)"
+  else ok; fi
+  if cmp -s cpu.og.raw cpu.pocl.raw; then ok; else bad "CPU path double: the RAW differs from PoCL's"; fi
+else
+  bad "CPU path: a run failed: $(tail -3 cpu.log)"
+fi
+# ... and on a device with less local memory than those sums need (-wi 1024: 16 KB with the
+# scalars' 4.2 KB) the run is refused before any work, naming the kernel, both sizes and
+# the way out, and writes nothing.
+LSQT_GPU_PATH=0 oclgrind --local-mem-size 8192 "$BIN" -R -q slab.lsqt -p 16 -wo 4 -wi 1024 --wi-spread \
+  -o small.raw --lss small.lss > small.log 2>&1
+rc=$?
+if [ "$rc" = 1 ] && grep -q "lsqt_walk needs 16496 bytes of local memory and Oclgrind Simulator has 8192" small.log &&
+  grep -q "LSQT_GPU_PATH=1" small.log && [ ! -e small.raw ] && [ ! -e small.lss ]; then
+  ok
+else
+  bad "CPU path, 8 KB of local memory: exit $rc, $(cat small.log)"
+fi
 finish test_oclgrind
