@@ -240,6 +240,29 @@ static int plan_outputs(const lsqt_cli *c, int from_stdin, int transmits, int be
     return 0;
 }
 
+/* The state files this run owns (lsqt_lock_take), released at exit. */
+static lsqt_lock g_locks[2] = {{-1, 0, ""}, {-1, 0, ""}};
+static void release_locks(void)
+{
+    for (int i = 0; i < 2; i++) lsqt_lock_release(&g_locks[i]);
+}
+
+/* Locks the LSS the run writes (exclusive) and, for a shard, the state it reads (shared),
+ * before that is read. Returns 0, or 1 (printed) when another run holds one. */
+static int lock_states(const outputs *o, int quiet)
+{
+    char err[3 * LSQT_PATH_CAP];
+    atexit(release_locks);
+    const char *paths[2] = {o->path[OUT_LSS], o->base != o->path[OUT_LSS] ? o->base : NULL};
+    for (int i = 0; i < 2; i++) {
+        if (!paths[i]) continue;
+        int r = lsqt_lock_take(&g_locks[i], paths[i], i == 0, err, sizeof err);
+        if (r == 2 && !quiet) fprintf(stderr, "warning: %s\n", err);
+        else if (r) return fail(1, "%s%s", err, r == 1 ? ", or give this run another state file (--lss PATH)" : "");
+    }
+    return 0;
+}
+
 /* Writes every output; a failed one does not stop the others. Returns 0 or 1. */
 /* The LSS is lss_st (an interrupted RRSS pilot's own state), the rest from st. */
 static int write_outputs(const outputs *o, const lsqt_cli *c, const lsqt_state *st, const lsqt_state *lss_st,
@@ -248,6 +271,7 @@ static int write_outputs(const outputs *o, const lsqt_cli *c, const lsqt_state *
     char err[LSQT_PATH_CAP + 512];
     int failed = 0, wrote = 0, skipped = 0, sk = 0;
     char done[OUT_COUNT * (LSQT_PATH_CAP + 2)];
+    int written[OUT_COUNT] = {0};
     done[0] = '\0';
     /* RAW files hold one side each: the main one exactly what it is without --from-below */
     lsqt_state sides[2];
@@ -257,7 +281,11 @@ static int write_outputs(const outputs *o, const lsqt_cli *c, const lsqt_state *
     int split_failed = two && (lsqt_state_split_sides(st, &sides[0], &sides[1]) ||
                                !(side_est[0] = lsqt_estimates(&sides[0])) || !(side_est[1] = lsqt_estimates(&sides[1])));
     if (split_failed) fail(1, "out of memory%s%s", "", ""), failed++;
-    for (int i = 0; i < OUT_COUNT && !split_failed; i++) {
+    /* The LSS first: it is what a later run continues, so a RAW that cannot be written
+     * (a FIFO nobody reads, a full disk) or a kill during the RAW loses no paths. */
+    static const int order[OUT_COUNT] = {OUT_LSS, OUT_RAW, OUT_RAW_T, OUT_RAW_B, OUT_RAW_BT, OUT_JSON};
+    for (int j = 0; j < OUT_COUNT && !split_failed; j++) {
+        const int i = order[j];
         const char *p = o->path[i];
         if (!p) continue;
         const int b = i == OUT_RAW_B || i == OUT_RAW_BT;
@@ -274,10 +302,13 @@ static int write_outputs(const outputs *o, const lsqt_cli *c, const lsqt_state *
             failed++;
             continue;
         }
-        if (strcmp(p, "-") == 0) continue;
-        size_t n = strlen(done);
-        snprintf(done + n, sizeof done - n, "%s%s", wrote++ ? ", " : "", p);
+        written[i] = strcmp(p, "-") != 0;
     }
+    for (int i = 0; i < OUT_COUNT; i++) /* in the usual order: RAW files, LSS, JSON */
+        if (written[i]) {
+            size_t n = strlen(done);
+            snprintf(done + n, sizeof done - n, "%s%s", wrote++ ? ", " : "", o->path[i]);
+        }
     if (!c->quiet && wrote) fprintf(info, "wrote %s\n", done);
     if (!c->quiet && c->only_hemispherical && !o->path[OUT_RAW_T])
         fprintf(info, "note: the stack transmits nothing, so -H wrote no T file\n");
@@ -405,6 +436,11 @@ int main(int argc, char **argv)
         free(wi_dirs);
         lsqt_assembly_free(&a);
         return fail(rc, "%s%s", err, "");
+    }
+    if (lock_states(&out, c.quiet)) {
+        free(wi_dirs);
+        lsqt_assembly_free(&a);
+        return 1;
     }
     const char *lss_path = out.base; /* the state continued */
     /* With an output on stdout, everything else we print goes to stderr. */

@@ -122,11 +122,21 @@ int lsqt_merge_main(const char *prog, int argc, char **argv)
         return fail(2, prog, "OUT.lss must be a file");
     }
 
-    /* Every input is read and checked before anything is written. */
+    /* Every input is read and checked before anything is written. The output is locked
+     * exclusive and the inputs shared first (lsqt_lock_take): a shard still running, or
+     * a run on OUT.lss, makes the merge wait for it rather than lose its paths. */
     lsqt_state *st = calloc((size_t)n_in, sizeof *st), sum;
+    lsqt_lock *locks = calloc((size_t)n_in + 1, sizeof *locks);
     memset(&sum, 0, sizeof sum);
-    int rc = 0, n_read = 0;
-    if (!st) rc = fail(1, prog, "out of memory");
+    int rc = 0, n_read = 0, n_locks = 0;
+    if (!st || !locks) rc = fail(1, prog, "out of memory");
+    for (int i = -1; i < n_in && !rc; i++) {
+        if (i >= 0 && lsqt_same_file(in[i], out_lss)) continue;
+        int r = lsqt_lock_take(&locks[n_locks], i < 0 ? out_lss : in[i], i < 0, err, sizeof err);
+        if (r == 0) n_locks++;
+        else if (r == 2 && !quiet) fprintf(stderr, "warning: %s\n", err);
+        else if (r != 2) rc = fail(1, prog, err);
+    }
     for (int i = 0; i < n_in && !rc; i++) {
         for (int j = 0; j < i && !rc; j++)
             if (lsqt_same_file(in[i], in[j])) {
@@ -305,6 +315,8 @@ int lsqt_merge_main(const char *prog, int argc, char **argv)
         }
     }
     lsqt_state_free(&sum);
+    for (int i = 0; i < n_locks; i++) lsqt_lock_release(&locks[i]);
+    free(locks);
     free(in);
     return rc;
 }

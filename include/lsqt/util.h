@@ -60,6 +60,25 @@ int lsqt_path_type(const char *path, const char **what);
  * and FIFOs may be shared (two outputs to /dev/null are fine). */
 int lsqt_same_file(const char *a, const char *b);
 
+/* A run owns the state it writes: an advisory lock (fcntl, whole file) on "STATE.lock"
+ * beside the state file (symlinks followed), taken before the state is read and held to
+ * the end. Exclusive for the file a run, a shard or a merge writes; shared for the state
+ * shards read (they run together; a plain run or a merge on it waits for them). fcntl
+ * locks are the ones NFS carries (NFSv4, or v3 with its lock manager), so runs on two
+ * cluster nodes exclude each other too; where the file system has no locks, take says
+ * so (returns 2) and the caller goes on unprotected. A lock dies with its process (even
+ * by SIGKILL); the holder removes the lock file when it is the last one. "-", devices and
+ * FIFOs hold no state and take no lock. */
+typedef struct lsqt_lock {
+    int fd; /* -1: none held */
+    int exclusive;
+    char path[LSQT_PATH_CAP + 8];
+} lsqt_lock;
+/* 0: held (or nothing to lock); 1: another process holds it (err names it, and how to go
+ * on); 2: the file system cannot lock (err says so); -1: another error (err). */
+int lsqt_lock_take(lsqt_lock *l, const char *state, int exclusive, char *err, size_t errcap);
+void lsqt_lock_release(lsqt_lock *l);
+
 #ifdef __cplusplus
 }
 #endif
