@@ -256,9 +256,11 @@ static int lock_states(const outputs *o, int quiet)
     const char *paths[2] = {o->path[OUT_LSS], o->base != o->path[OUT_LSS] ? o->base : NULL};
     for (int i = 0; i < 2; i++) {
         if (!paths[i]) continue;
+        /* -1 (no lock file can be made there): the output checks say why the place cannot
+         * be written, before any work. */
         int r = lsqt_lock_take(&g_locks[i], paths[i], i == 0, err, sizeof err);
         if (r == 2 && !quiet) fprintf(stderr, "warning: %s\n", err);
-        else if (r) return fail(1, "%s%s", err, r == 1 ? ", or give this run another state file (--lss PATH)" : "");
+        else if (r == 1) return fail(1, "%s%s", err, ", or give this run another state file (--lss PATH)");
     }
     return 0;
 }
@@ -350,6 +352,7 @@ int main(int argc, char **argv)
      * and a closed pipe is a write error to report (other outputs still get written). */
     sigint_setup();
     signal(SIGPIPE, SIG_IGN);
+    lsqt_out_cancel_flag(&g_stop); /* a signal ends a wait for a FIFO's reader */
 
     lsqt_cli c;
     char err[LSQT_PATH_CAP + 1024];

@@ -135,7 +135,7 @@ int lsqt_merge_main(const char *prog, int argc, char **argv)
         int r = lsqt_lock_take(&locks[n_locks], i < 0 ? out_lss : in[i], i < 0, err, sizeof err);
         if (r == 0) n_locks++;
         else if (r == 2 && !quiet) fprintf(stderr, "warning: %s\n", err);
-        else if (r != 2) rc = fail(1, prog, err);
+        else if (r == 1) rc = fail(1, prog, err); /* -1: writing OUT.lss fails and says why */
     }
     for (int i = 0; i < n_in && !rc; i++) {
         for (int j = 0; j < i && !rc; j++)

@@ -1,5 +1,5 @@
-/* realpath() is an XSI interface. */
-#define _XOPEN_SOURCE 700
+/* realpath() is an XSI interface; fopencookie a GNU one. */
+#define _GNU_SOURCE
 
 #include "lsqt/util.h"
 
@@ -227,6 +227,83 @@ static int open_socket(lsqt_out *o, char *err, size_t errcap)
     return -1;
 }
 
+static volatile sig_atomic_t *g_cancel; /* lsqt_out_cancel_flag */
+
+void lsqt_out_cancel_flag(volatile sig_atomic_t *flag) { g_cancel = flag; }
+
+/* A FIFO for writing once a reader has it open (O_NONBLOCK fails with ENXIO until then),
+ * then blocking as any output. */
+static int open_fifo(lsqt_out *o, char *err, size_t errcap)
+{
+    const double t0 = lsqt_now();
+    int said = 0;
+    for (;;) {
+        int fd = open(o->target, O_WRONLY | O_NONBLOCK | O_NOCTTY | O_CLOEXEC);
+        if (fd >= 0) {
+            int fl = fcntl(fd, F_GETFL);
+            if (fl >= 0) (void)fcntl(fd, F_SETFL, fl & ~O_NONBLOCK);
+            return fd;
+        }
+        if (errno != ENXIO && errno != EINTR) {
+            out_error(o, strerror(errno), err, errcap);
+            return -1;
+        }
+        if (g_cancel && *g_cancel) {
+            out_error(o, "no process read the FIFO before the interrupt", err, errcap);
+            return -1;
+        }
+        if (!said && lsqt_now() - t0 > 1.0) {
+            fprintf(stderr, "note: waiting for a process to read the FIFO '%s'%s\n", o->path,
+                    g_cancel ? " (an interrupt gives up on it)" : "");
+            said = 1;
+        }
+        struct timespec ts = {0, 20000000};
+        nanosleep(&ts, NULL);
+    }
+}
+
+#ifdef __GLIBC__
+/* The stream's writes keep their errno (commit reports the first failure's cause: stdio
+ * keeps only a flag, and a later successful flush leaves errno 0). */
+static ssize_t out_cookie_write(void *cookie, const char *buf, size_t n)
+{
+    lsqt_out *o = cookie;
+    size_t done = 0;
+    while (done < n) {
+        ssize_t w = write(o->fd, buf + done, n - done);
+        if (w < 0 && errno == EINTR) continue;
+        if (w <= 0) {
+            if (!o->werr) o->werr = w < 0 ? errno : EIO;
+            break;
+        }
+        done += (size_t)w;
+    }
+    return (ssize_t)done; /* short: the stream sets its error flag */
+}
+
+static int out_cookie_close(void *cookie)
+{
+    lsqt_out *o = cookie;
+    int r = close(o->fd);
+    if (r != 0 && !o->werr) o->werr = errno;
+    o->fd = -1;
+    return r;
+}
+#endif
+
+/* The stream over fd (o->fd). */
+static FILE *out_stream(lsqt_out *o, int fd)
+{
+    o->fd = fd;
+    o->werr = 0;
+#ifdef __GLIBC__
+    cookie_io_functions_t io = {NULL, out_cookie_write, NULL, out_cookie_close};
+    return fopencookie(o, "wb", io);
+#else
+    return fdopen(fd, "wb");
+#endif
+}
+
 int lsqt_out_check(const char *path, char *err, size_t errcap)
 {
     lsqt_out o;
@@ -252,6 +329,7 @@ int lsqt_out_open(lsqt_out *o, const char *path, char *err, size_t errcap)
     struct stat old;
     int exists = 0;
     if (out_plan(o, path, &old, &exists, err, errcap)) return -1;
+    o->fd = -1;
     if (o->how == LSQT_OUT_STDOUT) {
         o->f = stdout;
         return 0;
@@ -259,12 +337,13 @@ int lsqt_out_open(lsqt_out *o, const char *path, char *err, size_t errcap)
     int fd;
     if (o->how == LSQT_OUT_REPLACE) fd = make_temp(o, &old, exists, err, errcap);
     else if (S_ISSOCK(old.st_mode)) fd = open_socket(o, err, errcap);
+    else if (S_ISFIFO(old.st_mode)) fd = open_fifo(o, err, errcap);
     else {
-        fd = open(o->target, O_WRONLY | O_NOCTTY | O_CLOEXEC); /* a FIFO waits for its reader */
+        fd = open(o->target, O_WRONLY | O_NOCTTY | O_CLOEXEC);
         if (fd < 0) out_error(o, strerror(errno), err, errcap);
     }
     if (fd < 0) return -1;
-    o->f = fdopen(fd, "wb");
+    o->f = out_stream(o, fd);
     if (!o->f) {
         out_error(o, strerror(errno), err, errcap);
         close(fd);
@@ -278,8 +357,8 @@ int lsqt_out_commit(lsqt_out *o, char *err, size_t errcap)
 {
     errno = 0;
     int bad = fflush(o->f) != 0 || ferror(o->f);
-    if (!bad && o->how == LSQT_OUT_REPLACE && fsync(fileno(o->f)) != 0) bad = 1;
-    int saved = errno ? errno : EIO;
+    if (!bad && o->how == LSQT_OUT_REPLACE && fsync(o->fd) != 0) bad = 1;
+    int saved = o->werr ? o->werr : errno ? errno : EIO;
     if (o->how == LSQT_OUT_STDOUT) {
         o->f = NULL;
         if (bad) snprintf(err, errcap, "cannot write to stdout: %s", strerror(saved));
@@ -287,7 +366,7 @@ int lsqt_out_commit(lsqt_out *o, char *err, size_t errcap)
     }
     if (fclose(o->f) != 0 && !bad) {
         bad = 1;
-        saved = errno;
+        saved = o->werr ? o->werr : errno;
     }
     o->f = NULL;
     if (bad) {

@@ -37,6 +37,23 @@ expect 0 "" -- "$BIN" -q -R "${RUN[@]}" -o fifo --lss f.lss L.lsqt
 wait $reader
 cmp -s from_fifo.raw ref.raw && ok || bad "the FIFO's reader got another RAW"
 [ -p fifo ] && ok || bad "fifo is no longer a FIFO"
+# A FIFO nobody reads: the LSS is written first (the state is safe), the run says it is
+# waiting, and SIGTERM ends the wait: exit 1 naming the FIFO, well within seconds.
+"$BIN" -R "${RUN[@]}" -o fifo --lss nf.lss L.lsqt >nf.log 2>&1 &
+pid=$!
+for _ in $(seq 600); do [ -s nf.lss ] && break; sleep 0.1; done
+[ -s nf.lss ] && "$BIN" info nf.lss >/dev/null 2>&1 && ok || bad "no LSS while the RAW waits for a reader"
+sleep 1.5 # past the note's second
+kill -TERM $pid 2>/dev/null
+for _ in $(seq 100); do kill -0 $pid 2>/dev/null || break; sleep 0.1; done
+if kill -0 $pid 2>/dev/null; then
+  kill -9 $pid
+  bad "SIGTERM did not end the wait for the FIFO's reader"
+fi
+wait $pid
+rc=$?
+[ "$rc" = 1 ] && grep -q "cannot write 'fifo': no process read the FIFO before the interrupt" nf.log &&
+  grep -q "waiting for a process to read the FIFO 'fifo'" nf.log && ok || bad "FIFO without a reader: exit $rc, $(cat nf.log)"
 # As an LSS, a FIFO is never read (that hung): an error, or with -R a sink for the state.
 expect 2 "cannot continue from 'fifo': it is a FIFO" -- "$BIN" "${RUN[@]}" -o x.raw --lss fifo L.lsqt
 [ ! -e x.raw ] && ok || bad "the refused run wrote x.raw"

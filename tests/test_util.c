@@ -370,6 +370,19 @@ static void test_devices(void)
     CHECK(write_text(at("full"), "no room\n", err, sizeof err) != 0 && strstr(err, at("full")) &&
               strstr(err, strerror(ENOSPC)),
           "full device: '%s'", err);
+    /* A failed write that is the last one (more than stdio's buffer, nothing after it):
+     * the flush at commit has nothing left to write, so only the write kept the cause. */
+    {
+        static char big[1 << 20];
+        memset(big, 'x', sizeof big);
+        lsqt_out o;
+        CHECK(lsqt_out_open(&o, at("full"), err, sizeof err) == 0, "%s", err);
+        if (o.f) {
+            fwrite(big, 1, sizeof big, o.f);
+            CHECK(lsqt_out_commit(&o, err, sizeof err) != 0 && strstr(err, strerror(ENOSPC)),
+                  "full device, a 1 MB write: '%s'", err);
+        }
+    }
     CHECK(lstat(at("full"), &sb) == 0 && S_ISCHR(sb.st_mode), "the full device was replaced");
     CHECK(mknod(at("blk"), S_IFBLK | 0600, makedev(240, 0)) == 0, "mknod blk: %s", strerror(errno));
     CHECK(lsqt_out_check(at("blk"), err, sizeof err) != 0 && strstr(err, "block device"), "block: %s", err);

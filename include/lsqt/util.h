@@ -2,6 +2,7 @@
 #ifndef LSQT_UTIL_H
 #define LSQT_UTIL_H
 
+#include <signal.h>
 #include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -34,7 +35,9 @@ uint32_t lsqt_crc32(uint32_t crc, const void *data, size_t len);
 enum { LSQT_OUT_REPLACE = 1, LSQT_OUT_IN_PLACE, LSQT_OUT_STDOUT };
 
 typedef struct lsqt_out {
-    FILE *f;
+    FILE *f;                   /* writes through o itself: o must stay where it is until commit */
+    int fd;                    /* f's descriptor (-1 for stdout) */
+    int werr;                  /* the first write's errno (0: none), so commit names the cause */
     int how;                   /* LSQT_OUT_* */
     char path[LSQT_PATH_CAP];  /* as given (for messages) */
     char target[LSQT_PATH_CAP]; /* the file written: symlinks followed */
@@ -45,6 +48,10 @@ typedef struct lsqt_out {
  * creates and removes the temporary file, or checks write access to a device. */
 int lsqt_out_check(const char *path, char *err, size_t errcap);
 int lsqt_out_open(lsqt_out *o, const char *path, char *err, size_t errcap);
+/* A FIFO is opened once a process reads it (a note after a second of waiting); while
+ * *flag is 0. A program that stops on a signal passes its flag, so the signal ends the
+ * wait (the output fails, the others are written). */
+void lsqt_out_cancel_flag(volatile sig_atomic_t *flag);
 /* Flushes and closes (renames into place when replacing); on any write error, including
  * an earlier one, removes the temporary and fails with the reason (ENOSPC, EPIPE, ...). */
 int lsqt_out_commit(lsqt_out *o, char *err, size_t errcap);
