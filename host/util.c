@@ -3,6 +3,7 @@
 
 #include "lsqt/util.h"
 
+#include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <signal.h>
@@ -179,12 +180,50 @@ static int out_plan(lsqt_out *o, const char *path, struct stat *old, int *exists
     return -1;
 }
 
-/* Creates the temporary beside o->target (mode as the old file's, else 0666 & ~umask). */
+/* This machine's name as temporaries carry it (no dots: they separate the fields). */
+static void host_tag(char *out, size_t cap)
+{
+    if (gethostname(out, cap - 1) != 0 || !out[0]) snprintf(out, cap, "host");
+    out[cap - 1] = '\0';
+    for (char *p = out; *p; p++)
+        if (*p == '.' || *p == '/') *p = '_';
+}
+
+/* Removes the temporaries of target ("TARGET.tmp.HOST.PID.N") that a process of this
+ * machine left when it was killed while writing: its process is gone. Another machine's
+ * (a shared folder) are left alone: their process cannot be asked. */
+static void remove_stale_temps(const char *target, const char *host)
+{
+    const char *slash = strrchr(target, '/');
+    char dir[LSQT_PATH_CAP], prefix[LSQT_PATH_CAP + 200];
+    snprintf(dir, sizeof dir, "%.*s", slash ? (int)(slash - target) + 1 : 1, slash ? target : ".");
+    int n = snprintf(prefix, sizeof prefix, "%s.tmp.%s.", slash ? slash + 1 : target, host);
+    if (n <= 0 || (size_t)n >= sizeof prefix) return;
+    DIR *d = opendir(dir);
+    if (!d) return;
+    for (struct dirent *e; (e = readdir(d));) {
+        if (strncmp(e->d_name, prefix, (size_t)n) != 0) continue;
+        char *end;
+        long pid = strtol(e->d_name + n, &end, 10);
+        if (pid <= 0 || *end != '.' || pid == (long)getpid()) continue;
+        if (kill((pid_t)pid, 0) == 0 || errno != ESRCH) continue;
+        char path[2 * LSQT_PATH_CAP];
+        snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
+        unlink(path);
+    }
+    closedir(d);
+}
+
+/* Creates the temporary beside o->target (mode as the old file's, else 0666 & ~umask),
+ * after removing those that killed processes of this machine left there. */
 static int make_temp(lsqt_out *o, const struct stat *old, int exists, char *err, size_t errcap)
 {
     static unsigned serial;
+    char host[64];
+    host_tag(host, sizeof host);
+    remove_stale_temps(o->target, host);
     for (int tries = 0; tries < 1000; tries++) {
-        if ((size_t)snprintf(o->tmp, sizeof o->tmp, "%s.tmp.%ld.%u", o->target, (long)getpid(), serial++) >=
+        if ((size_t)snprintf(o->tmp, sizeof o->tmp, "%s.tmp.%s.%ld.%u", o->target, host, (long)getpid(), serial++) >=
             sizeof o->tmp) {
             out_error(o, "path too long", err, errcap);
             return -1;

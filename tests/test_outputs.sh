@@ -37,6 +37,17 @@ expect 0 "" -- "$BIN" -q -R "${RUN[@]}" -o fifo --lss f.lss L.lsqt
 wait $reader
 cmp -s from_fifo.raw ref.raw && ok || bad "the FIFO's reader got another RAW"
 [ -p fifo ] && ok || bad "fifo is no longer a FIFO"
+# Temporaries that a killed run of this machine left beside an output go when the next
+# run writes there; a live process's, and another machine's (a shared folder), stay.
+host=$(hostname | tr './' '__')
+true &
+dead=$!
+wait $dead
+touch "st.raw.tmp.$host.$dead.0" "st.raw.tmp.$host.$$.0" "st.raw.tmp.elsewhere.$dead.0"
+expect 0 "" -- "$BIN" -q -R "${RUN[@]}" -o st.raw --lss st.lss L.lsqt
+[ ! -e "st.raw.tmp.$host.$dead.0" ] && [ -e "st.raw.tmp.$host.$$.0" ] && [ -e "st.raw.tmp.elsewhere.$dead.0" ] && ok ||
+  bad "stale temporaries: $(ls st.raw.tmp.* 2>&1)"
+rm -f st.raw.tmp.*
 # A FIFO nobody reads: the LSS is written first (the state is safe), the run says it is
 # waiting, and SIGTERM ends the wait: exit 1 naming the FIFO, well within seconds.
 "$BIN" -R "${RUN[@]}" -o fifo --lss nf.lss L.lsqt >nf.log 2>&1 &
