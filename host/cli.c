@@ -188,7 +188,7 @@ static int apply(const struct flag *fl, const char *name, const char *v, lsqt_cl
     double d = 0;
     const char *expect = NULL;
     switch (fl->id) {
-    case F_PATHS: if (lsqt_parse_count(v, 1, 9.0e15, &c->paths)) expect = "an integer path count >= 1 (e.g. 10000 or 1e7)"; c->paths_given = 1; break;
+    case F_PATHS: if (lsqt_parse_count(v, 1, 9.0e15, &c->paths)) expect = "an integer path count from 1 to 9e15 (e.g. 10000 or 1e7)"; c->paths_given = 1; break;
     case F_WO: if (lsqt_parse_count(v, 4, 1024, &n)) expect = "an integer in 4-1024"; else c->wo_count = (int)n; c->sampling_given = 1; break;
     case F_WO_ANGLES: if (parse_angles(v, c)) expect = "comma-separated angles in degrees in [0, 90), at most 1024"; c->sampling_given = 1; break;
     case F_WI: if (lsqt_parse_count(v, 16, 1024, &n)) expect = "an integer in 16-1024"; else c->wi_count = (int)n; c->sampling_given = 1; break;

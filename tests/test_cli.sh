@@ -29,6 +29,7 @@ done <<'TABLE'
 -p 1.5|bad value '1.5' for -p
 -p 1e7x|bad value '1e7x' for -p
 -p nan|bad value 'nan' for -p
+-p 1e16|bad value '1e16' for -p: expected an integer path count from 1 to 9e15
 -wo 3|bad value '3' for -wo: expected an integer in 4-1024
 -wo=1025|bad value '1025' for -wo
 -wi 15|bad value '15' for -wi: expected an integer in 16-1024
