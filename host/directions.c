@@ -199,7 +199,7 @@ int lsqt_wi_file_read(const char *path, int lower, float **dirs, int *n, int *n_
     *n = 0;
     if (n_mirrored) *n_mirrored = 0;
     size_t len = 0;
-    char *text = lsqt_read_file(path, &len, err, errcap);
+    char *text = lsqt_read_text(path, LSQT_INPUT_MAX, &len, err, errcap);
     if (!text) return strncmp(err, "out of memory", 13) == 0 ? -1 : 1;
     int rc = lsqt_wi_parse(text, len, strcmp(path, "-") == 0 ? "<stdin>" : path, lower, dirs, n, n_mirrored, err, errcap);
     free(text);

@@ -386,7 +386,7 @@ int main(int argc, char **argv)
     /* Input -> assembly. */
     const int from_stdin = strcmp(c.input, "-") == 0;
     size_t len = 0;
-    char *text = lsqt_read_file(c.input, &len, err, sizeof err);
+    char *text = lsqt_read_text(c.input, LSQT_INPUT_MAX, &len, err, sizeof err);
     if (!text) return fail(2, "%s%s", err, "");
     lsqt_assembly a;
     lsqt_diag diag;

@@ -17,6 +17,11 @@
 
 char *lsqt_read_file(const char *path, size_t *len, char *err, size_t errcap)
 {
+    return lsqt_read_text(path, SIZE_MAX, len, err, errcap);
+}
+
+char *lsqt_read_text(const char *path, size_t max, size_t *len, char *err, size_t errcap)
+{
     if (errcap) err[0] = '\0';
     int is_stdin = strcmp(path, "-") == 0;
     FILE *f = is_stdin ? stdin : fopen(path, "rb");
@@ -29,6 +34,13 @@ char *lsqt_read_file(const char *path, size_t *len, char *err, size_t errcap)
     while (buf) {
         size_t got = fread(buf + n, 1, cap - n - 1, f);
         n += got;
+        if (n > max) {
+            snprintf(err, errcap, "%s%s%s is larger than %zu MiB, the most an input may be (is it the right file?)",
+                     is_stdin ? "" : "'", is_stdin ? "standard input" : path, is_stdin ? "" : "'", max >> 20);
+            free(buf);
+            buf = NULL;
+            break;
+        }
         if (n + 1 < cap) {
             if (ferror(f)) {
                 snprintf(err, errcap, "cannot read '%s': %s", path, strerror(errno));

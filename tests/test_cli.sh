@@ -287,4 +287,8 @@ rc=$?
   || bad "Ctrl-C while reading stdin: exit $rc: $(cat stdin_int.err)"
 exec 7>&-
 
+# An endless input (an LSQT file or a --wi-file read from a pipe by mistake) is refused
+# once it passes 64 MiB, not read until memory runs out.
+expect 2 "standard input is larger than 64 MiB" -- bash -c "yes | \"$BIN\" -p 10 -"
+expect 2 "--wi-file: standard input is larger than 64 MiB" -- bash -c "yes | \"$BIN\" -p 10 --wi-file - L.lsqt"
 finish test_cli

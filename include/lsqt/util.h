@@ -16,6 +16,10 @@ extern "C" {
 /* Reads a whole file ("-" is stdin) into a NUL-terminated heap buffer. Returns NULL and
  * fills err on failure. */
 char *lsqt_read_file(const char *path, size_t *len, char *err, size_t errcap);
+/* The same for text a user gives (an LSQT input, a --wi-file): at most max bytes, else an
+ * error that says so (a device or an endless pipe read by mistake is refused early). */
+char *lsqt_read_text(const char *path, size_t max, size_t *len, char *err, size_t errcap);
+#define LSQT_INPUT_MAX ((size_t)64 << 20)
 
 uint32_t lsqt_crc32(uint32_t crc, const void *data, size_t len);
 
