@@ -8,6 +8,8 @@
 #include "lsqt/assembly.h"
 #include "lsqt_internal.h"
 
+#include <errno.h>
+#include <float.h>
 #include <limits.h>
 #include <locale.h>
 #include <math.h>
@@ -29,7 +31,11 @@
     { name, LSQT_NUM, def, lo, hi, lo_open, hi_open, NULL, off, 0 }
 #define CHOICE(name, def, words, off) { name, LSQT_CHOICE, def, 0, 0, 0, 0, words, off, 0 }
 #define FRACTION(name, def, off) NUM(name, def, 0, CLOSED, 1, CLOSED, off)
-#define G(name, off) NUM(name, 0, -1, OPEN, 1, OPEN, off)
+/* Henyey-Greenstein's g: its peak, (1 + |g|) / (4 pi (1 - |g|)^2), is a next-event
+ * estimate's factor, so it must stay well within the tally's 2^44 per contribution
+ * (1.6e11 at the bound; g = 1 - 1e-7 overflows it). */
+#define LSQT_G_MAX 0.999999
+#define G(name, off) NUM(name, 0, -LSQT_G_MAX, CLOSED, LSQT_G_MAX, CLOSED, off)
 #define ALPHA NUM("alpha", 0.5, 0, OPEN, 100, CLOSED, LAY(alpha))
 /* default 0 = auto: resolved from alpha once the line is read */
 #define ITER_COUNT { "iter_count", LSQT_INT, 0, 1, 128, CLOSED, CLOSED, NULL, LAY(iter_count), 0 }
@@ -333,6 +339,9 @@ static void describe_range(const lsqt_key *k, lsqt_sb *sb)
 {
     lsqt_sb_printf(sb, " in %c%g, %g%c", k->lo_open ? '(' : '[', k->lo, k->hi,
                    k->hi_open ? ')' : ']');
+    if (k->hi == LSQT_G_MAX)
+        lsqt_sb_printf(sb, " (closer to +-1 the forward peak (1+|g|)/(4 pi (1-|g|)^2) would outgrow the "
+                           "tallies' range)");
 }
 
 /* What a valid value of the key looks like: "g=<number> in (-1, 1)". */
@@ -406,11 +415,16 @@ static const char *parse_number(span s, double *v)
     }
     buf[o] = '\0';
     char *end;
+    errno = 0;
     *v = strtod(buf, &end);
     if (end != buf + o)
         return "not a number";
     if (!isfinite(*v))
         return "number out of range";
+    /* ERANGE with a result below DBL_MIN: the text is not 0, but it would be read as 0
+     * (or a subnormal that loses digits). */
+    if (errno == ERANGE && fabs(*v) < DBL_MIN)
+        return "number too small (below 2.2e-308 it cannot be held; write 0 for zero)";
     return NULL;
 }
 

@@ -122,7 +122,15 @@ static const bad_case bad_cases[] = {
     { MEDIUM3("mus=1 henyeygreensteinphase"), 3, "unknown word at 'henyeygreensteinphase'" },
     /* phase keys */
     { MEDIUM3("mus=1 HenyeyGreensteinPhase g=1"), 3,
-      "value out of range at 'g=1'; expected g=<number> in (-1, 1)" },
+      "value out of range at 'g=1'; expected g=<number> in [-0.999999, 0.999999] (closer to +-1 the "
+      "forward peak (1+|g|)/(4 pi (1-|g|)^2) would outgrow the tallies' range)" },
+    /* the peak (1 + g) / (4 pi (1 - g)^2) at g = 1 - 1e-7 is 1.6e13, at the tallies' 2^44 */
+    { MEDIUM3("mus=1 HenyeyGreensteinPhase g=0.9999999"), 3, "value out of range at 'g=0.9999999'" },
+    { MEDIUM3("mus=1 HenyeyGreenstein2Phase g1=-0.9999999"), 3, "value out of range at 'g1=-0.9999999'" },
+    /* a number that underflows is an error like one that overflows, not a silent 0 */
+    { "Medium\nLayer z=0 LambertianBsdf fR=1e-400\nMedium\n", 2,
+      "number too small (below 2.2e-308 it cannot be held; write 0 for zero) at 'fR=1e-400'" },
+    { "Medium\nLayer z=0 LambertianBsdf fR=1e-310\nMedium\n", 2, "number too small" },
     { MEDIUM3("mus=1 HenyeyGreensteinPhase g=-1"), 3, "value out of range at 'g=-1'" },
     { MEDIUM3("mus=1 HenyeyGreensteinPhase g=0.1 g=0.2"), 3, "repeated key at 'g=0.2'" },
     { MEDIUM3("mus=1 HenyeyGreenstein2Phase b=1.5"), 3,
@@ -582,7 +590,7 @@ static void test_numbers(void)
         double z;
     } good[] = {
         { "1e-3", 1e-3 }, { "+1", 1 }, { ".5", 0.5 }, { "5.", 5 }, { "1E2", 100 },
-        { "-0.25", -0.25 }, { "-1e+3", -1000 }, { "007", 7 }, { "1e-999", 0 },
+        { "-0.25", -0.25 }, { "-1e+3", -1000 }, { "007", 7 }, { "0e-999", 0 },
         { "1000000000000", 1e12 }, { "-1e12", -1e12 },
     };
     for (size_t i = 0; i < sizeof good / sizeof good[0]; i++) {
