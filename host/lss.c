@@ -1,5 +1,6 @@
 #include "lsqt/lss.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -179,6 +180,30 @@ static float get_f32(rbuf *r)
  * span end, stage, range count, text length. */
 #define LSS_HEADER_BYTES (8 + 4 + 6 * 4 + 8 + 8 + 3 * 4 + 4 + 4 + 8 + 2 * 4 + 8 + 8 + 4 + 4 + 4)
 
+/* Contents a valid CRC cannot vouch for: every slice's theta_o in [0, pi/2) (from its own
+ * side's normal), and its incident directions finite unit vectors (those a run used or,
+ * during an RRSS pilot, will use). Returns 0, or -1 with err naming the slice. */
+static int check_slices(const lsqt_state *st, char *err, size_t errcap)
+{
+    for (int s = 0; s < st->n_slices; s++) {
+        const double t = st->theta_o[s];
+        if (!(t >= 0.0 && t < LSQT_PI / 2)) {
+            snprintf(err, errcap, "corrupt LSS file (slice %d: theta_o %g rad, outside [0, pi/2))", s, t);
+            return -1;
+        }
+        for (int k = 0; k < st->n_wi; k++) {
+            const float *d = st->wi + ((size_t)s * (size_t)st->n_wi + (size_t)k) * 4;
+            const double len = sqrt((double)d[0] * d[0] + (double)d[1] * d[1] + (double)d[2] * d[2]);
+            if (!(fabs(len - 1.0) < 1e-3)) {
+                snprintf(err, errcap, "corrupt LSS file (slice %d: incident direction %d (%g %g %g) is not a unit "
+                         "vector)", s, k, (double)d[0], (double)d[1], (double)d[2]);
+                return -1;
+            }
+        }
+    }
+    return 0;
+}
+
 int lsqt_lss_parse(const unsigned char *data, size_t len, lsqt_state *st, char *err, size_t errcap)
 {
     memset(st, 0, sizeof *st);
@@ -320,6 +345,10 @@ int lsqt_lss_parse(const unsigned char *data, size_t len, lsqt_state *st, char *
     if (r.bad) {
         lsqt_state_free(st);
         snprintf(err, errcap, "corrupt LSS file (inconsistent slice records)");
+        return -1;
+    }
+    if (check_slices(st, err, errcap)) {
+        lsqt_state_free(st);
         return -1;
     }
     return 0;

@@ -1,5 +1,6 @@
 /* LSS round trip, and refusal of every kind of damage (no OpenCL needed). */
 #define _XOPEN_SOURCE 700 /* mkdtemp */
+#include <math.h>
 #include <stdlib.h>
 #include <unistd.h>
 
@@ -16,7 +17,13 @@ static void fill(lsqt_state *st)
     st->span_end = 200000;
     st->flags = 2;
     for (int s = 0; s < 3; s++) st->theta_o[s] = 0.1 * s;
-    for (size_t i = 0; i < (size_t)3 * 16 * 4; i++) st->wi[i] = (i % 4 == 3) ? 0.0f : (float)i * 0.01f;
+    for (size_t i = 0; i < (size_t)3 * 16; i++) { /* distinct unit vectors */
+        const double a = 0.37 * (double)i, z = cos(0.05 * (double)i);
+        st->wi[4 * i] = (float)(sqrt(1 - z * z) * cos(a));
+        st->wi[4 * i + 1] = (float)(sqrt(1 - z * z) * sin(a));
+        st->wi[4 * i + 2] = (float)z;
+        st->wi[4 * i + 3] = 0.0f;
+    }
     for (size_t i = 0; i < lsqt_state_nee_count(st); i++) {
         st->nee[i].lo = i * 0x9E3779B97F4A7C15ULL;
         st->nee[i].hi = i * 0x5851F42D4C957F2DULL; /* both words must round-trip */
@@ -111,6 +118,32 @@ int main(void)
     lsqt_state_free(&b);
     CHECK(lsqt_lss_read("no-such-file.lss", &b, err, sizeof err) != 0 && strstr(err, "no-such-file.lss"),
           "missing file: %s", err);
+    /* Impossible contents under a valid CRC (written by the writer itself): refused, naming
+     * the slice, never continued. */
+    const struct {
+        int slice, k;
+        double theta;
+        float d[3];
+        const char *want;
+    } bad[] = {
+        {1, -1, NAN, {0}, "slice 1: theta_o nan rad, outside [0, pi/2)"},
+        {2, -1, -1.0, {0}, "slice 2: theta_o -1 rad"},
+        {0, -1, LSQT_PI / 2, {0}, "slice 0: theta_o 1.5708 rad"},
+        {1, 3, 0.2, {NAN, 0, 1}, "slice 1: incident direction 3 (nan 0 1) is not a unit vector"},
+        {0, 0, 0.0, {2, 0, 0}, "slice 0: incident direction 0 (2 0 0) is not a unit vector"},
+        {2, 15, 0.2, {0, 0, 0}, "incident direction 15 (0 0 0)"},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        lsqt_state c;
+        fill(&c);
+        if (bad[i].k < 0) c.theta_o[bad[i].slice] = bad[i].theta;
+        else memcpy(c.wi + ((size_t)bad[i].slice * 16 + (size_t)bad[i].k) * 4, bad[i].d, sizeof bad[i].d);
+        CHECK(lsqt_lss_write(path, &c, err, sizeof err) == 0, "%s", err);
+        CHECK(lsqt_lss_read(path, &b, err, sizeof err) != 0 && strstr(err, "corrupt LSS file") &&
+                  strstr(err, bad[i].want),
+              "impossible state %zu: '%s'", i, err);
+        lsqt_state_free(&c);
+    }
     free(f1);
     free(f2);
     remove(path);
