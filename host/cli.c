@@ -189,12 +189,12 @@ static int apply(const struct flag *fl, const char *name, const char *v, lsqt_cl
     const char *expect = NULL;
     switch (fl->id) {
     case F_PATHS: if (lsqt_parse_count(v, 1, 9.0e15, &c->paths)) expect = "an integer path count from 1 to 9e15 (e.g. 10000 or 1e7)"; c->paths_given = 1; break;
-    case F_WO: if (lsqt_parse_count(v, 4, 1024, &n)) expect = "an integer in 4-1024"; else c->wo_count = (int)n; c->sampling_given = 1; break;
+    case F_WO: if (lsqt_parse_count(v, 4, 1024, &n)) expect = "an integer in 4-1024"; else c->wo_count = (int)n; c->wo_given = c->sampling_given = 1; break;
     case F_WO_ANGLES: if (parse_angles(v, c)) expect = "comma-separated angles in degrees in [0, 90), at most 1024"; c->sampling_given = 1; break;
-    case F_WI: if (lsqt_parse_count(v, 16, 1024, &n)) expect = "an integer in 16-1024"; else c->wi_count = (int)n; c->sampling_given = 1; break;
+    case F_WI: if (lsqt_parse_count(v, 16, 1024, &n)) expect = "an integer in 16-1024"; else c->wi_count = (int)n; c->wi_given = c->sampling_given = 1; break;
     case F_WI_FILE: if (!*v) expect = "a file of directions"; c->wi_file = v; c->sampling_given = 1; break;
-    case F_RX: if (lsqt_parse_count(v, 2, 8, &n)) expect = "an integer in 2-8"; else c->rx = (int)n; c->sampling_given = 1; break;
-    case F_RP: if (lsqt_parse_double(v, &d) || !(d > 0 && d <= 1)) expect = "a number in (0, 1]"; else c->rp = d; c->sampling_given = 1; break;
+    case F_RX: if (lsqt_parse_count(v, 2, 8, &n)) expect = "an integer in 2-8"; else c->rx = (int)n; c->rx_given = c->sampling_given = 1; break;
+    case F_RP: if (lsqt_parse_double(v, &d) || !(d > 0 && d <= 1)) expect = "a number in (0, 1]"; else c->rp = d; c->rp_given = c->sampling_given = 1; break;
     case F_SEED: if (lsqt_parse_u64(v, &c->seed)) expect = "an integer in 0-18446744073709551615 (decimal digits)"; c->seed_given = c->sampling_given = 1; break;
     case F_THREADS: if (lsqt_parse_count(v, 1, 4096, &n)) expect = "an integer in 1-4096"; else c->threads = (int)n; break;
     case F_TIME: if (lsqt_parse_double(v, &d) || !(d > 0)) expect = "a positive number of seconds"; else c->time_limit = d; break;
@@ -278,6 +278,17 @@ int lsqt_cli_parse(int argc, char **argv, lsqt_cli *c, char *err, size_t errcap)
     }
     if (wi_name[0] && c->wi_file) {
         snprintf(err, errcap, "%s and --wi-file both set the incident directions: give one of them", wi_name);
+        return 2;
+    }
+    /* RRSS (the default) chooses the directions; --wi-spread and --wi-file choose them
+     * otherwise: two choices in one command are an error, not a silent pick. */
+    if (c->wi_spread && c->wi_file) {
+        snprintf(err, errcap, "--wi-spread and --wi-file both choose the incident directions: give one of them");
+        return 2;
+    }
+    if ((c->rx_given || c->rp_given) && (c->wi_spread || c->wi_file)) {
+        snprintf(err, errcap, "%s sets RRSS's pilot, and %s chooses the directions without RRSS: drop one of them",
+                 c->rx_given ? "-rx" : "-rp", c->wi_file ? "--wi-file" : "--wi-spread");
         return 2;
     }
     if (c->refine && !c->shard_n) {

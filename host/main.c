@@ -240,6 +240,83 @@ static int plan_outputs(const lsqt_cli *c, int from_stdin, int transmits, int be
     return 0;
 }
 
+static const char *dirs_name(uint32_t m)
+{
+    return m == LSQT_DIRS_RRSS ? "RRSS" : m == LSQT_DIRS_FILE ? "--wi-file" : "--wi-spread";
+}
+
+/* A continued run keeps its LSS's sampling. A sampling flag with the LSS's own value is
+ * fine; one that contradicts the LSS is an error (exit 2: the user meant another run, and
+ * -R starts one); -rp names what the LSS keeps. Returns 0, or 2 with err filled. */
+static int check_continuation(const lsqt_cli *c, const lsqt_state *st, const char *lss, int n_wi_file, char *err,
+                              size_t errcap)
+{
+    char why[512] = "", flag[64] = "";
+    /* the outgoing angles: the distinct theta_o of the slices from above */
+    double th[LSQT_MAX_WO];
+    int n_th = 0;
+    for (int s = 0; s < st->n_slices; s++) {
+        if (st->slice_flags[s] & LSQT_SLICE_BELOW) continue;
+        int seen = 0;
+        for (int j = 0; j < n_th && !seen; j++) seen = th[j] == st->theta_o[s];
+        if (!seen && n_th < LSQT_MAX_WO) th[n_th++] = st->theta_o[s];
+    }
+    if (c->seed_given && c->seed != st->seed) {
+        snprintf(flag, sizeof flag, "-s %llu", (unsigned long long)c->seed);
+        snprintf(why, sizeof why, "its paths were drawn with -s %llu", (unsigned long long)st->seed);
+    } else if (c->wi_given && c->wi_count != st->n_wi) {
+        snprintf(flag, sizeof flag, "-wi %d", c->wi_count);
+        snprintf(why, sizeof why, "it holds %d incident directions per slice", st->n_wi);
+    } else if (c->wo_given && c->wo_count != n_th) {
+        snprintf(flag, sizeof flag, "-wo %d", c->wo_count);
+        snprintf(why, sizeof why, "it holds %d outgoing directions", n_th);
+    } else if (c->n_wo_angles) {
+        int same = c->n_wo_angles == n_th;
+        for (int i = 0; i < c->n_wo_angles && same; i++) {
+            int found = 0;
+            for (int j = 0; j < n_th && !found; j++) found = fabs(c->wo_angles[i] - th[j]) < 1e-9;
+            same = found;
+        }
+        if (!same) {
+            snprintf(flag, sizeof flag, "--wo-angles");
+            snprintf(why, sizeof why, "its %d outgoing angles are others", n_th);
+        }
+    }
+    if (!flag[0] && ((c->wi_spread && st->dir_method != LSQT_DIRS_SPREAD) ||
+                     (c->wi_file && st->dir_method != LSQT_DIRS_FILE) ||
+                     ((c->rx_given || c->rp_given) && st->dir_method != LSQT_DIRS_RRSS))) {
+        snprintf(flag, sizeof flag, "%s", c->wi_spread ? "--wi-spread" : c->wi_file ? "--wi-file" : c->rx_given ? "-rx" : "-rp");
+        snprintf(why, sizeof why, "its incident directions were chosen by %s", dirs_name(st->dir_method));
+    }
+    if (!flag[0] && c->wi_file && n_wi_file != st->n_wi) {
+        snprintf(flag, sizeof flag, "--wi-file %.40s", c->wi_file);
+        snprintf(why, sizeof why, "it holds %d incident directions per slice, the file %d", st->n_wi, n_wi_file);
+    }
+    if (!flag[0] && c->rx_given && (uint32_t)c->rx != st->rx) {
+        snprintf(flag, sizeof flag, "-rx %d", c->rx);
+        snprintf(why, sizeof why, "its RRSS pilot drew -rx %u candidates per direction", st->rx);
+    }
+    if (!flag[0] && c->from_below && lsqt_state_below_count(st) == 0 && st->transmits) {
+        snprintf(flag, sizeof flag, "--from-below");
+        snprintf(why, sizeof why, "it has no slices from below");
+    }
+    if (!flag[0] && c->use_double && !st->use_double) {
+        snprintf(flag, sizeof flag, "--double");
+        snprintf(why, sizeof why, "it is a float state");
+    }
+    if (flag[0]) {
+        snprintf(err, errcap, "%s contradicts '%s' (%s): a continued run keeps what its LSS was made with; drop "
+                 "%s, or start over with -R", flag, lss, why, flag);
+        return 2;
+    }
+    if (!c->quiet && c->rp_given)
+        fprintf(stderr, "note: -rp %g is not used: '%s' keeps its RRSS pilot (%llu paths per slice)\n", c->rp, lss,
+                (unsigned long long)st->pilot_paths);
+    if (!c->quiet && c->wi_file)
+        fprintf(stderr, "note: --wi-file: '%s' keeps the %d directions it was started with\n", lss, st->n_wi);
+    return 0;
+}
+
 /* The state files this run owns (lsqt_lock_take), released at exit. */
 static lsqt_lock g_locks[2] = {{-1, 0, ""}, {-1, 0, ""}};
 static void release_locks(void)
@@ -331,9 +408,8 @@ static int plan_sides(const lsqt_cli *c, int from_stdin, const lsqt_assembly *a,
     if (!c->quiet && c->from_below && !lsqt_assembly_transmits(a))
         fprintf(stderr, "note: --from-below: the stack transmits nothing, so no light from below reaches it; "
                         "only the slices from above are simulated\n");
-    else if (!c->quiet && continued && below != c->from_below)
-        fprintf(stderr, "note: the LSS has %sslices from below: %s\n", below ? "" : "no ",
-                below ? "both sides are continued" : "--from-below is ignored (use -R to start over with them)");
+    else if (!c->quiet && continued && below && !c->from_below) /* the other case is refused */
+        fprintf(stderr, "note: the LSS has slices from below: both sides are continued\n");
     int rc = below ? plan_outputs(c, from_stdin, st->transmits, 1, out, err, errcap) : 0;
     if (rc) {
         lsqt_state_free(st);
@@ -483,10 +559,11 @@ int main(int argc, char **argv)
             lsqt_state_free(&st);
             rc = fail(2, "'%s' holds paths with gaps between them (a partial merge): merge the missing shards "
                          "into it first (see lsqt-cl info)%s", lss_path, "");
+        } else if (check_continuation(&c, &st, lss_path, n_wi_dirs, err, sizeof err)) {
+            lsqt_state_free(&st);
+            rc = fail(2, "%s%s", err, "");
         } else if (!c.quiet) {
-            fprintf(stderr, "continuing %s (%llu paths per slice so far)%s\n", lss_path,
-                    (unsigned long long)st.paths,
-                    c.sampling_given ? "; sampling flags (-wo, -wi, --wi-file, -s, ...) are taken from it" : "");
+            fprintf(stderr, "continuing %s (%llu paths per slice so far)\n", lss_path, (unsigned long long)st.paths);
             if (st.use_double != c.use_double)
                 fprintf(stderr, "note: precision follows the LSS (%s)\n", st.use_double ? "double" : "float");
         }

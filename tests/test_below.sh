@@ -87,9 +87,10 @@ grep -q "^stage: RRSS pilot" q.info && ok || bad "Ctrl-C in a two-sided pilot: $
 "$BIN" -q -p 1.2e6 -o q.raw --lss q.lss S.lsqt && "$BIN" -q -wo 4 -wi 16 -p 1.2e6 --from-below -o u.raw --lss u.lss S.lsqt &&
   cmp -s q.lss u.lss && cmp -s q.raw u.raw && cmp -s q.below.raw u.below.raw && ok ||
   bad "continuing an interrupted two-sided RRSS pilot differs from one run"
-# A one-sided LSS stays one-sided.
+# A one-sided LSS stays one-sided: --from-below contradicts it (exit 2, nothing written).
 rm -f a.below.raw
-expect 0 "--from-below is ignored" -- "$BIN" -wo 4 -wi 16 -p 1000 --from-below -o a.raw --lss a.lss S.lsqt
+expect 2 "--from-below contradicts 'a.lss' (it has no slices from below)" -- \
+  "$BIN" -wo 4 -wi 16 -p 1000 --from-below -o a.raw --lss a.lss S.lsqt
 [ ! -e a.below.raw ] && ok || bad "a one-sided LSS got a below RAW"
 
 # Refused: a RAW on stdout or a device (the second name comes from it); nothing written.

@@ -44,6 +44,9 @@ done <<'TABLE'
 --wo-angles=10,95|bad value '10,95' for --wo-angles
 --bogus|unknown option '--bogus'
 -R=1|-R takes no value
+--wi-spread --wi-file x.txt|--wi-spread and --wi-file both choose the incident directions: give one of them
+-rx 3 --wi-file x.txt|-rx sets RRSS's pilot, and --wi-file chooses the directions without RRSS
+-rp 0.5 --wi-spread|-rp sets RRSS's pilot, and --wi-spread chooses the directions without RRSS
 TABLE
 expect 2 "needs a value" -- "$BIN" L.lsqt -p
 expect 2 "more than one input file" -- "$BIN" L.lsqt L.lsqt
@@ -286,6 +289,29 @@ rc=$?
 [ "$rc" = 130 ] && grep -q "lsqt-cl: interrupted: stopping now" stdin_int.err && [ ! -e Layered.raw.tmp* ] && ok \
   || bad "Ctrl-C while reading stdin: exit $rc: $(cat stdin_int.err)"
 exec 7>&-
+
+# A continued LSS keeps what it was made with: a flag with its own value is fine, one that
+# contradicts it is an error (exit 2, the LSS untouched) naming the flag and the LSS's
+# value; -rp says what the LSS keeps.
+"$BIN" -q -R -p 300 -wo 4 -wi 16 -s 3 -o c.raw --lss c.lss L.lsqt && ok || bad "a state to continue"
+cp c.lss c0.lss
+while IFS='|' read -r args text; do
+  [ -z "$args" ] && continue
+  # shellcheck disable=SC2086
+  expect 2 "$text" -- "$BIN" -p 100 $args -o c.raw --lss c.lss L.lsqt
+  cmp -s c.lss c0.lss || bad "[$args] changed the LSS"
+done <<'TABLE'
+-s 7|-s 7 contradicts 'c.lss' (its paths were drawn with -s 3): a continued run keeps what its LSS was made with; drop -s 7, or start over with -R
+-wi 32|-wi 32 contradicts 'c.lss' (it holds 16 incident directions per slice)
+-wo 8|-wo 8 contradicts 'c.lss' (it holds 4 outgoing directions)
+--wo-angles 10,20,30,40|--wo-angles contradicts 'c.lss'
+--wi-spread|--wi-spread contradicts 'c.lss' (its incident directions were chosen by RRSS)
+-rx 3|-rx 3 contradicts 'c.lss' (its RRSS pilot drew -rx 4 candidates per direction)
+--double|--double contradicts 'c.lss' (it is a float state)
+TABLE
+expect 0 "continuing c.lss (300 paths per slice so far)" -- "$BIN" -p 100 -s 3 -wo 4 -wi 16 -rx 4 -o c.raw --lss c.lss L.lsqt
+expect 0 "note: -rp 0.3 is not used: 'c.lss' keeps its RRSS pilot" -- "$BIN" -p 100 -rp 0.3 -o c.raw --lss c.lss L.lsqt
+expect 0 "" -- "$BIN" -q -R -p 100 -wi 32 -o c.raw --lss c.lss L.lsqt
 
 # An endless input (an LSQT file or a --wi-file read from a pipe by mistake) is refused
 # once it passes 64 MiB, not read until memory runs out.

@@ -202,13 +202,17 @@ ls w.raw w.lss >/dev/null 2>&1 && bad "a refused run wrote output" || ok
 "$BIN" -q -R -p 500 -wo 4 --wi-file - -o in.raw --lss in.lss L.lsqt <three.txt && python3 check.py in.raw three.txt 4 0.5 0 \
   && ok || bad "--wi-file - (stdin)"
 
-# A continued LSS keeps its directions: --wi-file (or -wi) is a sampling flag, ignored
-# with a message; a bad file is still an error.
-expect 0 "sampling flags (-wo, -wi, --wi-file, -s, ...) are taken from it" -- \
+# A continued LSS keeps its directions: another --wi-file, or -wi, contradicts it (exit 2,
+# nothing changed); the same file is fine and says the LSS keeps its own; a bad file is
+# still an error.
+cp L.lsqt.lss keep0.lss
+expect 2 "--wi-file seventeen.txt contradicts 'L.lsqt.lss' (it holds 3 incident directions per slice, the file 17)" -- \
   "$BIN" -p 1000 --wi-file seventeen.txt L.lsqt
+expect 2 "-wi 16 contradicts 'L.lsqt.lss' (it holds 3 incident directions per slice)" -- "$BIN" -p 1000 -wi 16 L.lsqt
+cmp -s keep0.lss L.lsqt.lss && ok || bad "a refused continuation changed the LSS"
+expect 0 "note: --wi-file: 'L.lsqt.lss' keeps the 3 directions it was started with" -- "$BIN" -p 1000 --wi-file three.txt L.lsqt
+grep -q "paths: 1000 added per slice (3000 per slice in all)" <("$BIN" -p 1000 L.lsqt 2>&1) && ok || bad "continue"
 python3 check.py L.lsqt.raw three.txt 4 0.5 0 && ok || bad "the continued LSS lost its directions"
-grep -q "paths: 1000 added per slice (3000 per slice in all)" <("$BIN" -p 1000 -wi 16 L.lsqt 2>&1) && ok || bad "continue with -wi"
-python3 check.py L.lsqt.raw three.txt 4 0.5 0 && ok || bad "-wi changed a continued LSS's directions"
 printf '0 0 0\n' > w.txt
 cp L.lsqt.lss keep.lss
 expect 2 "w.txt:1: error: the zero vector" -- "$BIN" -p 100 --wi-file w.txt L.lsqt

@@ -43,6 +43,7 @@ typedef struct lsqt_cli {
     int shard_k, shard_n;     /* --shard K/N (shard_n 0: not sharded) */
     int refine;               /* --refine: a shard does only what its state owes */
     int from_below;           /* --from-below: also the slices of light entering from below */
+    int wo_given, wi_given, rx_given, rp_given; /* -wo, -wi, -rx, -rp were given */
 } lsqt_cli;
 
 /* Returns 0, or 2 with err naming the flag and what it expects. */
