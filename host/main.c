@@ -642,6 +642,14 @@ int main(int argc, char **argv)
         if (!est) rc = fail(1, "out of memory%s%s", "", "");
         else rc = write_outputs(&out, &c, &st, sg.have_ps ? &sg.ps : &st, est, &ri, info);
         if (est && !c.quiet) lsqt_report_summary(info, &st, est, &ri);
+        if (sg.have_ps && !c.quiet && out.path[OUT_LSS] && fflush(info) == 0)
+            fprintf(stderr,
+                    "note: the run stopped in its RRSS pilot: '%s' holds %llu of the pilot's %llu paths per slice, "
+                    "and the RAW's directions are a provisional choice from them. Continuing without -p finishes "
+                    "the pilot and then this run (%llu paths per slice in all); continuing with -p N chooses the "
+                    "directions from the pilot as it is and adds N paths per slice.\n",
+                    out.path[OUT_LSS], (unsigned long long)sg.ps.paths, (unsigned long long)sg.ps.pilot_paths,
+                    (unsigned long long)sg.ps.span_end);
         if (!c.quiet && c.shard_n)
             fprintf(info, "shard %d/%d: paths [%llu, %llu) of this run's [%llu, %llu)%s\n", c.shard_k, c.shard_n,
                     (unsigned long long)sg.part_lo, (unsigned long long)sg.part_hi, (unsigned long long)sg.run_lo,

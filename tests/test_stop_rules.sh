@@ -70,4 +70,11 @@ for v in 0 -0.1 abc nan; do
 done
 ls S.lsqt.* >/dev/null 2>&1 && bad "a refused run wrote output" || ok
 
+# A time limit inside the RRSS pilot: the summary says what the LSS holds (the pilot, so
+# far) and what continuing with and without -p will do.
+expect 0 "note: the run stopped in its RRSS pilot: 'P.lss' holds" -- \
+  "$BIN" -R -wo 4 -wi 16 -p 1e9 --time-limit 1 -o P.raw --lss P.lss S.lsqt
+expect 0 "Continuing without -p finishes the pilot and then this run (1000000000 paths per slice in all)" -- \
+  "$BIN" -R -wo 4 -wi 16 -p 1e9 --time-limit 1 -o P.raw --lss P.lss S.lsqt
+"$BIN" info P.lss | grep -q "^stage: RRSS pilot" && ok || bad "the time-limited pilot's LSS: $("$BIN" info P.lss | grep stage)"
 finish test_stop_rules
