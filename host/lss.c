@@ -356,6 +356,13 @@ int lsqt_lss_parse(const unsigned char *data, size_t len, lsqt_state *st, char *
 
 int lsqt_lss_read(const char *path, lsqt_state *st, char *err, size_t errcap)
 {
+    /* One input rule for every program: only a regular file (or stdin, "-") is read as an
+     * LSS: a FIFO would block, a device holds no state, a directory is no file. */
+    const char *what = NULL;
+    if (strcmp(path, "-") != 0 && lsqt_path_type(path, &what) > LSQT_PATH_REGULAR) {
+        snprintf(err, errcap, "'%s' is a %s, not an LSS file (only regular files are read)", path, what);
+        return -1;
+    }
     size_t len = 0;
     char *data = lsqt_read_file(path, &len, err, errcap);
     if (!data) return -1;

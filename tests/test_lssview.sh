@@ -294,6 +294,13 @@ printf '\x09' | dd of=v9.lss bs=1 seek=8 conv=notrunc status=none
 expect 2 "version 9" -- "$VIEW" v9.lss -o t.png
 : > empty.lss
 expect 2 "empty" -- "$VIEW" empty.lss -o t.png
+# One input rule with lsqt-cl: only a regular file is read (a FIFO hung, a device was
+# "empty"). The null device is made here, never the system's.
+mkfifo in.fifo
+expect 2 "'in.fifo' is a FIFO, not an LSS file (only regular files are read)" -- "$VIEW" in.fifo -o t.png
+if mknod nulldev c 1 3 2>/dev/null; then
+  expect 2 "'nulldev' is a character device, not an LSS file" -- "$VIEW" nulldev -o t.png
+fi
 expect 2 "" -- "$VIEW" missing.lss
 expect 2 "unknown option" -- "$VIEW" --nope L.lss
 expect 2 "--image-dim" -- "$VIEW" --image-dim 0 L.lss

@@ -70,6 +70,8 @@ cp m.lsqt.shard-0-of-4.lss copy0.lss
 expect 2 "overlapping parts" -- "$BIN" merge x.lss m.lsqt.shard-0-of-4.lss copy0.lss
 expect 2 "both hold paths [0, 1000)" -- "$BIN" merge x.lss m.lsqt.shard-0-of-4.lss m.lsqt.shard-0-of-2.lss
 expect 2 "given twice" -- "$BIN" merge x.lss m.lsqt.shard-1-of-4.lss m.lsqt.shard-1-of-4.lss
+mkfifo part.fifo # read as an LSS, a FIFO would block the merge
+expect 2 "'part.fifo' is a FIFO, not an LSS file" -- "$BIN" merge x.lss m.lsqt.shard-1-of-4.lss part.fifo
 [ -e x.lss ] && bad "a refused merge wrote x.lss" || ok
 expect 2 "leave out paths [3000, 4000) of the run [0, 4000): missing shards" -- \
   "$BIN" merge x.lss m.lsqt.shard-0-of-4.lss m.lsqt.shard-1-of-4.lss m.lsqt.shard-2-of-4.lss
