@@ -228,15 +228,15 @@ static void remove_stale_temps(const char *target, const char *host)
 
 /* Creates the temporary beside o->target (mode as the old file's, else 0666 & ~umask),
  * after removing those that killed processes of this machine left there. */
-static int make_temp(lsqt_out *o, const struct stat *old, int exists, char *err, size_t errcap)
+static int make_temp(lsqt_out *o, const struct stat *old, int exists, const char *suffix, char *err, size_t errcap)
 {
     static unsigned serial;
     char host[64];
     host_tag(host, sizeof host);
     remove_stale_temps(o->target, host);
     for (int tries = 0; tries < 1000; tries++) {
-        if ((size_t)snprintf(o->tmp, sizeof o->tmp, "%s.tmp.%s.%ld.%u", o->target, host, (long)getpid(), serial++) >=
-            sizeof o->tmp) {
+        if ((size_t)snprintf(o->tmp, sizeof o->tmp, "%s.tmp.%s.%ld.%u%s", o->target, host, (long)getpid(), serial++,
+                             suffix) >= sizeof o->tmp) {
             out_error(o, "path too long", err, errcap);
             return -1;
         }
@@ -368,7 +368,7 @@ int lsqt_out_check(const char *path, char *err, size_t errcap)
         return -1;
     }
     /* Creating the temporary is the only honest test (permissions, read-only mounts). */
-    int fd = make_temp(&o, &old, exists, err, errcap);
+    int fd = make_temp(&o, &old, exists, "", err, errcap);
     if (fd < 0) return -1;
     close(fd);
     unlink(o.tmp);
@@ -386,7 +386,7 @@ int lsqt_out_open(lsqt_out *o, const char *path, char *err, size_t errcap)
         return 0;
     }
     int fd;
-    if (o->how == LSQT_OUT_REPLACE) fd = make_temp(o, &old, exists, err, errcap);
+    if (o->how == LSQT_OUT_REPLACE) fd = make_temp(o, &old, exists, "", err, errcap);
     else if (S_ISSOCK(old.st_mode)) fd = open_socket(o, err, errcap);
     else if (S_ISFIFO(old.st_mode)) fd = open_fifo(o, err, errcap);
     else {
@@ -403,6 +403,8 @@ int lsqt_out_open(lsqt_out *o, const char *path, char *err, size_t errcap)
     }
     return 0;
 }
+
+static int replace_target(lsqt_out *o, char *err, size_t errcap);
 
 int lsqt_out_commit(lsqt_out *o, char *err, size_t errcap)
 {
@@ -426,6 +428,13 @@ int lsqt_out_commit(lsqt_out *o, char *err, size_t errcap)
         return -1;
     }
     if (o->how == LSQT_OUT_IN_PLACE) return 0;
+    return replace_target(o, err, errcap);
+}
+
+/* Renames the finished temporary over the target, durably. */
+static int replace_target(lsqt_out *o, char *err, size_t errcap)
+{
+    int saved;
     if (rename(o->tmp, o->target) != 0) {
         saved = errno;
         unlink(o->tmp);
@@ -434,6 +443,7 @@ int lsqt_out_commit(lsqt_out *o, char *err, size_t errcap)
         out_error(o, why, err, errcap);
         return -1;
     }
+    o->tmp[0] = '\0';
     /* Make the rename itself durable (best effort: not every file system allows it). */
     char dir[LSQT_PATH_CAP];
     const char *slash = strrchr(o->target, '/');
@@ -446,8 +456,49 @@ int lsqt_out_commit(lsqt_out *o, char *err, size_t errcap)
     return 0;
 }
 
+int lsqt_out_open_named(lsqt_out *o, const char *path, char *err, size_t errcap)
+{
+    struct stat old;
+    int exists = 0;
+    if (out_plan(o, path, &old, &exists, err, errcap)) return -1;
+    o->fd = -1;
+    o->f = NULL;
+    if (o->how == LSQT_OUT_STDOUT) {
+        snprintf(err, errcap, "cannot write to stdout ('-') here: give a file name");
+        return -1;
+    }
+    if (o->how == LSQT_OUT_IN_PLACE) return 0;
+    const char *base = strrchr(o->target, '/'), *dot = strrchr(base ? base : o->target, '.');
+    int fd = make_temp(o, &old, exists, dot ? dot : "", err, errcap);
+    if (fd < 0) return -1;
+    close(fd);
+    return 0;
+}
+
+const char *lsqt_out_name(const lsqt_out *o) { return o->how == LSQT_OUT_REPLACE ? o->tmp : o->target; }
+
+int lsqt_out_commit_named(lsqt_out *o, char *err, size_t errcap)
+{
+    if (o->how != LSQT_OUT_REPLACE) return 0;
+    int fd = open(o->tmp, O_RDONLY | O_CLOEXEC);
+    if (fd < 0 || fsync(fd) != 0) {
+        const int e = errno;
+        if (fd >= 0) close(fd);
+        unlink(o->tmp);
+        out_error(o, strerror(e), err, errcap);
+        return -1;
+    }
+    close(fd);
+    return replace_target(o, err, errcap);
+}
+
 void lsqt_out_abort(lsqt_out *o)
 {
+    if (!o->f && o->how == LSQT_OUT_REPLACE && o->tmp[0]) { /* a named output */
+        unlink(o->tmp);
+        o->tmp[0] = '\0';
+        return;
+    }
     if (o->f && o->how != LSQT_OUT_STDOUT) fclose(o->f);
     if (o->f && o->how == LSQT_OUT_REPLACE && o->tmp[0]) unlink(o->tmp);
     o->f = NULL;

@@ -22,7 +22,11 @@ VIEW=$2
 DUMP=$3
 EX=$4
 T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
+cleanup() {
+  mountpoint -q "$T/small" 2>/dev/null && umount "$T/small"
+  rm -rf "$T"
+}
+trap cleanup EXIT
 cd "$T"
 
 # check.py MODE IMAGE ARGS...: reads IMAGE through image_dump; the sphere geometry of
@@ -310,4 +314,29 @@ expect 0 "--image-dim" -- "$VIEW" --help
 expect 0 "--strict" -- "$VIEW" --help
 [ ! -e t.png ] && ok || bad "an image of a refused LSS"
 
+# Where the image goes (util.h's rules, as lsqt-cl's outputs): never over the input, a
+# folder or an extension without a writer refused before any work, and written through
+# a temporary that must read back whole before it replaces anything.
+cp L.lss in.png
+expect 2 "the output 'in.png' would replace the input" -- "$VIEW" -q in.png -o in.png
+cmp -s L.lss in.png && ok || bad "lssview wrote over its input"
+mkdir -p adir
+expect 1 "cannot write 'adir': it is a directory" -- "$VIEW" L.lss -o adir
+expect 2 "OpenImageIO has no writer for its extension" -- "$VIEW" L.lss -o x.nosuchformat
+# A full file system (a small tmpfs, as root): exit 1 naming the image, the old one kept,
+# no new or half-written file, no temporaries.
+mkdir -p small
+if mount -t tmpfs -o size=2m tmpfs small 2>/dev/null; then
+  expect 0 "wrote small/old.exr" -- "$VIEW" L.lss -o small/old.exr
+  cp small/old.exr keep.exr
+  dd if=/dev/zero of=small/filler bs=4k 2>/dev/null
+  expect 1 "cannot write 'small/old.exr'" -- "$VIEW" L.lss -o small/old.exr
+  cmp -s small/old.exr keep.exr && ok || bad "a full disk damaged the old image"
+  expect 1 "cannot write 'small/new.png'" -- "$VIEW" L.lss -o small/new.png
+  [ ! -e small/new.png ] && ok || bad "a half-written small/new.png exists"
+  ! ls small | grep -q tmp && ok || bad "temporaries left: $(ls small)"
+  umount small
+else
+  echo "skip: cannot mount a tmpfs here (not root?): full-disk checks skipped"
+fi
 finish test_lssview

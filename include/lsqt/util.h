@@ -60,6 +60,13 @@ void lsqt_out_cancel_flag(volatile sig_atomic_t *flag);
  * an earlier one, removes the temporary and fails with the reason (ENOSPC, EPIPE, ...). */
 int lsqt_out_commit(lsqt_out *o, char *err, size_t errcap);
 void lsqt_out_abort(lsqt_out *o);
+/* For a writer that opens the file itself by name (OpenImageIO): the same rules, through
+ * a temporary beside PATH that ends as PATH does (so the format follows the extension).
+ * Write to lsqt_out_name(o), then lsqt_out_commit_named (fsync, rename over PATH) or
+ * lsqt_out_abort. A device or FIFO is written in place; "-" is refused. */
+int lsqt_out_open_named(lsqt_out *o, const char *path, char *err, size_t errcap);
+const char *lsqt_out_name(const lsqt_out *o);
+int lsqt_out_commit_named(lsqt_out *o, char *err, size_t errcap);
 
 double lsqt_now(void); /* monotonic seconds */
 

@@ -59,6 +59,7 @@
 #include "lsqt/lss.h"
 #include "lsqt/state.h"
 #include "lsqt/tally.h"
+#include "lsqt/util.h"
 
 namespace {
 
@@ -98,8 +99,9 @@ void usage(FILE *f)
                  "usage: lssview [OPTIONS] IN.lss\n"
                  "Renders a sphere with the BSDF of IN.lss under directional lights (direct light only).\n"
                  "  -o, --output PATH    image to write, any format OpenImageIO writes (default IN.lss.png,\n"
-                 "                       IN.lss.error.png with --error); .exr/.hdr/.pfm get linear values,\n"
-                 "                       others are tone mapped (1 - exp(-v)) and sRGB encoded\n"
+                 "                       IN.lss.error.png with --error), written atomically, never over\n"
+                 "                       IN.lss; .exr/.hdr get linear values, others are tone mapped\n"
+                 "                       (1 - exp(-v)) and sRGB encoded\n"
                  "  --image-dim N        image width and height in pixels (512; 16-8192)\n"
                  "  --image-mul M        brightness: values are multiplied by M (1)\n"
                  "  --error              the relative standard error of each pixel in false colour, with a bar\n"
@@ -443,7 +445,15 @@ int main(int argc, char **argv)
 
     lsqt_state st;
     std::memset(&st, 0, sizeof st);
-    char err[512];
+    char err[3 * LSQT_PATH_CAP];
+    // The image goes where lsqt-cl's outputs go (util.h): never over the input, checked
+    // before any work, written to a temporary beside it and renamed into place.
+    if (o.in != "-" && lsqt_same_file(o.out.c_str(), o.in.c_str()))
+        die(2, "the output '%s' would replace the input", o.out.c_str());
+    if (lsqt_out_check(o.out.c_str(), err, sizeof err)) die(1, "%s", err);
+    if (!OIIO::ImageOutput::create(o.out))
+        die(2, "cannot write '%s': OpenImageIO has no writer for its extension (use .png, .exr, .hdr, .tif, ...)",
+            o.out.c_str());
     if (lsqt_lss_read(o.in.c_str(), &st, err, sizeof err)) die(2, "%s", err);
     if (st.stage != LSQT_STAGE_RUN) {
         lsqt_state_free(&st);
@@ -551,8 +561,14 @@ int main(int argc, char **argv)
         }
     }
 
-    std::unique_ptr<OIIO::ImageOutput> out = OIIO::ImageOutput::create(o.out);
-    if (!out) die(2, "cannot write '%s': %s", o.out.c_str(), OIIO::geterror().c_str());
+    lsqt_out w;
+    if (lsqt_out_open_named(&w, o.out.c_str(), err, sizeof err)) die(1, "%s", err);
+    const std::string name = lsqt_out_name(&w);
+    std::unique_ptr<OIIO::ImageOutput> out = OIIO::ImageOutput::create(name);
+    if (!out) {
+        lsqt_out_abort(&w);
+        die(2, "cannot write '%s': %s", o.out.c_str(), OIIO::geterror().c_str());
+    }
     OIIO::ImageSpec spec(W, D, 3, linear ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
     spec.attribute("oiio:ColorSpace", linear && !o.error ? "Linear" : "sRGB");
     const double theta_max_deg = slices.empty() ? 0.0 : slices.back().theta * 180.0 / M_PI;
@@ -565,8 +581,26 @@ int main(int argc, char **argv)
                    std::string(o.error ? "lssview --error: relative standard error, magenta: not covered"
                                        : "lssview: BSDF sphere, magenta: not covered") +
                        rim);
-    if (!out->open(o.out, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, img.data()) || !out->close())
+    if (!out->open(name, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, img.data()) || !out->close()) {
+        lsqt_out_abort(&w);
         die(1, "cannot write '%s': %s", o.out.c_str(), out->geterror().c_str());
+    }
+    out.reset();
+    // Image writers may not see a failed write (a full disk leaves a short file behind
+    // them): the file must read back whole before it replaces anything.
+    if (w.how == LSQT_OUT_REPLACE) {
+        std::vector<float> back((size_t)W * D * 3);
+        auto in = OIIO::ImageInput::open(name);
+        const bool whole = in && in->spec().width == W && in->spec().height == D &&
+                           in->spec().nchannels == 3 && in->read_image(0, 0, 0, 3, OIIO::TypeDesc::FLOAT, back.data());
+        if (in) in->close();
+        if (!whole) {
+            lsqt_out_abort(&w);
+            die(1, "cannot write '%s': the image written does not read back whole (%s)", o.out.c_str(),
+                errno == ENOSPC ? std::strerror(ENOSPC) : "a full disk?");
+        }
+    }
+    if (lsqt_out_commit_named(&w, err, sizeof err)) die(1, "%s", err);
 
     if (!o.quiet) {
         size_t n_sphere = (size_t)std::count_if(kind.begin(), kind.end(), [](unsigned char k) { return k != 0; });
