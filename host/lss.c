@@ -8,29 +8,33 @@
 
 static const char magic[8] = {'L', 'S', 'Q', 'T', 'L', 'S', 'S', '\0'};
 
-/* ---- writing: a growing little-endian byte buffer ---- */
+/* ---- writing: little-endian, streamed to the file through a small buffer with the CRC
+ * kept as it goes, so writing needs no second copy of the state (a large LSS after a long
+ * run cannot fail for memory) ---- */
+#define LSS_WBUF (1u << 16)
 typedef struct wbuf {
-    unsigned char *p;
-    size_t n, cap;
-    int oom;
+    unsigned char *p; /* LSS_WBUF bytes */
+    size_t n;
+    uint32_t crc; /* of every byte flushed */
+    FILE *f;
 } wbuf;
+
+static void flush_w(wbuf *w)
+{
+    w->crc = lsqt_crc32(w->crc, w->p, w->n);
+    if (w->n) fwrite(w->p, 1, w->n, w->f); /* a failure shows at lsqt_out_commit */
+    w->n = 0;
+}
 
 static void put(wbuf *w, const void *src, size_t n)
 {
-    if (w->oom) return;
-    if (w->n + n > w->cap) {
-        size_t cap = w->cap ? w->cap : 4096;
-        while (cap < w->n + n) cap *= 2;
-        unsigned char *g = realloc(w->p, cap);
-        if (!g) {
-            w->oom = 1;
-            return;
-        }
-        w->p = g;
-        w->cap = cap;
+    const unsigned char *s = src;
+    while (n) {
+        size_t k = LSS_WBUF - w->n < n ? LSS_WBUF - w->n : n;
+        memcpy(w->p + w->n, s, k);
+        w->n += k, s += k, n -= k;
+        if (w->n == LSS_WBUF) flush_w(w);
     }
-    memcpy(w->p + w->n, src, n);
-    w->n += n;
 }
 
 static void put_u32(wbuf *w, uint32_t v)
@@ -68,7 +72,17 @@ static void put_f32(wbuf *w, float f)
 
 int lsqt_lss_write(const char *path, const lsqt_state *st, char *err, size_t errcap)
 {
-    wbuf w = {NULL, 0, 0, 0};
+    wbuf w = {malloc(LSS_WBUF), 0, 0, NULL};
+    if (!w.p) {
+        snprintf(err, errcap, "out of memory writing '%s'", path);
+        return -1;
+    }
+    lsqt_out af;
+    if (lsqt_out_open(&af, path, err, errcap)) {
+        free(w.p);
+        return -1;
+    }
+    w.f = af.f;
     const size_t nw = (size_t)st->n_wi;
     put(&w, magic, 8);
     put_u32(&w, LSQT_LSS_VERSION);
@@ -104,20 +118,11 @@ int lsqt_lss_write(const char *path, const lsqt_state *st, char *err, size_t err
         for (size_t i = 0; i < LSQT_BATCHES * LSQT_HIST_BINS; i++)
             put_u128(&w, st->hist[(size_t)s * LSQT_BATCHES * LSQT_HIST_BINS + i]);
     }
-    put_u32(&w, lsqt_crc32(0, w.p, w.n));
-    if (w.oom) {
-        free(w.p);
-        snprintf(err, errcap, "out of memory writing '%s'", path);
-        return -1;
-    }
-    lsqt_out af;
-    int rc = lsqt_out_open(&af, path, err, errcap);
-    if (rc == 0) {
-        fwrite(w.p, 1, w.n, af.f);
-        rc = lsqt_out_commit(&af, err, errcap);
-    }
+    flush_w(&w);
+    put_u32(&w, w.crc);
+    flush_w(&w);
     free(w.p);
-    return rc;
+    return lsqt_out_commit(&af, err, errcap);
 }
 
 /* ---- reading: a bounds-checked cursor ---- */
