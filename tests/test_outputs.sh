@@ -52,7 +52,7 @@ rm -f st.raw.tmp.*
 # waiting, and SIGTERM ends the wait: exit 1 naming the FIFO, well within seconds.
 "$BIN" -R "${RUN[@]}" -o fifo --lss nf.lss L.lsqt >nf.log 2>&1 &
 pid=$!
-for _ in $(seq 600); do [ -s nf.lss ] && break; sleep 0.1; done
+for _ in $(seq 300); do [ -s nf.lss ] && break; sleep 0.1; done # 30 s: build and run take a few
 [ -s nf.lss ] && "$BIN" info nf.lss >/dev/null 2>&1 && ok || bad "no LSS while the RAW waits for a reader"
 sleep 1.5 # past the note's second
 kill -TERM $pid 2>/dev/null
