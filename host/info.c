@@ -275,21 +275,8 @@ int lsqt_info_main(const char *prog, int argc, char **argv)
         return 2;
     }
 
-    /* Only a regular file (or stdin, "-") is read: a FIFO would block, a device holds no
-     * state, a directory is no file. */
+    /* Only a regular file (or stdin, "-") is read: lsqt_lss_read's rule for every program. */
     const int from_stdin = strcmp(input, "-") == 0;
-    if (!from_stdin) {
-        const char *what = NULL;
-        int t = lsqt_path_type(input, &what);
-        if (t == LSQT_PATH_MISSING) {
-            snprintf(msg, sizeof msg, "cannot open '%s': %s", input, strerror(errno));
-            return info_fail(prog, 2, msg);
-        }
-        if (t != LSQT_PATH_REGULAR) {
-            snprintf(msg, sizeof msg, "'%s' is a %s, not an LSS file (only regular files are read)", input, what);
-            return info_fail(prog, 2, msg);
-        }
-    }
     if (json && !from_stdin && strcmp(json, "-") != 0 && lsqt_same_file(json, input)) {
         snprintf(msg, sizeof msg, "the JSON output '%s' would replace the input", json);
         return info_fail(prog, 2, msg);
