@@ -128,7 +128,7 @@ static void print_text(FILE *f, const char *path, const lsqt_state *st, const ls
     fprintf(f, "file: %s\n", path);
     fprintf(f, "format: LSS version %u; chunk %d paths, %d batches, %d fixed-point bits, "
                "histogram 2 x %d x %d = %d bins, %d scalar tallies\n",
-            LSQT_LSS_VERSION, LSQT_CHUNK, LSQT_BATCHES, LSQT_FIX_BITS, LSQT_HIST_NMU, LSQT_HIST_NPHI, LSQT_HIST_BINS,
+            st->lss_version, LSQT_CHUNK, LSQT_BATCHES, LSQT_FIX_BITS, LSQT_HIST_NMU, LSQT_HIST_NPHI, LSQT_HIST_BINS,
             LSQT_T_COUNT);
     fprintf(f, "assembly hash: %016llx\n", (unsigned long long)st->hash);
     fprintf(f, "seed: %llu\n", (unsigned long long)st->seed);
@@ -191,7 +191,7 @@ static int write_json(const char *out, const char *path, const lsqt_state *st, c
     json_str(f, path);
     fprintf(f, ", \"version\": %u,\n \"layout\": {\"chunk\": %d, \"batches\": %d, \"fix_bits\": %d, "
                "\"hist_nmu\": %d, \"hist_nphi\": %d, \"hist_bins\": %d, \"t_count\": %d},\n",
-            LSQT_LSS_VERSION, LSQT_CHUNK, LSQT_BATCHES, LSQT_FIX_BITS, LSQT_HIST_NMU, LSQT_HIST_NPHI, LSQT_HIST_BINS,
+            st->lss_version, LSQT_CHUNK, LSQT_BATCHES, LSQT_FIX_BITS, LSQT_HIST_NMU, LSQT_HIST_NPHI, LSQT_HIST_BINS,
             LSQT_T_COUNT);
     fprintf(f, " \"hash\": \"%016llx\", \"seed\": %llu, \"double\": %s, \"transmits\": %s, \"n_slices\": %d, "
                "\"n_wi\": %d, \"paths\": %llu,\n \"directions\": {\"method\": \"%s\", \"rx\": %u, \"pilot_paths\": %llu},\n"

@@ -13,14 +13,16 @@ static const char magic[8] = {'L', 'S', 'Q', 'T', 'L', 'S', 'S', '\0'};
  * run cannot fail for memory) ---- */
 #define LSS_WBUF (1u << 16)
 typedef struct wbuf {
-    unsigned char *p; /* LSS_WBUF bytes */
+    unsigned char *p; /* LSS_WBUF bytes; NULL: a sizing pass that only counts */
     size_t n;
     uint32_t crc; /* of every byte flushed */
     FILE *f;
+    uint64_t total; /* bytes put so far */
 } wbuf;
 
 static void flush_w(wbuf *w)
 {
+    if (!w->p) return;
     w->crc = lsqt_crc32(w->crc, w->p, w->n);
     if (w->n) fwrite(w->p, 1, w->n, w->f); /* a failure shows at lsqt_out_commit */
     w->n = 0;
@@ -28,6 +30,8 @@ static void flush_w(wbuf *w)
 
 static void put(wbuf *w, const void *src, size_t n)
 {
+    w->total += n;
+    if (!w->p) return;
     const unsigned char *s = src;
     while (n) {
         size_t k = LSS_WBUF - w->n < n ? LSS_WBUF - w->n : n;
@@ -50,10 +54,59 @@ static void put_u64(wbuf *w, uint64_t v)
     put_u32(w, (uint32_t)(v >> 32));
 }
 
-static void put_u128(wbuf *w, lsqt_u128 v)
+/* ---- the tallies of a slice, packed (version 6): most 128-bit words are zero (batches
+ * not yet reached, bins never hit) or use 5 to 8 bytes (2^-40 units). A token is an
+ * unsigned LEB128 varint t: t = 2k (k >= 1) is a run of k zero tallies; t = 2L + 1
+ * (1 <= L <= 16) is a nonzero tally in the next L bytes, little-endian, its last byte
+ * nonzero. The encoding is canonical (runs are whole, lengths minimal), so a state has
+ * exactly one form and equal work still gives byte-identical files. ---- */
+typedef struct tally_run {
+    lsqt_u128 *part[3]; /* a slice's point-estimate sums, scalars, histogram, in file order */
+    size_t n[3];
+} tally_run;
+
+static tally_run slice_tallies(const lsqt_state *st, size_t s)
 {
-    put_u64(w, v.lo);
-    put_u64(w, v.hi);
+    const size_t nw = (size_t)st->n_wi;
+    tally_run t = {{st->nee + s * LSQT_BATCHES * nw, st->scalars + s * LSQT_BATCHES * LSQT_T_COUNT,
+                    st->hist + s * LSQT_BATCHES * LSQT_HIST_BINS},
+                   {LSQT_BATCHES * nw, LSQT_BATCHES * LSQT_T_COUNT, LSQT_BATCHES * LSQT_HIST_BINS}};
+    return t;
+}
+
+static void put_varint(wbuf *w, uint64_t v)
+{
+    unsigned char b[10];
+    size_t n = 0;
+    do {
+        b[n] = (unsigned char)(v & 0x7f);
+        v >>= 7;
+        if (v) b[n] |= 0x80;
+        n++;
+    } while (v);
+    put(w, b, n);
+}
+
+static void put_tallies(wbuf *w, const tally_run *t)
+{
+    uint64_t zeros = 0;
+    for (int p = 0; p < 3; p++)
+        for (size_t i = 0; i < t->n[p]; i++) {
+            const lsqt_u128 v = t->part[p][i];
+            if (!v.lo && !v.hi) {
+                zeros++;
+                continue;
+            }
+            if (zeros) put_varint(w, 2 * zeros);
+            zeros = 0;
+            unsigned char b[16];
+            for (int j = 0; j < 8; j++) b[j] = (unsigned char)(v.lo >> (8 * j)), b[8 + j] = (unsigned char)(v.hi >> (8 * j));
+            size_t len = 16;
+            while (!b[len - 1]) len--;
+            put_varint(w, 2 * len + 1);
+            put(w, b, len);
+        }
+    if (zeros) put_varint(w, 2 * zeros);
 }
 
 static void put_f64(wbuf *w, double d)
@@ -70,9 +123,52 @@ static void put_f32(wbuf *w, float f)
     put_u32(w, v);
 }
 
+/* Everything but the CRC; file_bytes is the whole file's size, announced in the header. */
+static void put_state(wbuf *w, const lsqt_state *st, uint64_t file_bytes)
+{
+    const size_t nw = (size_t)st->n_wi;
+    put(w, magic, 8);
+    put_u32(w, LSQT_LSS_VERSION);
+    uint32_t layout[] = {LSQT_CHUNK, LSQT_BATCHES, LSQT_FIX_BITS, LSQT_HIST_NMU, LSQT_HIST_NPHI, LSQT_T_COUNT};
+    for (size_t i = 0; i < 6; i++) put_u32(w, layout[i]);
+    put_u64(w, st->seed);
+    put_u64(w, st->hash);
+    put_u32(w, (uint32_t)st->use_double);
+    put_u32(w, (uint32_t)st->transmits);
+    put_u32(w, st->flags);
+    put_u32(w, st->dir_method);
+    put_u32(w, st->rx);
+    put_u64(w, st->pilot_paths);
+    put_u32(w, (uint32_t)st->n_slices);
+    put_u32(w, (uint32_t)st->n_wi);
+    put_u64(w, st->paths);
+    put_u64(w, st->span_end);
+    put_u32(w, st->stage);
+    put_u32(w, (uint32_t)st->n_ranges);
+    size_t tl = strlen(st->canonical);
+    put_u32(w, (uint32_t)tl);
+    put_u64(w, file_bytes);
+    put(w, st->canonical, tl);
+    for (int i = 0; i < 2 * st->n_ranges; i++) put_u64(w, st->ranges[i]);
+    for (int s = 0; s < st->n_slices; s++) {
+        put_f64(w, st->theta_o[s]);
+        put_u32(w, st->slice_flags[s]);
+        put_u64(w, st->paths);
+        for (size_t k = 0; k < nw; k++)
+            for (int c = 0; c < 3; c++) put_f32(w, st->wi[((size_t)s * nw + k) * 4 + (size_t)c]);
+        const tally_run t = slice_tallies(st, (size_t)s);
+        put_tallies(w, &t);
+    }
+}
+
 int lsqt_lss_write(const char *path, const lsqt_state *st, char *err, size_t errcap)
 {
-    wbuf w = {malloc(LSS_WBUF), 0, 0, NULL};
+    /* Two passes: the first only counts the bytes, so that the header can announce the
+     * file's size (a reader tells a truncated file from a damaged one). */
+    wbuf w = {NULL, 0, 0, NULL, 0};
+    put_state(&w, st, 0);
+    const uint64_t file_bytes = w.total + 4;
+    w.p = malloc(LSS_WBUF);
     if (!w.p) {
         snprintf(err, errcap, "out of memory writing '%s'", path);
         return -1;
@@ -83,41 +179,8 @@ int lsqt_lss_write(const char *path, const lsqt_state *st, char *err, size_t err
         return -1;
     }
     w.f = af.f;
-    const size_t nw = (size_t)st->n_wi;
-    put(&w, magic, 8);
-    put_u32(&w, LSQT_LSS_VERSION);
-    uint32_t layout[] = {LSQT_CHUNK, LSQT_BATCHES, LSQT_FIX_BITS, LSQT_HIST_NMU, LSQT_HIST_NPHI, LSQT_T_COUNT};
-    for (size_t i = 0; i < 6; i++) put_u32(&w, layout[i]);
-    put_u64(&w, st->seed);
-    put_u64(&w, st->hash);
-    put_u32(&w, (uint32_t)st->use_double);
-    put_u32(&w, (uint32_t)st->transmits);
-    put_u32(&w, st->flags);
-    put_u32(&w, st->dir_method);
-    put_u32(&w, st->rx);
-    put_u64(&w, st->pilot_paths);
-    put_u32(&w, (uint32_t)st->n_slices);
-    put_u32(&w, (uint32_t)st->n_wi);
-    put_u64(&w, st->paths);
-    put_u64(&w, st->span_end);
-    put_u32(&w, st->stage);
-    put_u32(&w, (uint32_t)st->n_ranges);
-    size_t tl = strlen(st->canonical);
-    put_u32(&w, (uint32_t)tl);
-    put(&w, st->canonical, tl);
-    for (int i = 0; i < 2 * st->n_ranges; i++) put_u64(&w, st->ranges[i]);
-    for (int s = 0; s < st->n_slices; s++) {
-        put_f64(&w, st->theta_o[s]);
-        put_u32(&w, st->slice_flags[s]);
-        put_u64(&w, st->paths);
-        for (size_t k = 0; k < nw; k++)
-            for (int c = 0; c < 3; c++) put_f32(&w, st->wi[((size_t)s * nw + k) * 4 + (size_t)c]);
-        for (size_t i = 0; i < LSQT_BATCHES * nw; i++) put_u128(&w, st->nee[(size_t)s * LSQT_BATCHES * nw + i]);
-        for (size_t i = 0; i < LSQT_BATCHES * LSQT_T_COUNT; i++)
-            put_u128(&w, st->scalars[(size_t)s * LSQT_BATCHES * LSQT_T_COUNT + i]);
-        for (size_t i = 0; i < LSQT_BATCHES * LSQT_HIST_BINS; i++)
-            put_u128(&w, st->hist[(size_t)s * LSQT_BATCHES * LSQT_HIST_BINS + i]);
-    }
+    w.total = 0;
+    put_state(&w, st, file_bytes);
     flush_w(&w);
     put_u32(&w, w.crc);
     flush_w(&w);
@@ -180,10 +243,65 @@ static float get_f32(rbuf *r)
     return f;
 }
 
+static int get_varint(rbuf *r, uint64_t *v)
+{
+    *v = 0;
+    for (int i = 0; i < 10; i++) {
+        const unsigned char *b = take(r, 1);
+        if (!b) return -1;
+        if (i == 9 && *b > 1) return -1; /* beyond 64 bits */
+        *v |= (uint64_t)(*b & 0x7f) << (7 * i);
+        if (!(*b & 0x80)) return i && !*b ? -1 : 0; /* a zero last byte: not the shortest form */
+    }
+    return -1;
+}
+
+/* Reads one slice's packed tallies (see put_tallies) into zeroed arrays; any token that
+ * the writer would not have written (a run past the end, two runs in a row, a length out
+ * of range or not the shortest) marks r bad. */
+static void get_tallies(rbuf *r, const tally_run *t)
+{
+    int p = 0, after_run = 0;
+    size_t at = 0;
+    while (p < 3 && !r->bad) {
+        uint64_t tok;
+        if (get_varint(r, &tok)) {
+            r->bad = 1;
+            break;
+        }
+        if (!(tok & 1)) {
+            uint64_t k = tok / 2;
+            if (!k || after_run) r->bad = 1;
+            while (k && p < 3) { /* a run may cross from one part into the next */
+                const size_t step = t->n[p] - at < k ? t->n[p] - at : (size_t)k;
+                at += step, k -= step;
+                if (at == t->n[p]) p++, at = 0;
+            }
+            if (k) r->bad = 1; /* the run goes past the slice's last tally */
+            after_run = 1;
+            continue;
+        }
+        const uint64_t len = tok / 2;
+        const unsigned char *b = len >= 1 && len <= 16 ? take(r, (size_t)len) : NULL;
+        if (!b || !b[len - 1]) {
+            r->bad = 1;
+            break;
+        }
+        lsqt_u128 v = {0, 0};
+        for (size_t j = 0; j < len; j++)
+            if (j < 8) v.lo |= (uint64_t)b[j] << (8 * j);
+            else v.hi |= (uint64_t)b[j] << (8 * (j - 8));
+        t->part[p][at++] = v;
+        if (at == t->n[p]) p++, at = 0;
+        after_run = 0;
+    }
+}
+
 /* Bytes before the assembly text: magic, version, 6 layout words, seed, hash, 3 u32
  * (double, transmits, flags), direction method, rx, pilot paths, n_slices, n_wi, paths,
- * span end, stage, range count, text length. */
-#define LSS_HEADER_BYTES (8 + 4 + 6 * 4 + 8 + 8 + 3 * 4 + 4 + 4 + 8 + 2 * 4 + 8 + 8 + 4 + 4 + 4)
+ * span end, stage, range count, text length; and from version 6 on the file's size. */
+#define LSS_HEADER_V5 (8 + 4 + 6 * 4 + 8 + 8 + 3 * 4 + 4 + 4 + 8 + 2 * 4 + 8 + 8 + 4 + 4 + 4)
+#define LSS_HEADER_BYTES (LSS_HEADER_V5 + 8)
 
 /* Contents a valid CRC cannot vouch for: every slice's theta_o in [0, pi/2) (from its own
  * side's normal), and its incident directions finite unit vectors (those a run used or,
@@ -229,12 +347,14 @@ int lsqt_lss_parse(const unsigned char *data, size_t len, lsqt_state *st, char *
     }
     rbuf r = {data, len, 8, 0};
     uint32_t version = get_u32(&r);
-    if (version != LSQT_LSS_VERSION) {
-        snprintf(err, errcap, "LSS version %u, this lsqt-cl reads version %u", version, LSQT_LSS_VERSION);
+    if (version != LSQT_LSS_VERSION && version != 5) {
+        snprintf(err, errcap, "LSS version %u, this lsqt-cl reads versions 5 and %u", version, LSQT_LSS_VERSION);
         return -1;
     }
-    if (len < LSS_HEADER_BYTES + 4) {
-        snprintf(err, errcap, "truncated at byte %zu (inside the %d-byte header)", len, LSS_HEADER_BYTES);
+    const int packed = version >= 6; /* version 5 stores every tally in 16 bytes */
+    const size_t header = packed ? LSS_HEADER_BYTES : LSS_HEADER_V5;
+    if (len < header + 4) {
+        snprintf(err, errcap, "truncated at byte %zu (inside the %zu-byte header)", len, header);
         return -1;
     }
     static const char *const layout_name[] = {"chunk", "batches", "fixed-point bits", "histogram mu bins",
@@ -250,13 +370,19 @@ int lsqt_lss_parse(const unsigned char *data, size_t len, lsqt_state *st, char *
     uint64_t paths = get_u64(&r), span_end = get_u64(&r);
     uint32_t stage = get_u32(&r), n_ranges = get_u32(&r);
     uint32_t tl = get_u32(&r);
-    /* The size the header announces, when its counts are in range (else unknown: 0). */
-    const int sane = n_slices >= 1 && n_slices <= 4096 * 8 && n_wi >= 1 && n_wi <= 65536 && tl <= (1u << 24) &&
-                     n_ranges <= (1u << 20);
-    const size_t per_slice = sane ? 20 + (size_t)n_wi * 12 + (size_t)LSQT_BATCHES * n_wi * 16 +
-                                        LSQT_BATCHES * LSQT_T_COUNT * 16 + LSQT_BATCHES * LSQT_HIST_BINS * 16
-                                  : 0;
-    const size_t want = sane ? LSS_HEADER_BYTES + (size_t)tl + (size_t)n_ranges * 16 + per_slice * n_slices + 4 : 0;
+    const uint64_t file_bytes = packed ? get_u64(&r) : 0;
+    /* The size the header announces, when its counts are in range (else unknown: 0):
+     * version 5's follows from the counts; version 6 states it, between the sizes of
+     * all-zero tallies (one byte a slice) and of the largest (17 bytes each). */
+    int sane = n_slices >= 1 && n_slices <= 4096 * 8 && n_wi >= 1 && n_wi <= 65536 && tl <= (1u << 24) &&
+               n_ranges <= (1u << 20);
+    const size_t tallies = (size_t)LSQT_BATCHES * (n_wi + LSQT_T_COUNT + LSQT_HIST_BINS);
+    const size_t fixed = sane ? header + (size_t)tl + (size_t)n_ranges * 16 + (20 + (size_t)n_wi * 12) * n_slices + 4 : 0;
+    size_t want = sane ? fixed + tallies * 16 * n_slices : 0;
+    if (packed) {
+        sane = sane && file_bytes >= fixed + n_slices && file_bytes <= fixed + tallies * 17 * n_slices;
+        want = sane ? (size_t)file_bytes : 0;
+    }
     uint32_t crc = (uint32_t)data[len - 4] | (uint32_t)data[len - 3] << 8 |
                    (uint32_t)data[len - 2] << 16 | (uint32_t)data[len - 1] << 24;
 #ifndef LSQT_LSS_FUZZING /* the fuzz target skips the CRC to reach the parser behind it */
@@ -312,6 +438,7 @@ int lsqt_lss_parse(const unsigned char *data, size_t len, lsqt_state *st, char *
     st->pilot_paths = pilot_paths;
     st->span_end = span_end;
     st->stage = stage;
+    st->lss_version = version;
     uint64_t *ranges = malloc(((size_t)n_ranges + 1) * 2 * sizeof *ranges);
     if (!ranges) {
         lsqt_state_free(st);
@@ -341,12 +468,13 @@ int lsqt_lss_parse(const unsigned char *data, size_t len, lsqt_state *st, char *
         if (get_u64(&r) != paths) r.bad = 1;
         for (size_t k = 0; k < nw; k++)
             for (size_t c = 0; c < 3; c++) st->wi[(s * nw + k) * 4 + c] = get_f32(&r);
-        for (size_t i = 0; i < LSQT_BATCHES * nw; i++) st->nee[s * LSQT_BATCHES * nw + i] = get_u128(&r);
-        for (size_t i = 0; i < LSQT_BATCHES * LSQT_T_COUNT; i++)
-            st->scalars[s * LSQT_BATCHES * LSQT_T_COUNT + i] = get_u128(&r);
-        for (size_t i = 0; i < LSQT_BATCHES * LSQT_HIST_BINS; i++)
-            st->hist[s * LSQT_BATCHES * LSQT_HIST_BINS + i] = get_u128(&r);
+        const tally_run t = slice_tallies(st, s);
+        if (packed) get_tallies(&r, &t);
+        else
+            for (int p = 0; p < 3; p++)
+                for (size_t i = 0; i < t.n[p]; i++) t.part[p][i] = get_u128(&r);
     }
+    if (r.at != r.n) r.bad = 1; /* packed tallies shorter than the size announced */
     if (r.bad) {
         lsqt_state_free(st);
         snprintf(err, errcap, "corrupt LSS file (inconsistent slice records)");

@@ -80,7 +80,7 @@ for b, s in zip(blocks, run["slices"]):
 for line in ("seed: %d" % seed, "assembly hash: %s" % run["assembly_hash"], "precision: float",
              "transmits: %s" % ("yes" if transmits else "no"), "slices: 4, wi per slice: 16",
              "paths: %d per slice" % paths, "flags: none", "ranges: [0, %d) on every slice" % paths,
-             "format: LSS version 5; chunk 256 paths, 32 batches, 40 fixed-point bits, histogram 2 x 32 x 16 = 1024 bins"):
+             "format: LSS version 6; chunk 256 paths, 32 batches, 40 fixed-point bits, histogram 2 x 32 x 16 = 1024 bins"):
     if not re.search("^" + re.escape(line), text, re.M): p.append("text lacks '%s'" % line)
 asm = re.search(r"^assembly:\n((?:  .*\n)+)", text, re.M)
 if not asm or "\n".join(l[2:] for l in asm.group(1).splitlines()) + "\n" != info.get("assembly"):
@@ -89,7 +89,7 @@ if not asm or "\n".join(l[2:] for l in asm.group(1).splitlines()) + "\n" != info
 for k in ("version", "seed", "hash", "double", "transmits", "n_wi", "assembly", "flags", "ranges", "slices"):
     if k not in info: p.append("JSON lacks %s" % k)
 if p: sys.exit("; ".join(p))
-if info["version"] != 5 or info["seed"] != seed or info["seed"] != run["seed"]: p.append("JSON version/seed")
+if info["version"] != 6 or info["seed"] != seed or info["seed"] != run["seed"]: p.append("JSON version/seed")
 if info["hash"] != run["assembly_hash"] or not re.fullmatch(r"[0-9a-f]{16}", info["hash"]): p.append("JSON hash")
 if info["double"] is not False or info["double"] != run["double"] or info["transmits"] is not transmits: p.append("JSON double/transmits")
 if info["n_wi"] != 16 or info["flags"] != 0 or info["ranges"] != [[0, paths]]: p.append("JSON n_wi/flags/ranges")
@@ -163,8 +163,8 @@ cp L.lsqt.lss magic.lss
 printf 'XSQT' | dd of=magic.lss bs=1 seek=0 conv=notrunc status=none
 cp L.lsqt.lss v1.lss
 printf '\001\000\000\000' | dd of=v1.lss bs=1 seek=8 conv=notrunc status=none
-cp L.lsqt.lss v6.lss
-printf '\006\000\000\000' | dd of=v6.lss bs=1 seek=8 conv=notrunc status=none
+cp L.lsqt.lss v7.lss
+printf '\007\000\000\000' | dd of=v7.lss bs=1 seek=8 conv=notrunc status=none
 : > empty.lss
 printf 'Medium\nLayer z=0 NullBsdf\nMedium\n' > text.lss
 mkdir dir.lss
@@ -183,14 +183,14 @@ while IFS='|' read -r file text; do
   done
 done <<TABLE
 trunc.lss|truncated at byte 1000 (its header announces $n bytes
-trunc_header.lss|truncated at byte 40 (inside the 116-byte header)
+trunc_header.lss|truncated at byte 40 (inside the 124-byte header)
 trunc_crc.lss|truncated at byte $((n - 1))
 flip.lss|corrupt LSS file (CRC mismatch
 long.lss|corrupt LSS file: $((n + 1)) bytes where its header announces $n
 magic.lss|not an LSS file (bad magic)
 text.lss|not an LSS file (bad magic)
-v1.lss|LSS version 1, this lsqt-cl reads version 5
-v6.lss|LSS version 6, this lsqt-cl reads version 5
+v1.lss|LSS version 1, this lsqt-cl reads versions 5 and 6
+v7.lss|LSS version 7, this lsqt-cl reads versions 5 and 6
 empty.lss|empty file (not an LSS file)
 dir.lss|is a directory, not an LSS file
 fifo.lss|is a FIFO, not an LSS file

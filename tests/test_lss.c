@@ -1,4 +1,6 @@
-/* LSS round trip, and refusal of every kind of damage (no OpenCL needed). */
+/* LSS round trip, and refusal of every kind of damage (no OpenCL needed); the packed
+ * tallies of version 6 against the format's own rules; version 5 still read; writing
+ * needs no copy of the state (malloc is wrapped: -Wl,--wrap=malloc). */
 #define _XOPEN_SOURCE 700 /* mkdtemp */
 #include <math.h>
 #include <stdlib.h>
@@ -7,6 +9,17 @@
 #include "check.h"
 #include "lsqt/lss.h"
 #include "lsqt/util.h"
+
+/* The largest single malloc while `watching`: the LSS writer's memory beyond the state. */
+void *__real_malloc(size_t n);
+void *__wrap_malloc(size_t n);
+static int watching;
+static size_t largest;
+void *__wrap_malloc(size_t n)
+{
+    if (watching && n > largest) largest = n;
+    return __real_malloc(n);
+}
 
 static void fill(lsqt_state *st)
 {
@@ -31,6 +44,150 @@ static void fill(lsqt_state *st)
     for (size_t i = 0; i < lsqt_state_scalar_count(st); i++) st->scalars[i].lo = i * 77, st->scalars[i].hi = i;
     for (size_t i = 0; i < lsqt_state_hist_count(st); i++) st->hist[i].lo = i ^ 0xFFFF, st->hist[i].hi = ~i;
     st->slice_flags[1] = LSQT_SLICE_BELOW;
+    /* What packing must keep: a run of zeros from slice 0's last batch of sums through all
+     * its scalars into its histogram (crossing both boundaries), a run that ends slice 2,
+     * and tallies of every length from 1 to 16 bytes (slice 1's scalars). */
+    const size_t nb = LSQT_BATCHES * 16, sb = LSQT_BATCHES * LSQT_T_COUNT, hb = LSQT_BATCHES * LSQT_HIST_BINS;
+    for (size_t i = nb - 16; i < nb; i++) st->nee[i].lo = st->nee[i].hi = 0;
+    for (size_t i = 0; i < sb; i++) st->scalars[i].lo = st->scalars[i].hi = 0;
+    for (size_t i = 0; i < 5; i++) st->hist[i].lo = st->hist[i].hi = 0;
+    for (size_t i = 3 * hb - 100; i < 3 * hb; i++) st->hist[i].lo = st->hist[i].hi = 0;
+    for (size_t j = 0; j < 16; j++) {
+        lsqt_u128 *v = &st->scalars[sb + j];
+        v->lo = j < 8 ? 0xA5ULL << (8 * j) : 1;
+        v->hi = j < 8 ? 0 : 0xA5ULL << (8 * (j - 8));
+    }
+}
+
+static void le(unsigned char **p, uint64_t v, int n)
+{
+    for (int i = 0; i < n; i++) *(*p)++ = (unsigned char)(v >> (8 * i));
+}
+
+/* A version-5 file of st, from that version's layout (lss.h): 16 bytes a tally, no file size. */
+static unsigned char *v5_image(const lsqt_state *st, size_t *len)
+{
+    const size_t nw = (size_t)st->n_wi, tl = strlen(st->canonical);
+    const size_t nt = LSQT_BATCHES * (nw + LSQT_T_COUNT + LSQT_HIST_BINS);
+    *len = 116 + tl + 16 * (size_t)st->n_ranges + (size_t)st->n_slices * (20 + 12 * nw + 16 * nt) + 4;
+    unsigned char *f = malloc(*len), *p = f;
+    memcpy(p, "LSQTLSS", 8), p += 8;
+    const uint64_t head[] = {5, LSQT_CHUNK, LSQT_BATCHES, LSQT_FIX_BITS, LSQT_HIST_NMU, LSQT_HIST_NPHI, LSQT_T_COUNT};
+    for (int i = 0; i < 7; i++) le(&p, head[i], 4);
+    le(&p, st->seed, 8), le(&p, st->hash, 8);
+    le(&p, (uint64_t)st->use_double, 4), le(&p, (uint64_t)st->transmits, 4), le(&p, st->flags, 4);
+    le(&p, st->dir_method, 4), le(&p, st->rx, 4), le(&p, st->pilot_paths, 8);
+    le(&p, (uint64_t)st->n_slices, 4), le(&p, nw, 4), le(&p, st->paths, 8), le(&p, st->span_end, 8);
+    le(&p, st->stage, 4), le(&p, (uint64_t)st->n_ranges, 4), le(&p, tl, 4);
+    memcpy(p, st->canonical, tl), p += tl;
+    for (int i = 0; i < 2 * st->n_ranges; i++) le(&p, st->ranges[i], 8);
+    for (size_t s = 0; s < (size_t)st->n_slices; s++) {
+        uint64_t th;
+        memcpy(&th, &st->theta_o[s], 8);
+        le(&p, th, 8), le(&p, st->slice_flags[s], 4), le(&p, st->paths, 8);
+        for (size_t k = 0; k < nw; k++)
+            for (size_t c = 0; c < 3; c++) {
+                uint32_t x;
+                memcpy(&x, &st->wi[(s * nw + k) * 4 + c], 4);
+                le(&p, x, 4);
+            }
+        const lsqt_u128 *part[] = {st->nee + s * LSQT_BATCHES * nw, st->scalars + s * LSQT_BATCHES * LSQT_T_COUNT,
+                                   st->hist + s * LSQT_BATCHES * LSQT_HIST_BINS};
+        const size_t n[] = {LSQT_BATCHES * nw, LSQT_BATCHES * LSQT_T_COUNT, LSQT_BATCHES * LSQT_HIST_BINS};
+        for (int q = 0; q < 3; q++)
+            for (size_t i = 0; i < n[q]; i++) le(&p, part[q][i].lo, 8), le(&p, part[q][i].hi, 8);
+    }
+    le(&p, lsqt_crc32(0, f, *len - 4), 4);
+    return f;
+}
+
+/* A version-6 file of one slice, one direction and no paths whose tallies are the given
+ * token stream (file size and CRC made to match): how the reader takes hand-made streams. */
+static int parse_stream(const unsigned char *prefix, size_t np, const unsigned char *tok, size_t nt, lsqt_state *out,
+                        char *err, size_t errcap)
+{
+    size_t len = np + nt + 4;
+    unsigned char *f = malloc(len), *p = f + 116;
+    memcpy(f, prefix, np);
+    le(&p, len, 8);
+    memcpy(f + np, tok, nt);
+    p = f + np + nt;
+    le(&p, lsqt_crc32(0, f, len - 4), 4);
+    int rc = lsqt_lss_parse(f, len, out, err, errcap);
+    free(f);
+    return rc;
+}
+
+static size_t varint(unsigned char *b, uint64_t v)
+{
+    size_t n = 0;
+    do b[n++] = (unsigned char)((v & 0x7f) | (v >> 7 ? 0x80 : 0)), v >>= 7;
+    while (v);
+    return n;
+}
+
+static int packed_streams(const char *path)
+{
+    char err[512];
+    lsqt_state z, b;
+    lsqt_state_init(&z, "Medium eta=1\nLayer z=0 LambertianBsdf fR=0.6 fT=0\nMedium eta=1\n", 1, 2, 1, 1, 0);
+    z.wi[2] = 1.0f;
+    CHECK(lsqt_lss_write(path, &z, err, sizeof err) == 0, "%s", err);
+    size_t n = 0;
+    unsigned char *f = (unsigned char *)lsqt_read_file(path, &n, err, sizeof err);
+    /* All 32 x (1 + 7 + 1024) = 33024 tallies zero: one run, the token 2 x 33024 = 66048
+     * as LEB128 (0x80 0x84 0x04), after the 124-byte header, the text and the slice's
+     * 20 + 12 bytes. */
+    const size_t NT = LSQT_BATCHES * (1 + LSQT_T_COUNT + LSQT_HIST_BINS), np = n - 7;
+    CHECK(NT == 33024 && n == 124 + strlen(z.canonical) + 32 + 3 + 4 && f[np] == 0x80 && f[np + 1] == 0x84 &&
+              f[np + 2] == 0x04,
+          "all-zero tallies: %zu bytes, not one run token", n);
+    unsigned char t[64];
+    size_t k;
+    /* Valid: 33023 zeros then 5 (the last histogram bin); a 16-byte tally then the rest. */
+    k = varint(t, 2 * (NT - 1)), t[k++] = 3, t[k++] = 5;
+    CHECK(parse_stream(f, np, t, k, &b, err, sizeof err) == 0 && b.hist[LSQT_BATCHES * LSQT_HIST_BINS - 1].lo == 5 &&
+              b.hist[LSQT_BATCHES * LSQT_HIST_BINS - 2].lo == 0,
+          "run then a one-byte tally: %s", err);
+    lsqt_state_free(&b);
+    t[0] = 33;
+    memset(t + 1, 0xFF, 16);
+    k = 17 + varint(t + 17, 2 * (NT - 1));
+    CHECK(parse_stream(f, np, t, k, &b, err, sizeof err) == 0 && b.nee[0].lo == UINT64_MAX && b.nee[0].hi == UINT64_MAX,
+          "16-byte tally then a run: %s", err);
+    lsqt_state_free(&b);
+    /* What the writer never writes is refused. */
+    struct {
+        const char *why;
+        unsigned char tok[40];
+        size_t n;
+    } bad[12];
+    size_t nb = 0;
+    bad[nb].why = "two runs in a row", bad[nb].n = varint(bad[nb].tok, 2 * 24);
+    bad[nb].n += varint(bad[nb].tok + bad[nb].n, 2 * (NT - 24)), nb++;
+    bad[nb].why = "a run past the end", bad[nb].n = varint(bad[nb].tok, 2 * (NT + 1)), nb++;
+    bad[nb].why = "too few tallies", bad[nb].n = varint(bad[nb].tok, 2 * (NT - 1)), nb++;
+    bad[nb].why = "bytes after the last tally", bad[nb].n = varint(bad[nb].tok, 2 * NT), bad[nb].tok[bad[nb].n++] = 0,
+    nb++;
+    bad[nb].why = "an empty run", bad[nb].tok[0] = 0, bad[nb].n = 1 + varint(bad[nb].tok + 1, 2 * NT), nb++;
+    bad[nb].why = "a zero tally", bad[nb].n = varint(bad[nb].tok, 2 * (NT - 1));
+    bad[nb].tok[bad[nb].n++] = 3, bad[nb].tok[bad[nb].n++] = 0, nb++;
+    bad[nb].why = "a tally not in its fewest bytes", bad[nb].n = varint(bad[nb].tok, 2 * (NT - 1));
+    bad[nb].tok[bad[nb].n++] = 5, bad[nb].tok[bad[nb].n++] = 7, bad[nb].tok[bad[nb].n++] = 0, nb++;
+    bad[nb].why = "a 17-byte tally", bad[nb].tok[0] = 35, memset(bad[nb].tok + 1, 1, 17);
+    bad[nb].n = 18 + varint(bad[nb].tok + 18, 2 * (NT - 1)), nb++;
+    bad[nb].why = "a zero-length tally", bad[nb].tok[0] = 1, bad[nb].n = 1 + varint(bad[nb].tok + 1, 2 * (NT - 1)), nb++;
+    bad[nb].why = "a token not in its fewest bytes", memcpy(bad[nb].tok, "\x80\x84\x84\x00", 4), bad[nb].n = 4, nb++;
+    bad[nb].why = "a token beyond 64 bits", memset(bad[nb].tok, 0xFF, 10), bad[nb].n = 10, nb++;
+    for (size_t i = 0; i < nb; i++) {
+        int rc = parse_stream(f, np, bad[i].tok, bad[i].n, &b, err, sizeof err);
+        CHECK(rc != 0 && strstr(err, "corrupt LSS file"), "%s: accepted or wrong message '%s'", bad[i].why,
+              rc ? err : "");
+        if (!rc) lsqt_state_free(&b);
+    }
+    free(f);
+    lsqt_state_free(&z);
+    return 0;
 }
 
 int main(void)
@@ -98,7 +255,7 @@ int main(void)
               strstr(err, "truncated at byte 1000 ("),
           "truncated: %s", err);
     CHECK(lsqt_lss_parse((const unsigned char *)f1, 50, &b, err, sizeof err) != 0 &&
-              strstr(err, "truncated at byte 50 (inside the 116-byte header)"),
+              strstr(err, "truncated at byte 50 (inside the 124-byte header)"),
           "truncated header: %s", err);
     f1[n1 / 2] ^= 0x10;
     CHECK(lsqt_lss_parse((const unsigned char *)f1, n1, &b, err, sizeof err) != 0 && strstr(err, "CRC mismatch"),
@@ -106,7 +263,7 @@ int main(void)
     f1[n1 / 2] ^= 0x10;
     f1[8] = 1;
     char want_v[64];
-    snprintf(want_v, sizeof want_v, "LSS version 1, this lsqt-cl reads version %u", LSQT_LSS_VERSION);
+    snprintf(want_v, sizeof want_v, "LSS version 1, this lsqt-cl reads versions 5 and %u", LSQT_LSS_VERSION);
     CHECK(lsqt_lss_parse((const unsigned char *)f1, n1, &b, err, sizeof err) != 0 && strstr(err, want_v),
           "version: %s", err);
     f1[8] = (char)LSQT_LSS_VERSION;
@@ -144,6 +301,43 @@ int main(void)
               "impossible state %zu: '%s'", i, err);
         lsqt_state_free(&c);
     }
+
+    /* Packed tallies: an all-zero state's exact size, and hand-made token streams. */
+    packed_streams(path);
+
+    /* Version 5, written from its layout, is read to the same state (and says so). */
+    size_t n5 = 0;
+    unsigned char *f5 = v5_image(&a, &n5);
+    CHECK(lsqt_lss_parse(f5, n5, &b, err, sizeof err) == 0, "version 5 refused: %s", err);
+    if (!check_failures) {
+        CHECK(b.lss_version == 5 && a.paths == b.paths && b.n_ranges == 2 && b.span_end == 200000, "v5 header differs");
+        CHECK(memcmp(a.wi, b.wi, (size_t)3 * 16 * 4 * sizeof(float)) == 0 &&
+                  memcmp(a.nee, b.nee, lsqt_state_nee_count(&a) * sizeof *a.nee) == 0 &&
+                  memcmp(a.scalars, b.scalars, lsqt_state_scalar_count(&a) * sizeof *a.scalars) == 0 &&
+                  memcmp(a.hist, b.hist, lsqt_state_hist_count(&a) * sizeof *a.hist) == 0,
+              "version 5 tallies differ");
+        lsqt_state_free(&b);
+    }
+    CHECK(lsqt_lss_parse(f5, 60, &b, err, sizeof err) != 0 && strstr(err, "inside the 116-byte header"),
+          "truncated version 5: %s", err);
+    CHECK(lsqt_lss_parse(f5, n5 - 16, &b, err, sizeof err) != 0 && strstr(err, "truncated at byte"),
+          "short version 5: %s", err);
+    free(f5);
+
+    /* Writing streams through a small buffer: no allocation near the state's size (a large
+     * LSS after a long run cannot fail for memory). 4 slices of 1024 directions, dense:
+     * 8 MB of tallies. */
+    lsqt_state big;
+    lsqt_state_init(&big, "Medium eta=1\nLayer z=0 LambertianBsdf fR=0.6 fT=0\nMedium eta=1\n", 7, 1, 4, 1024, 1);
+    for (size_t i = 0; i < (size_t)4 * 1024; i++) big.wi[4 * i + 2] = 1.0f;
+    for (size_t i = 0; i < lsqt_state_nee_count(&big); i++) big.nee[i].lo = i * 0x9E3779B97F4A7C15ULL;
+    for (size_t i = 0; i < lsqt_state_hist_count(&big); i++) big.hist[i].lo = ~i;
+    watching = 1, largest = 0;
+    CHECK(lsqt_lss_write(path, &big, err, sizeof err) == 0, "%s", err);
+    watching = 0;
+    CHECK(largest > 0 && largest <= 256 * 1024, "writing 8 MB of tallies allocated %zu bytes at once", largest);
+    lsqt_state_free(&big);
+
     free(f1);
     free(f2);
     remove(path);

@@ -3,13 +3,17 @@
  *   u64 seed, u64 assembly hash, u32 double, transmits, flags, u32 direction method
  *   (0 spread, 1 RRSS, 2 file), u32 RRSS rx, u64 RRSS pilot paths,
  *   u32 n_slices, n_wi, u64 paths, u64 span end, u32 stage (0 run, 1 RRSS pilot shard),
- *   u32 range count, u32 text length, canonical assembly text,
+ *   u32 range count, u32 text length, u64 file size in bytes, canonical assembly text,
  *   range count x (u64 lo, u64 hi): the path indices held, sorted and disjoint,
  *   per slice: f64 theta_o, u32 slice flags (1: light from below), u64 paths, n_wi x f32 (x, y, z),
- *              [batch][n_wi] point-estimate sums, [batch][t_count] scalars,
- *              [batch][hist_bins] histogram, each tally a u128 as two u64 (low first) of 2^-fix_bits units,
+ *              then its tallies, [batch][n_wi] point-estimate sums, [batch][t_count] scalars,
+ *              [batch][hist_bins] histogram, each a u128 of 2^-fix_bits units, packed: a
+ *              sequence of LEB128 varint tokens t, t = 2k a run of k zero tallies, t = 2L + 1
+ *              a tally in the next L bytes (1..16, little-endian, the last nonzero),
  *   u32 CRC-32 of everything before it.
- * Nothing that depends on timing is stored, so equal work gives byte-identical files. */
+ * Version 5 (read, never written) had no file size and every tally in 16 bytes (two u64,
+ * low first). Nothing that depends on timing is stored, so equal work gives
+ * byte-identical files. */
 #ifndef LSQT_LSS_H
 #define LSQT_LSS_H
 
@@ -21,7 +25,7 @@
 extern "C" {
 #endif
 
-#define LSQT_LSS_VERSION 5u /* 5: path ranges, span, stage, slice flags; 4: direction method, RRSS rx and pilot paths; 3: work counters, histogram per
+#define LSQT_LSS_VERSION 6u /* 6: packed tallies, file size; 5: path ranges, span, stage, slice flags; 4: direction method, RRSS rx and pilot paths; 3: work counters, histogram per
                              batch; 2: 128-bit tallies of 2^-40 (1: 64-bit of 2^-30) */
 
 /* Written through lsqt_out (util.h: atomic for regular files). Returns 0 or -1. */
@@ -29,7 +33,7 @@ int lsqt_lss_write(const char *path, const lsqt_state *st, char *err, size_t err
 
 /* Reads and checks everything (magic, version, sizes, CRC, layout constants). Returns 0,
  * or -1 with err saying what is wrong, checked in this order: "empty file", "not an LSS
- * file (bad magic)", "LSS version N, this lsqt-cl reads version 2", "truncated at byte
+ * file (bad magic)", "LSS version N, this lsqt-cl reads versions 5 and 6", "truncated at byte
  * N (...)", "corrupt LSS file (CRC mismatch ...)", then what a valid CRC cannot vouch for
  * (another tally layout, an impossible header); lsqt_lss_read puts the path in front.
  * Never accepts a truncated or corrupt file. */

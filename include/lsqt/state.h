@@ -36,6 +36,7 @@ typedef struct lsqt_state {
     uint32_t dir_method;    /* LSQT_DIRS_*: how the directions were chosen */
     uint32_t rx;            /* RRSS: candidates per direction (0 otherwise) */
     uint64_t pilot_paths;   /* RRSS: paths of the pilot, the first of every slice's paths */
+    uint32_t lss_version;   /* the LSS format version it was read from (0: not read from a file) */
 } lsqt_state;
 
 enum { LSQT_DIRS_SPREAD = 0, LSQT_DIRS_RRSS = 1, LSQT_DIRS_FILE = 2 };
