@@ -87,6 +87,7 @@ static int init_like(lsqt_state *out, const lsqt_state *st, int n)
     out->stage = st->stage;
     out->flags = st->flags;
     out->dir_method = st->dir_method;
+    out->grid_ni = st->grid_ni, out->grid_nphi = st->grid_nphi;
     out->rx = st->rx;
     out->pilot_paths = st->pilot_paths;
     if (lsqt_state_set_ranges(out, st->ranges, st->n_ranges)) {
@@ -140,7 +141,8 @@ int lsqt_state_join_sides(const lsqt_state *above, const lsqt_state *below, lsqt
              above->span_end != below->span_end || above->stage != below->stage)
         diff = "paths";
     else if (above->dir_method != below->dir_method || above->rx != below->rx ||
-             above->pilot_paths != below->pilot_paths)
+             above->pilot_paths != below->pilot_paths || above->grid_ni != below->grid_ni ||
+             above->grid_nphi != below->grid_nphi)
         diff = "direction method";
     if (diff) {
         snprintf(err, errcap, "the sides from above and from below differ in their %s", diff);

@@ -69,6 +69,13 @@ void lsqt_cli_help(FILE *f)
           "  -rp, --rrss-path-frac F     share of the first run's -p spent on the RRSS pilot, (0,1]\n"
           "                              (default 0.8; its tallies are kept)\n"
           "      --wi-spread             an even spread of incident directions instead of RRSS\n"
+          "      --grid NO,NI,NPHI       a regular grid instead of -wo and -wi (for NetCDF and\n"
+          "                              Eradiate): slices at cos(theta_o) = linspace(0, 1, NO),\n"
+          "                              directions at cos(theta_i) = linspace(0, 1, NI) (and\n"
+          "                              below, when the stack transmits) times the azimuths\n"
+          "                              2 pi k / NPHI in [0, pi] (the rest are their mirror\n"
+          "                              images); cos 0, the horizon, is simulated at 0.001.\n"
+          "                              --grid N is N,N,4(N-1). NO, NI >= 2, NPHI >= 2, even\n"
           "      --from-below            when the stack transmits, also the slices of light entering\n"
           "                              from the bottom medium (the full two-sided BSDF), written\n"
           "                              to OUT.below.raw (the stack turned upside down: negate z of\n"
@@ -129,7 +136,7 @@ void lsqt_cli_help(FILE *f)
 
 enum flag_id {
     F_PATHS, F_WO, F_WO_ANGLES, F_WI, F_WI_FILE, F_RX, F_RP, F_RESTART, F_SEED, F_THREADS, F_OUTPUT,
-    F_HEMI, F_SPREAD, F_BELOW, F_CHECKPOINT, F_SHARD, F_REFINE, F_DEVICE, F_LIST, F_DOUBLE, F_TIME, F_TARGET, F_LSS, F_JSON, F_QUIET, F_VERBOSE, F_HELP
+    F_HEMI, F_SPREAD, F_GRID, F_BELOW, F_CHECKPOINT, F_SHARD, F_REFINE, F_DEVICE, F_LIST, F_DOUBLE, F_TIME, F_TARGET, F_LSS, F_JSON, F_QUIET, F_VERBOSE, F_HELP
 };
 
 static const struct flag {
@@ -150,7 +157,26 @@ static const struct flag {
     {NULL, "--target-error", F_TARGET, 1},  {NULL, "--wi-spread", F_SPREAD, 0},
     {NULL, "--checkpoint", F_CHECKPOINT, 1}, {NULL, "--shard", F_SHARD, 1},
     {NULL, "--refine", F_REFINE, 0}, {NULL, "--from-below", F_BELOW, 0},
+    {NULL, "--grid", F_GRID, 1},
 };
+
+/* --grid NO,NI,NPHI or --grid N (= N,N,4(N-1)): NO, NI in 2-1024, NPHI even in 2-2048
+ * (what fits in 1024 directions is checked once the stack is known). */
+static int parse_grid(const char *v, lsqt_cli *c)
+{
+    char buf[64];
+    if (strlen(v) >= sizeof buf) return -1;
+    strcpy(buf, v);
+    uint64_t n[3];
+    int k = 0;
+    for (char *tok = strtok(buf, ","); tok; tok = strtok(NULL, ","))
+        if (k >= 3 || lsqt_parse_count(tok, 2, 2048, &n[k++])) return -1;
+    if (k == 1) n[1] = n[0], n[2] = 4 * (n[0] - 1);
+    else if (k != 3) return -1;
+    if (n[0] > 1024 || n[1] > 1024 || n[2] % 2) return -1;
+    c->grid_no = (int)n[0], c->grid_ni = (int)n[1], c->grid_nphi = (int)n[2];
+    return 0;
+}
 
 /* --shard K/N: 0 <= K < N <= 65536, decimal digits only. */
 static int parse_shard(const char *v, lsqt_cli *c)
@@ -207,6 +233,7 @@ static int apply(const struct flag *fl, const char *name, const char *v, lsqt_cl
     case F_RESTART: c->restart = 1; break;
     case F_HEMI: c->only_hemispherical = 1; break;
     case F_SPREAD: c->wi_spread = 1; c->sampling_given = 1; break;
+    case F_GRID: if (parse_grid(v, c)) expect = "NO,NI,NPHI (or N for N,N,4(N-1)): NO and NI in 2-1024, NPHI even in 2-2048"; c->sampling_given = 1; break;
     case F_BELOW: c->from_below = 1; c->sampling_given = 1; break;
     case F_CHECKPOINT: if (lsqt_parse_double(v, &d) || !(d >= 0)) expect = "seconds >= 0 (0: no checkpoints)"; else c->checkpoint = d; break;
     case F_SHARD: if (parse_shard(v, c)) expect = "K/N with 0 <= K < N <= 65536 (e.g. 0/4; SLURM: $SLURM_ARRAY_TASK_ID/N)"; break;
@@ -291,6 +318,17 @@ int lsqt_cli_parse(int argc, char **argv, lsqt_cli *c, char *err, size_t errcap)
         snprintf(err, errcap, "%s sets RRSS's pilot, and %s chooses the directions without RRSS: drop one of them",
                  c->rx_given ? "-rx" : "-rp", c->wi_file ? "--wi-file" : "--wi-spread");
         return 2;
+    }
+    /* --grid fixes the slices and the directions: any other choice of them contradicts it. */
+    if (c->grid_no) {
+        const char *other = c->wo_given ? "-wo" : c->n_wo_angles ? "--wo-angles" : wi_name[0] ? wi_name
+                          : c->wi_file ? "--wi-file" : c->wi_spread ? "--wi-spread" : c->rx_given ? "-rx"
+                          : c->rp_given ? "-rp" : NULL;
+        if (other) {
+            snprintf(err, errcap, "--grid sets the slices and the incident directions, and %s chooses them too: give one "
+                                  "of them", other);
+            return 2;
+        }
     }
     if (c->refine && !c->shard_n) {
         snprintf(err, errcap, "--refine is for the refinement shards of a sharded run: give --shard K/N too");

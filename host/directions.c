@@ -48,6 +48,38 @@ static void sincos_deg(double deg, double *s, double *c)
     *c += 0.0;
 }
 
+/* ---- --grid --------------------------------------------------------------------------- */
+
+double lsqt_grid_cos(int k, int n)
+{
+    return k == 0 ? LSQT_GRID_HORIZON_COS : (double)k / (n - 1);
+}
+
+void lsqt_grid_theta_o(int n, double *theta)
+{
+    for (int s = 0; s < n; s++) theta[s] = s == 0 ? 0.0 : acos(lsqt_grid_cos(n - 1 - s, n));
+}
+
+int lsqt_grid_wi_count(int ni, int nphi, int lower)
+{
+    return ni * (nphi / 2 + 1) * (lower ? 2 : 1);
+}
+
+void lsqt_grid_wi(int ni, int nphi, int lower, float *out)
+{
+    const int na = nphi / 2 + 1;
+    for (int h = 0; h < (lower ? 2 : 1); h++)
+        for (int i = 0; i < ni; i++) {
+            const double c = lsqt_grid_cos(ni - 1 - i, ni), st = sqrt(fmax(0.0, 1.0 - c * c));
+            for (int m = 0; m < na; m++) {
+                double sp, cp;
+                sincos_deg(360.0 * m / nphi, &sp, &cp); /* exact at multiples of 90 deg */
+                float *d = out + 4 * ((size_t)(h * ni + i) * na + m);
+                d[0] = (float)(st * cp), d[1] = (float)(st * sp), d[2] = (float)(h ? -c : c), d[3] = 0.0f;
+            }
+        }
+}
+
 typedef struct wi_span {
     const char *p;
     size_t n;

@@ -144,6 +144,8 @@ static void print_text(FILE *f, const char *path, const lsqt_state *st, const ls
     if (st->dir_method == LSQT_DIRS_RRSS)
         fprintf(f, "directions: RRSS (%u candidates per direction, pilot of %llu paths)\n", st->rx,
                 (unsigned long long)st->pilot_paths);
+    else if (st->dir_method == LSQT_DIRS_GRID)
+        fprintf(f, "directions: grid (--grid: NI %u, NPHI %u)\n", st->grid_ni, st->grid_nphi);
     else fprintf(f, "directions: %s\n", st->dir_method == LSQT_DIRS_FILE ? "from a file (--wi-file)" : "even spread");
     if (st->stage == LSQT_STAGE_PILOT)
         fprintf(f, "stage: RRSS pilot (%d slices x %u candidate blocks of %d; %llu of its %llu paths; the run: %llu)\n",
@@ -194,12 +196,16 @@ static int write_json(const char *out, const char *path, const lsqt_state *st, c
             st->lss_version, LSQT_CHUNK, LSQT_BATCHES, LSQT_FIX_BITS, LSQT_HIST_NMU, LSQT_HIST_NPHI, LSQT_HIST_BINS,
             LSQT_T_COUNT);
     fprintf(f, " \"hash\": \"%016llx\", \"seed\": %llu, \"double\": %s, \"transmits\": %s, \"n_slices\": %d, "
-               "\"n_wi\": %d, \"paths\": %llu,\n \"directions\": {\"method\": \"%s\", \"rx\": %u, \"pilot_paths\": %llu},\n"
+               "\"n_wi\": %d, \"paths\": %llu,\n \"directions\": {\"method\": \"%s\", \"rx\": %u, \"pilot_paths\": %llu, "
+               "\"grid_ni\": %u, \"grid_nphi\": %u},\n"
                " \"flags\": %u, \"flag_names\": [%s], \"ranges\": ",
             (unsigned long long)st->hash, (unsigned long long)st->seed, st->use_double ? "true" : "false",
             st->transmits ? "true" : "false", st->n_slices, st->n_wi, (unsigned long long)st->paths,
-            st->dir_method == LSQT_DIRS_RRSS ? "rrss" : st->dir_method == LSQT_DIRS_FILE ? "file" : "spread", st->rx,
-            (unsigned long long)st->pilot_paths, st->flags, flags);
+            st->dir_method == LSQT_DIRS_RRSS   ? "rrss"
+            : st->dir_method == LSQT_DIRS_FILE ? "file"
+            : st->dir_method == LSQT_DIRS_GRID ? "grid"
+                                               : "spread",
+            st->rx, (unsigned long long)st->pilot_paths, st->grid_ni, st->grid_nphi, st->flags, flags);
     info_ranges(f, st, 1);
     fprintf(f, ", \"span_end\": %llu, \"stage\": \"%s\"", (unsigned long long)st->span_end,
             st->stage == LSQT_STAGE_PILOT ? "rrss-pilot" : "run");

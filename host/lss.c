@@ -4,6 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "lsqt/directions.h"
 #include "lsqt/util.h"
 
 static const char magic[8] = {'L', 'S', 'Q', 'T', 'L', 'S', 'S', '\0'};
@@ -148,6 +149,8 @@ static void put_state(wbuf *w, const lsqt_state *st, uint64_t file_bytes)
     size_t tl = strlen(st->canonical);
     put_u32(w, (uint32_t)tl);
     put_u64(w, file_bytes);
+    put_u32(w, st->grid_ni);
+    put_u32(w, st->grid_nphi);
     put(w, st->canonical, tl);
     for (int i = 0; i < 2 * st->n_ranges; i++) put_u64(w, st->ranges[i]);
     for (int s = 0; s < st->n_slices; s++) {
@@ -299,9 +302,10 @@ static void get_tallies(rbuf *r, const tally_run *t)
 
 /* Bytes before the assembly text: magic, version, 6 layout words, seed, hash, 3 u32
  * (double, transmits, flags), direction method, rx, pilot paths, n_slices, n_wi, paths,
- * span end, stage, range count, text length; and from version 6 on the file's size. */
+ * span end, stage, range count, text length; and from version 6 on the file's size and
+ * the grid's NI and NPHI. */
 #define LSS_HEADER_V5 (8 + 4 + 6 * 4 + 8 + 8 + 3 * 4 + 4 + 4 + 8 + 2 * 4 + 8 + 8 + 4 + 4 + 4)
-#define LSS_HEADER_BYTES (LSS_HEADER_V5 + 8)
+#define LSS_HEADER_BYTES (LSS_HEADER_V5 + 8 + 4 + 4)
 
 /* Contents a valid CRC cannot vouch for: every slice's theta_o in [0, pi/2) (from its own
  * side's normal), and its incident directions finite unit vectors (those a run used or,
@@ -371,6 +375,7 @@ int lsqt_lss_parse(const unsigned char *data, size_t len, lsqt_state *st, char *
     uint32_t stage = get_u32(&r), n_ranges = get_u32(&r);
     uint32_t tl = get_u32(&r);
     const uint64_t file_bytes = packed ? get_u64(&r) : 0;
+    const uint32_t grid_ni = packed ? get_u32(&r) : 0, grid_nphi = packed ? get_u32(&r) : 0;
     /* The size the header announces, when its counts are in range (else unknown: 0):
      * version 5's follows from the counts; version 6 states it, between the sizes of
      * all-zero tallies (one byte a slice) and of the largest (17 bytes each). */
@@ -405,7 +410,11 @@ int lsqt_lss_parse(const unsigned char *data, size_t len, lsqt_state *st, char *
                      layout_name[i], file_layout[i], layout[i]);
             return -1;
         }
-    if (r.bad || !sane || use_double > 1 || transmits > 1 || dir_method > LSQT_DIRS_FILE || rx > 8 ||
+    const int grid_ok = dir_method == LSQT_DIRS_GRID
+                            ? grid_ni >= 2 && grid_ni <= 1024 && grid_nphi >= 2 && grid_nphi <= 2048 && grid_nphi % 2 == 0 &&
+                                  (uint32_t)lsqt_grid_wi_count((int)grid_ni, (int)grid_nphi, (int)transmits) == n_wi
+                            : grid_ni == 0 && grid_nphi == 0;
+    if (r.bad || !sane || !grid_ok || use_double > 1 || transmits > 1 || dir_method > LSQT_DIRS_GRID || rx > 8 ||
         stage > LSQT_STAGE_PILOT || (stage == LSQT_STAGE_PILOT && (rx < 2 || n_slices % rx)) ||
         (stage == LSQT_STAGE_RUN && pilot_paths > span_end)) {
         snprintf(err, errcap, "corrupt LSS header (slices %u, wi %u, text %u bytes, double %u, transmits %u)",
@@ -439,6 +448,7 @@ int lsqt_lss_parse(const unsigned char *data, size_t len, lsqt_state *st, char *
     st->span_end = span_end;
     st->stage = stage;
     st->lss_version = version;
+    st->grid_ni = grid_ni, st->grid_nphi = grid_nphi;
     uint64_t *ranges = malloc(((size_t)n_ranges + 1) * 2 * sizeof *ranges);
     if (!ranges) {
         lsqt_state_free(st);

@@ -184,6 +184,7 @@ int lsqt_merge_main(const char *prog, int argc, char **argv)
         } else {
             sum.use_double = f->use_double, sum.dir_method = f->dir_method, sum.rx = f->rx;
             sum.pilot_paths = f->pilot_paths, sum.stage = f->stage;
+            sum.grid_ni = f->grid_ni, sum.grid_nphi = f->grid_nphi;
             memcpy(sum.theta_o, f->theta_o, (size_t)f->n_slices * sizeof *f->theta_o);
             memcpy(sum.slice_flags, f->slice_flags, (size_t)f->n_slices * sizeof *f->slice_flags);
             memcpy(sum.wi, f->wi, (size_t)f->n_slices * (size_t)f->n_wi * 4 * sizeof *f->wi);

@@ -159,8 +159,9 @@ const char *lsqt_state_differs(const lsqt_state *a, const lsqt_state *b)
     if (a->stage != b->stage) return "stage (an RRSS pilot shard and a run's state)";
     if (a->n_slices != b->n_slices || a->n_wi != b->n_wi || a->transmits != b->transmits)
         return "shape (slices, directions)";
-    if (a->dir_method != b->dir_method || a->rx != b->rx || a->pilot_paths != b->pilot_paths)
-        return "direction method or RRSS pilot";
+    if (a->dir_method != b->dir_method || a->rx != b->rx || a->pilot_paths != b->pilot_paths ||
+        a->grid_ni != b->grid_ni || a->grid_nphi != b->grid_nphi)
+        return "direction method (RRSS pilot, grid)";
     if (memcmp(a->theta_o, b->theta_o, (size_t)a->n_slices * sizeof *a->theta_o) != 0) return "outgoing angles";
     if (memcmp(a->slice_flags, b->slice_flags, (size_t)a->n_slices * sizeof *a->slice_flags) != 0)
         return "slice kinds (from above, from below)";

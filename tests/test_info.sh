@@ -183,7 +183,7 @@ while IFS='|' read -r file text; do
   done
 done <<TABLE
 trunc.lss|truncated at byte 1000 (its header announces $n bytes
-trunc_header.lss|truncated at byte 40 (inside the 124-byte header)
+trunc_header.lss|truncated at byte 40 (inside the 132-byte header)
 trunc_crc.lss|truncated at byte $((n - 1))
 flip.lss|corrupt LSS file (CRC mismatch
 long.lss|corrupt LSS file: $((n + 1)) bytes where its header announces $n

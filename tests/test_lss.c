@@ -136,10 +136,10 @@ static int packed_streams(const char *path)
     size_t n = 0;
     unsigned char *f = (unsigned char *)lsqt_read_file(path, &n, err, sizeof err);
     /* All 32 x (1 + 7 + 1024) = 33024 tallies zero: one run, the token 2 x 33024 = 66048
-     * as LEB128 (0x80 0x84 0x04), after the 124-byte header, the text and the slice's
+     * as LEB128 (0x80 0x84 0x04), after the 132-byte header, the text and the slice's
      * 20 + 12 bytes. */
     const size_t NT = LSQT_BATCHES * (1 + LSQT_T_COUNT + LSQT_HIST_BINS), np = n - 7;
-    CHECK(NT == 33024 && n == 124 + strlen(z.canonical) + 32 + 3 + 4 && f[np] == 0x80 && f[np + 1] == 0x84 &&
+    CHECK(NT == 33024 && n == 132 + strlen(z.canonical) + 32 + 3 + 4 && f[np] == 0x80 && f[np + 1] == 0x84 &&
               f[np + 2] == 0x04,
           "all-zero tallies: %zu bytes, not one run token", n);
     unsigned char t[64];
@@ -255,7 +255,7 @@ int main(void)
               strstr(err, "truncated at byte 1000 ("),
           "truncated: %s", err);
     CHECK(lsqt_lss_parse((const unsigned char *)f1, 50, &b, err, sizeof err) != 0 &&
-              strstr(err, "truncated at byte 50 (inside the 124-byte header)"),
+              strstr(err, "truncated at byte 50 (inside the 132-byte header)"),
           "truncated header: %s", err);
     f1[n1 / 2] ^= 0x10;
     CHECK(lsqt_lss_parse((const unsigned char *)f1, n1, &b, err, sizeof err) != 0 && strstr(err, "CRC mismatch"),
@@ -304,6 +304,28 @@ int main(void)
 
     /* Packed tallies: an all-zero state's exact size, and hand-made token streams. */
     packed_streams(path);
+
+    /* A grid state keeps its NI and NPHI; ones that do not give its direction count are
+     * refused (16 directions on a transmitting stack: NI 2 x (NPHI/2 + 1 = 4) x 2). */
+    {
+        lsqt_state g;
+        fill(&g);
+        g.dir_method = LSQT_DIRS_GRID, g.grid_ni = 2, g.grid_nphi = 6;
+        CHECK(lsqt_lss_write(path, &g, err, sizeof err) == 0, "%s", err);
+        const int rc = lsqt_lss_read(path, &b, err, sizeof err);
+        CHECK(rc == 0 && b.dir_method == LSQT_DIRS_GRID && b.grid_ni == 2 && b.grid_nphi == 6, "grid state: %s",
+              rc ? err : "other grid sizes");
+        if (rc == 0) lsqt_state_free(&b);
+        g.grid_nphi = 8;
+        CHECK(lsqt_lss_write(path, &g, err, sizeof err) == 0, "%s", err);
+        CHECK(lsqt_lss_read(path, &b, err, sizeof err) != 0 && strstr(err, "corrupt LSS header"),
+              "a grid of 20 directions holding 16 accepted: '%s'", err);
+        g.dir_method = LSQT_DIRS_FILE, g.grid_nphi = 6;
+        CHECK(lsqt_lss_write(path, &g, err, sizeof err) == 0, "%s", err);
+        CHECK(lsqt_lss_read(path, &b, err, sizeof err) != 0 && strstr(err, "corrupt LSS header"),
+              "grid sizes on a --wi-file state accepted: '%s'", err);
+        lsqt_state_free(&g);
+    }
 
     /* Version 5, written from its layout, is read to the same state (and says so). */
     size_t n5 = 0;

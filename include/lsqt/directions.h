@@ -18,6 +18,22 @@ void lsqt_wo_angles(int n, double *theta);
  * (x, y, z, 0). The BSDF is mirror symmetric in y, so y < 0 is the same. */
 void lsqt_wi_spread(int n, int sphere, float *out);
 
+/* --grid NO,NI,NPHI: a regular grid, the one Eradiate's tabulated BSDF takes (cos theta
+ * on linspace(0, 1, N), azimuth on 2 pi k / NPHI). Node k of n is cos theta = k / (n - 1),
+ * but node 0, the horizon, where no direction can be simulated, is simulated at
+ * LSQT_GRID_HORIZON_COS (theta = 89.94 deg): a continuous BSDF differs there from its
+ * horizon limit by far less than any Monte Carlo error. */
+#define LSQT_GRID_HORIZON_COS 0.001
+double lsqt_grid_cos(int k, int n);
+/* Slice s (of n) at the node n-1-s: theta_o ascending from 0, as -wo's. */
+void lsqt_grid_theta_o(int n, double *theta);
+/* Simulated azimuths: 2 pi m / nphi for m = 0 .. nphi/2 (the rest, in (pi, 2 pi), are
+ * mirror images); directions ni * (nphi/2 + 1), twice that when `lower`. */
+int lsqt_grid_wi_count(int ni, int nphi, int lower);
+/* The directions, 4 floats each, direction ((h * ni + i) * (nphi/2 + 1) + m): h 0 above,
+ * 1 below (z = -cos), i over theta ascending (node ni-1-i), m over the azimuths. */
+void lsqt_grid_wi(int ni, int nphi, int lower, float *out);
+
 /* Incident directions given by the user (--wi-file), from text[0 .. len) (NUL bytes are
  * just bad characters). One direction per line, either `x y z` (any length but 0; it is
  * normalised) or `theta_deg phi_deg` (theta from +z, in [0, 180]; phi from +x, the

@@ -1,9 +1,10 @@
 /* LSS: the progressive state file (SPEC §7). Versioned little-endian binary:
  *   "LSQTLSS\0", u32 version, u32 chunk, batches, fix_bits, hist_nmu, hist_nphi, t_count,
  *   u64 seed, u64 assembly hash, u32 double, transmits, flags, u32 direction method
- *   (0 spread, 1 RRSS, 2 file), u32 RRSS rx, u64 RRSS pilot paths,
+ *   (0 spread, 1 RRSS, 2 file, 3 grid), u32 RRSS rx, u64 RRSS pilot paths,
  *   u32 n_slices, n_wi, u64 paths, u64 span end, u32 stage (0 run, 1 RRSS pilot shard),
- *   u32 range count, u32 text length, u64 file size in bytes, canonical assembly text,
+ *   u32 range count, u32 text length, u64 file size in bytes, u32 grid NI, u32 grid NPHI
+ *   (direction method 3, --grid; else 0), canonical assembly text,
  *   range count x (u64 lo, u64 hi): the path indices held, sorted and disjoint,
  *   per slice: f64 theta_o, u32 slice flags (1: light from below), u64 paths, n_wi x f32 (x, y, z),
  *              then its tallies, [batch][n_wi] point-estimate sums, [batch][t_count] scalars,
