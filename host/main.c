@@ -12,6 +12,7 @@
 #include "lsqt/cli.h"
 #include "lsqt/device.h"
 #include "lsqt/directions.h"
+#include "lsqt/export.h"
 #include "lsqt/info.h"
 #include "lsqt/lss.h"
 #include "lsqt/merge.h"
@@ -435,6 +436,8 @@ int main(int argc, char **argv)
     if (argc >= 2 && strcmp(argv[1], "info") == 0) return lsqt_info_main("lsqt-cl info", argc - 1, argv + 1);
     /* lsqt-cl merge OUT.lss IN.lss...: adds shards (host/merge.c), no OpenCL. */
     if (argc >= 2 && strcmp(argv[1], "merge") == 0) return lsqt_merge_main("lsqt-cl merge", argc - 1, argv + 1);
+    /* lsqt-cl export FILE.lss -o OUT.nc: a grid LSS as NetCDF (host/export.c). */
+    if (argc >= 2 && strcmp(argv[1], "export") == 0) return lsqt_export_main("lsqt-cl export", argc - 1, argv + 1);
     /* Signals first: a Ctrl-C during device setup or the kernel build must not be lost,
      * and a closed pipe is a write error to report (other outputs still get written). */
     sigint_setup();

@@ -1,0 +1,345 @@
+/* lsqt-cl export: the BSDF of a grid LSS (--grid) as a NetCDF file that xarray opens as
+ * labelled arrays and Eradiate's tabulated BSDF reads: the values and their standard
+ * errors exactly as `lsqt-cl info --json --bsdf` gives them (the same reduction), laid
+ * on the grid's axes, with R, T and delta_T per theta_o and the run's provenance. An LSS
+ * that is not on a grid is refused: export writes what was simulated, never a resampling. */
+#include "lsqt/export.h"
+
+#include <math.h>
+#include <netcdf.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "lsqt/directions.h"
+#include "lsqt/lss.h"
+#include "lsqt/tally.h"
+#include "lsqt/util.h"
+
+#ifndef LSQT_VERSION_STRING
+#define LSQT_VERSION_STRING "unknown"
+#endif
+
+static void usage(FILE *f, const char *prog)
+{
+    fprintf(f,
+            "usage: %s FILE.lss -o OUT.nc [-q]\n"
+            "Writes the BSDF of an LSS made with --grid as NetCDF (netCDF-4): variables brdf\n"
+            "and brdf_stderr over (cos_theta_i, phi_d, cos_theta_o), in 1/sr and not\n"
+            "cosine-weighted; btdf and btdf_stderr the same when the stack transmits\n"
+            "(cos_theta_i is then |cos| of the direction below); R, T, delta_T and their\n"
+            "errors over cos_theta_o; _below variables for the slices from below\n"
+            "(--from-below); the assembly, seed, paths and versions as attributes. The axes are\n"
+            "the grid's: cos theta on linspace(0, 1, N) and phi_d on 2 pi k / NPHI (0: the\n"
+            "incident direction on the outgoing one's side), the table Eradiate's mqdiffuse\n"
+            "reads. Python: xarray.open_dataset(\"OUT.nc\")[\"brdf\"].\n"
+            "\n"
+            "  -o, --output OUT.nc   the file (a regular file, written atomically)\n"
+            "  -q, --quiet           print errors only\n"
+            "  -h, --help            this text\n"
+            "Exit status: 0 success, 1 the output could not be written, 2 bad flags or an LSS\n"
+            "that cannot be exported (unreadable, not on a grid).\n",
+            prog);
+}
+
+static int export_fail(const char *prog, int code, const char *msg)
+{
+    fprintf(stderr, "%s: error: %s\n", prog, msg);
+    return code;
+}
+
+/* The NetCDF calls of one file: the first failure is kept (with the call that failed), the
+ * rest are skipped, so the writer reads as a list of what the file holds. */
+typedef struct ncw {
+    int id, status;
+    const char *what;
+} ncw;
+
+static void nc_check(ncw *w, int status, const char *what)
+{
+    if (w->status == NC_NOERR && status != NC_NOERR) w->status = status, w->what = what;
+}
+
+static void put_text(ncw *w, int var, const char *name, const char *text)
+{
+    if (w->status == NC_NOERR) nc_check(w, nc_put_att_text(w->id, var, name, strlen(text), text), name);
+}
+
+static void put_double_att(ncw *w, int var, const char *name, double v)
+{
+    if (w->status == NC_NOERR) nc_check(w, nc_put_att_double(w->id, var, name, NC_DOUBLE, 1, &v), name);
+}
+
+static int def_var(ncw *w, const char *name, int ndims, const int *dims, const char *units, const char *long_name)
+{
+    int v = -1;
+    if (w->status == NC_NOERR) nc_check(w, nc_def_var(w->id, name, NC_DOUBLE, ndims, dims, &v), name);
+    put_text(w, v, "units", units);
+    put_text(w, v, "long_name", long_name);
+    return v;
+}
+
+/* The grid of a state: NO slices per side (the slices of each side in ascending theta_o,
+ * slice s at cos node NO-1-s), NI polar nodes, NPHI azimuths, NA of them simulated. */
+typedef struct grid {
+    int no, ni, nphi, na, below;
+    int *side[2]; /* the state's slice index of each side's slice s */
+} grid;
+
+/* Direction index of (hemisphere h, cos node ki, azimuth p of NPHI) in a slice's list
+ * (directions.h: ((h * NI + i) * NA + m), i = NI-1-ki, m the simulated mirror of p). */
+static size_t grid_wi(const grid *g, int h, int ki, int p)
+{
+    const int m = p <= g->nphi / 2 ? p : g->nphi - p;
+    return ((size_t)(h * g->ni + (g->ni - 1 - ki)) * (size_t)g->na + (size_t)m);
+}
+
+/* The table of one side and hemisphere: [ki][p][ko] = what(est of slice, direction). */
+static void fill_table(const grid *g, const lsqt_slice_est *est, int side, int h, int want_err, double *out)
+{
+    for (int ki = 0; ki < g->ni; ki++)
+        for (int p = 0; p < g->nphi; p++)
+            for (int ko = 0; ko < g->no; ko++) {
+                const lsqt_est *e = &est[g->side[side][g->no - 1 - ko]].f[grid_wi(g, h, ki, p)];
+                out[((size_t)ki * (size_t)g->nphi + (size_t)p) * (size_t)g->no + (size_t)ko] =
+                    want_err ? e->err : e->mean;
+            }
+}
+
+static int write_nc(const char *tmp, const char *input, const lsqt_state *st, const lsqt_slice_est *est,
+                    const grid *g, char *err, size_t errcap)
+{
+    ncw w = {-1, NC_NOERR, NULL};
+    nc_check(&w, nc_create(tmp, NC_CLOBBER | NC_NETCDF4, &w.id), "create");
+    if (w.status != NC_NOERR) {
+        snprintf(err, errcap, "cannot create '%s': %s", tmp, nc_strerror(w.status));
+        return -1;
+    }
+    int d_o = -1, d_p = -1, d_i = -1;
+    nc_check(&w, nc_def_dim(w.id, "cos_theta_i", (size_t)g->ni, &d_i), "cos_theta_i");
+    if (w.status == NC_NOERR) nc_check(&w, nc_def_dim(w.id, "phi_d", (size_t)g->nphi, &d_p), "phi_d");
+    if (w.status == NC_NOERR) nc_check(&w, nc_def_dim(w.id, "cos_theta_o", (size_t)g->no, &d_o), "cos_theta_o");
+    const int dims3[3] = {d_i, d_p, d_o};
+    char horizon[160];
+    snprintf(horizon, sizeof horizon, "%g (the horizon, cos theta = 0, cannot be simulated)", LSQT_GRID_HORIZON_COS);
+    const int v_ci = def_var(&w, "cos_theta_i", 1, &d_i, "", "cosine of the incident zenith angle");
+    put_double_att(&w, v_ci, "simulated_at_0", LSQT_GRID_HORIZON_COS);
+    const int v_p = def_var(&w, "phi_d", 1, &d_p, "rad",
+                            "azimuth of the incident direction from the outgoing one (0: same side, backscatter)");
+    const int v_co = def_var(&w, "cos_theta_o", 1, &d_o, "", "cosine of the outgoing zenith angle");
+    put_double_att(&w, v_co, "simulated_at_0", LSQT_GRID_HORIZON_COS);
+    /* per side (from above; from below) and hemisphere (reflection; transmission) */
+    int v_f[2][2][2] = {{{-1, -1}, {-1, -1}}, {{-1, -1}, {-1, -1}}}, v_s[2][6];
+    static const char *const scal[6] = {"R", "R_stderr", "T", "T_stderr", "delta_T", "delta_T_stderr"};
+    static const char *const scal_long[6] = {
+        "directional-hemispherical reflectance", "standard error of R", "directional-hemispherical transmittance",
+        "standard error of T", "unscattered forward transmittance (a delta, not in btdf)", "standard error of delta_T"};
+    for (int side = 0; side < (g->below ? 2 : 1); side++) {
+        const char *suffix = side ? "_below" : "";
+        const char *from = side ? ", light entering from below (the stack upside down)" : "";
+        for (int h = 0; h < (st->transmits ? 2 : 1); h++)
+            for (int e = 0; e < 2; e++) {
+                char name[48], long_name[200];
+                snprintf(name, sizeof name, "%s%s%s", h ? "btdf" : "brdf", e ? "_stderr" : "", suffix);
+                snprintf(long_name, sizeof long_name, "%s%s, not cosine-weighted%s", e ? "standard error of the " : "",
+                         h ? "BTDF (transmission)" : "BRDF (reflection)", from);
+                v_f[side][h][e] = def_var(&w, name, 3, dims3, "sr-1", long_name);
+            }
+        for (int k = 0; k < 6; k++) {
+            char name[48], long_name[200];
+            snprintf(name, sizeof name, "%s%s", scal[k], suffix);
+            snprintf(long_name, sizeof long_name, "%s%s", scal_long[k], from);
+            v_s[side][k] = def_var(&w, name, 1, &d_o, "1", long_name);
+        }
+    }
+    char gridtext[64], paths[32], seed[32], hash[32], version[16];
+    snprintf(gridtext, sizeof gridtext, "%d,%d,%d", g->no, g->ni, g->nphi);
+    snprintf(paths, sizeof paths, "%llu", (unsigned long long)st->paths);
+    snprintf(seed, sizeof seed, "%llu", (unsigned long long)st->seed);
+    snprintf(hash, sizeof hash, "%016llx", (unsigned long long)st->hash);
+    snprintf(version, sizeof version, "%u", st->lss_version);
+    put_text(&w, NC_GLOBAL, "Conventions", "CF-1.8");
+    put_text(&w, NC_GLOBAL, "title", "BSDF of a layered assembly (lsqt-cl Monte Carlo simulation)");
+    put_text(&w, NC_GLOBAL, "source", "lsqt-cl " LSQT_VERSION_STRING);
+    put_text(&w, NC_GLOBAL, "lss_file", input);
+    put_text(&w, NC_GLOBAL, "lss_version", version);
+    put_text(&w, NC_GLOBAL, "assembly", st->canonical);
+    put_text(&w, NC_GLOBAL, "assembly_hash", hash);
+    put_text(&w, NC_GLOBAL, "seed", seed);
+    put_text(&w, NC_GLOBAL, "paths_per_slice", paths);
+    put_text(&w, NC_GLOBAL, "precision", st->use_double ? "double" : "float");
+    put_text(&w, NC_GLOBAL, "grid", gridtext);
+    put_text(&w, NC_GLOBAL, "horizon_simulated_at_cos", horizon);
+    put_text(&w, NC_GLOBAL, "stderr",
+             "one standard error of the mean (batch means over 32 batches); NaN where the paths are too few");
+    if (w.status == NC_NOERR) nc_check(&w, nc_enddef(w.id), "enddef");
+
+    double *ax = malloc(sizeof(double) * (size_t)(g->ni > g->no ? (g->ni > g->nphi ? g->ni : g->nphi)
+                                                                 : (g->no > g->nphi ? g->no : g->nphi)));
+    double *tab = malloc(sizeof(double) * (size_t)g->ni * (size_t)g->nphi * (size_t)g->no);
+    if (!ax || !tab) {
+        free(ax), free(tab);
+        nc_close(w.id);
+        snprintf(err, errcap, "out of memory");
+        return -1;
+    }
+    /* the axes carry the nominal grid (Eradiate checks them against linspace) */
+    for (int k = 0; k < g->ni; k++) ax[k] = (double)k / (g->ni - 1);
+    if (w.status == NC_NOERR) nc_check(&w, nc_put_var_double(w.id, v_ci, ax), "cos_theta_i values");
+    for (int k = 0; k < g->nphi; k++) ax[k] = 2.0 * LSQT_PI * k / g->nphi;
+    if (w.status == NC_NOERR) nc_check(&w, nc_put_var_double(w.id, v_p, ax), "phi_d values");
+    for (int k = 0; k < g->no; k++) ax[k] = (double)k / (g->no - 1);
+    if (w.status == NC_NOERR) nc_check(&w, nc_put_var_double(w.id, v_co, ax), "cos_theta_o values");
+    for (int side = 0; side < (g->below ? 2 : 1); side++) {
+        for (int h = 0; h < (st->transmits ? 2 : 1); h++)
+            for (int e = 0; e < 2; e++) {
+                fill_table(g, est, side, h, e, tab);
+                if (w.status == NC_NOERR) nc_check(&w, nc_put_var_double(w.id, v_f[side][h][e], tab), "table values");
+            }
+        for (int k = 0; k < 6; k++) {
+            for (int ko = 0; ko < g->no; ko++) {
+                const lsqt_slice_est *s = &est[g->side[side][g->no - 1 - ko]];
+                const lsqt_est *q = k < 2 ? &s->R : k < 4 ? &s->T : &s->delta_T;
+                ax[ko] = k % 2 ? q->err : q->mean;
+            }
+            if (w.status == NC_NOERR) nc_check(&w, nc_put_var_double(w.id, v_s[side][k], ax), scal[k]);
+        }
+    }
+    free(ax), free(tab);
+    const int closed = nc_close(w.id);
+    nc_check(&w, closed, "close");
+    if (w.status != NC_NOERR) {
+        snprintf(err, errcap, "cannot write '%s' (%s): %s", tmp, w.what, nc_strerror(w.status));
+        return -1;
+    }
+    /* Read back what was written (a writer may miss a full disk): every dimension there. */
+    int id, nd = 0;
+    size_t len_o = 0;
+    if (nc_open(tmp, NC_NOWRITE, &id) != NC_NOERR) {
+        snprintf(err, errcap, "'%s' cannot be read back as NetCDF after writing it", tmp);
+        return -1;
+    }
+    int dim_o = -1;
+    const int bad = nc_inq_ndims(id, &nd) != NC_NOERR || nd != 3 || nc_inq_dimid(id, "cos_theta_o", &dim_o) != NC_NOERR ||
+                    nc_inq_dimlen(id, dim_o, &len_o) != NC_NOERR || len_o != (size_t)g->no;
+    nc_close(id);
+    if (bad) {
+        snprintf(err, errcap, "'%s' does not read back as written", tmp);
+        return -1;
+    }
+    return 0;
+}
+
+/* The grid of ST, or -1 with err saying why it has none. */
+static int find_grid(const lsqt_state *st, const char *input, grid *g, char *err, size_t errcap)
+{
+    memset(g, 0, sizeof *g);
+    if (st->dir_method != LSQT_DIRS_GRID) {
+        static const char *const how[] = {"--wi-spread", "RRSS", "--wi-file", "--grid"};
+        snprintf(err, errcap, "'%s' is not on a grid (its incident directions were chosen by %s): export writes the "
+                 "values a run simulated, on their grid; run with --grid NO,NI,NPHI", input,
+                 how[st->dir_method < 4 ? st->dir_method : 0]);
+        return -1;
+    }
+    if (st->stage != LSQT_STAGE_RUN || st->paths == 0) {
+        snprintf(err, errcap, "'%s' holds no finished paths to export (%s)", input,
+                 st->stage != LSQT_STAGE_RUN ? "an RRSS pilot shard" : "0 paths");
+        return -1;
+    }
+    g->ni = (int)st->grid_ni, g->nphi = (int)st->grid_nphi, g->na = g->nphi / 2 + 1;
+    int n[2] = {0, 0};
+    for (int s = 0; s < st->n_slices; s++) n[(st->slice_flags[s] & LSQT_SLICE_BELOW) != 0]++;
+    g->no = n[0], g->below = n[1] > 0;
+    if (g->no < 2 || (g->below && n[1] != g->no)) {
+        snprintf(err, errcap, "'%s': %d slices from above and %d from below do not make a grid", input, n[0], n[1]);
+        return -1;
+    }
+    for (int side = 0; side < 2; side++) {
+        g->side[side] = malloc(sizeof(int) * (size_t)g->no);
+        if (!g->side[side]) {
+            snprintf(err, errcap, "out of memory");
+            return -1;
+        }
+        int k = 0;
+        for (int s = 0; s < st->n_slices; s++)
+            if (((st->slice_flags[s] & LSQT_SLICE_BELOW) != 0) == side && k < g->no) g->side[side][k++] = s;
+    }
+    return 0;
+}
+
+int lsqt_export_main(const char *prog, int argc, char **argv)
+{
+    signal(SIGPIPE, SIG_IGN);
+    const char *input = NULL, *out = NULL;
+    int quiet = 0;
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        if (strcmp(a, "-h") == 0 || strcmp(a, "--help") == 0) {
+            usage(stdout, prog);
+            return 0;
+        } else if (strcmp(a, "-q") == 0 || strcmp(a, "--quiet") == 0) {
+            quiet = 1;
+        } else if (strcmp(a, "-o") == 0 || strcmp(a, "--output") == 0) {
+            if (i + 1 >= argc) return export_fail(prog, 2, "-o needs a file name (OUT.nc)");
+            out = argv[++i];
+        } else if (strncmp(a, "--output=", 9) == 0) {
+            out = a + 9;
+        } else if (a[0] == '-' && a[1]) {
+            char msg[160];
+            snprintf(msg, sizeof msg, "unknown option '%.64s' (see %s --help)", a, prog);
+            return export_fail(prog, 2, msg);
+        } else if (input) {
+            return export_fail(prog, 2, "more than one input LSS");
+        } else {
+            input = a;
+        }
+    }
+    if (!input || !out || !*out) {
+        usage(stderr, prog);
+        return 2;
+    }
+    const size_t ol = strlen(out);
+    if (ol < 4 || strcmp(out + ol - 3, ".nc") != 0)
+        return export_fail(prog, 2, "the output's name must end in .nc (NetCDF, the one format export writes)");
+    const char *what = NULL;
+    if (strcmp(out, "-") == 0 || lsqt_path_type(out, &what) > LSQT_PATH_REGULAR) {
+        char msg[LSQT_PATH_CAP + 96];
+        snprintf(msg, sizeof msg, "'%s' is %s%s: NetCDF is written to a regular file (it seeks)", out,
+                 what ? "a " : "", what ? what : "stdout");
+        return export_fail(prog, 2, msg);
+    }
+    if (strcmp(input, "-") != 0 && lsqt_same_file(out, input)) {
+        char msg[LSQT_PATH_CAP + 64];
+        snprintf(msg, sizeof msg, "the output '%s' would replace the input", out);
+        return export_fail(prog, 2, msg);
+    }
+    char msg[LSQT_PATH_CAP * 2 + 256];
+    lsqt_state st;
+    if (lsqt_lss_read(input, &st, msg, sizeof msg)) return export_fail(prog, 2, msg);
+    grid g;
+    if (find_grid(&st, input, &g, msg, sizeof msg)) {
+        free(g.side[0]), free(g.side[1]);
+        lsqt_state_free(&st);
+        return export_fail(prog, 2, msg);
+    }
+    int rc = 0;
+    lsqt_slice_est *est = lsqt_estimates(&st);
+    lsqt_out o;
+    if (!est) rc = export_fail(prog, 1, "out of memory");
+    else if (lsqt_out_open_named(&o, out, msg, sizeof msg)) rc = export_fail(prog, 1, msg);
+    else if (write_nc(lsqt_out_name(&o), input, &st, est, &g, msg, sizeof msg)) {
+        lsqt_out_abort(&o);
+        rc = export_fail(prog, 1, msg);
+    } else if (lsqt_out_commit_named(&o, msg, sizeof msg)) {
+        rc = export_fail(prog, 1, msg);
+    } else if (!quiet) {
+        printf("wrote %s: brdf%s over (cos_theta_i %d, phi_d %d, cos_theta_o %d)%s, %llu paths per slice\n", out,
+               st.transmits ? " and btdf" : "", g.ni, g.nphi, g.no, g.below ? " from above and from below" : "",
+               (unsigned long long)st.paths);
+    }
+    if (est) lsqt_estimates_free(est, st.n_slices);
+    free(g.side[0]), free(g.side[1]);
+    lsqt_state_free(&st);
+    return rc;
+}

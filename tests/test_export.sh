@@ -1,0 +1,119 @@
+#!/usr/bin/env bash
+# lsqt-cl export: a grid LSS as NetCDF, read back with xarray as a Python user would (and
+# as Eradiate's tabulated BSDF checks it: dimension names, coordinates on linspace(0, 1, N)
+# and 2 pi k / NPHI, units). Every value and standard error of brdf, btdf and their _below
+# twins equals `lsqt-cl info --json --bsdf` at the direction the coordinates name (found
+# by geometry, not by the exporter's index arithmetic), and R, T, delta_T per theta_o
+# equal info's. A non-grid LSS, a wrong output name or kind, and output over input are
+# errors (exit 2) that write nothing. Skipped (77) only where no Python has xarray and
+# netCDF4 (tools/setup.sh installs Debian's).
+# usage: test_export.sh LSQT_CL EXAMPLES_DIR
+set -u
+# shellcheck source=cli_lib.sh
+source "$(dirname "${BASH_SOURCE[0]}")/cli_lib.sh"
+BIN=$1
+EX=$2
+T=$(mktemp -d)
+trap 'rm -rf "$T"' EXIT
+cd "$T"
+
+PY=
+for p in /usr/bin/python3 python3; do
+  if "$p" -c 'import xarray, netCDF4' 2>/dev/null; then PY=$p; break; fi
+done
+if [ -z "$PY" ]; then
+  echo "test_export: skipped: no Python with xarray and netCDF4 (Debian: python3-xarray python3-netcdf4)"
+  exit 77
+fi
+
+expect 0 "usage: lsqt-cl export FILE.lss -o OUT.nc" -- "$BIN" export --help
+
+cp "$EX/tutorial/Rough.lsqt" R.lsqt
+printf 'Medium\nLayer z=0 LambertianBsdf fR=0.3 fT=0.5\nMedium eta=1.3 mus=2 mua=0.1 HenyeyGreensteinPhase g=0.5\nLayer z=-0.5 LambertianBsdf fR=0.2 fT=0.4\nMedium\n' > t.lsqt
+
+# check.py NC INFO_JSON NO NI NPHI: the NetCDF against info --json --bsdf.
+cat > check.py <<'PY'
+import json, math, sys
+import numpy as np
+import xarray as xr
+nc, info_path, no, ni, nphi = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4]), int(sys.argv[5])
+d = xr.open_dataset(nc)
+info = json.load(open(info_path))
+p = []
+# what Eradiate's tabulated BSDF requires of its dataset
+if set(d["brdf"].dims) != {"cos_theta_o", "phi_d", "cos_theta_i"}: p.append("brdf dims %s" % (d["brdf"].dims,))
+for name, want in (("cos_theta_o", np.linspace(0, 1, no)), ("cos_theta_i", np.linspace(0, 1, ni)),
+                   ("phi_d", np.linspace(0, 2 * np.pi, nphi, endpoint=False))):
+    if d[name].size != want.size or not np.allclose(d[name].values, want, rtol=0, atol=1e-12):
+        p.append("%s = %s, expected %s" % (name, d[name].values, want))
+    if "units" not in d[name].attrs: p.append("%s has no units" % name)
+if d["brdf"].attrs.get("units") != "sr-1": p.append("brdf units %r" % d["brdf"].attrs.get("units"))
+if d.attrs.get("seed") != str(info["seed"]) or d.attrs.get("assembly") != info["assembly"] \
+        or d.attrs.get("paths_per_slice") != str(info["paths"]) or d.attrs.get("grid") != "%d,%d,%d" % (no, ni, nphi):
+    p.append("attributes %s" % {k: d.attrs.get(k) for k in ("seed", "paths_per_slice", "grid")})
+def node(c):  # the direction simulated for a cos coordinate (the horizon at 0.001)
+    return 0.001 if c == 0 else c
+checked = 0
+for side, suffix in ((False, ""), (True, "_below")):
+    slices = [s for s in info["slices"] if s["from_below"] == side]
+    if not slices:
+        if "brdf" + suffix in d: p.append("brdf%s without slices from below" % suffix)
+        continue
+    by_cos = {round(math.cos(s["theta_o"]), 9): s for s in slices}
+    for var, sign in (("brdf", 1), ("btdf", -1)):
+        if not info["transmits"] and sign < 0:
+            if var + suffix in d: p.append("btdf of a stack that transmits nothing")
+            continue
+        f, e = d[var + suffix], d[var + "_stderr" + suffix]
+        for co in d["cos_theta_o"].values:
+            s = by_cos.get(round(node(float(co)), 9))
+            if s is None:
+                p.append("no slice at cos_theta_o %g" % co); continue
+            for ci in d["cos_theta_i"].values:
+                c = node(float(ci)); st = math.sqrt(1 - c * c)
+                for ph in d["phi_d"].values:
+                    x, y, z = st * math.cos(ph), abs(st * math.sin(ph)), sign * c  # mirror symmetric in y
+                    hit = [b for b in s["bsdf"] if abs(b[0] - x) < 2e-6 and abs(b[1] - y) < 2e-6 and abs(b[2] - z) < 2e-6]
+                    if len(hit) < 1:
+                        p.append("%s: no direction (%g %g %g) in info" % (var, x, y, z)); continue
+                    got = (float(f.sel(cos_theta_o=co, cos_theta_i=ci, phi_d=ph)), float(e.sel(cos_theta_o=co, cos_theta_i=ci, phi_d=ph)))
+                    for g, w in zip(got, hit[0][3:5]):
+                        if (w is None) != math.isnan(g) or (w is not None and abs(g - w) > 1e-8 * abs(w)):
+                            p.append("%s%s at cos_o %g cos_i %g phi %g: %r, info %r" % (var, suffix, co, ci, ph, got, hit[0][3:5]))
+                    checked += 1
+        for k in ("R", "T", "delta_T"):
+            got = [float(v) for v in d[k + suffix].values]
+            want = [by_cos[round(node(float(co)), 9)][k] for co in d["cos_theta_o"].values]
+            if any(abs(a - b) > 1e-8 * abs(b) for a, b in zip(got, want)): p.append("%s%s %s, info %s" % (k, suffix, got, want))
+if checked == 0: p.append("nothing compared")
+if p: sys.exit("\n".join(p[:12]))
+print("compared %d values" % checked)
+PY
+
+# Rough (reflection only), a 4 x 4 x 8 grid; the errors are known from 257 paths on.
+"$BIN" -q -p 600 --grid 4,4,8 R.lsqt && "$BIN" export R.lsqt.lss -o R.nc -q && ok || bad "Rough: run and export"
+"$BIN" info R.lsqt.lss --json R.json --bsdf > /dev/null
+"$PY" check.py R.nc R.json 4 4 8 > out.txt 2>&1 && ok || bad "Rough NetCDF: $(cat out.txt)"
+# A transmitting stack with the slices from below: brdf, btdf, brdf_below, btdf_below.
+"$BIN" -q -p 600 --grid 3,3,6 --from-below t.lsqt && "$BIN" export t.lsqt.lss -o t.nc && ok || bad "transmitting: run and export"
+"$BIN" info t.lsqt.lss --json t.json --bsdf > /dev/null
+"$PY" check.py t.nc t.json 3 3 6 > out.txt 2>&1 && ok || bad "transmitting NetCDF: $(cat out.txt)"
+"$PY" -c 'import xarray as xr, sys; d = xr.open_dataset(sys.argv[1]); sys.exit(not all(v in d for v in ("btdf", "btdf_below", "brdf_below", "T_below")))' t.nc \
+  && ok || bad "transmitting NetCDF lacks btdf or the _below variables"
+
+# Errors: nothing written, an existing file kept.
+"$BIN" -q -p 300 -wo 4 -wi 16 --wi-spread --lss s.lss -o s.raw R.lsqt
+cp R.nc keep.nc
+expect 2 "'s.lss' is not on a grid (its incident directions were chosen by --wi-spread)" -- "$BIN" export s.lss -o keep.nc
+cmp -s R.nc keep.nc && ok || bad "a refused export changed the existing output"
+expect 2 "must end in .nc" -- "$BIN" export R.lsqt.lss -o R.txt
+mkdir dir.nc
+expect 2 "'dir.nc' is a directory: NetCDF is written to a regular file" -- "$BIN" export R.lsqt.lss -o dir.nc
+cp R.lsqt.lss same.nc
+expect 2 "would replace the input" -- "$BIN" export same.nc -o same.nc
+expect 2 "usage: lsqt-cl export" -- "$BIN" export R.lsqt.lss
+expect 2 "unknown option '--rgbx'" -- "$BIN" export R.lsqt.lss -o x.nc --rgbx
+expect 2 "'missing.lss'" -- "$BIN" export missing.lss -o x.nc
+[ ! -e x.nc ] && [ ! -e R.txt ] && ok || bad "a refused export wrote a file"
+ls ./*.tmp.* >/dev/null 2>&1 && bad "temporary files left behind" || ok
+finish test_export
