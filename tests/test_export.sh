@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# lsqt-cl export: a grid LSS as NetCDF, read back with xarray as a Python user would (and
+# lsqt-cl export: grid LSS files (the tutorial's Rough and Substr, a transmitting stack
+# with --from-below) as NetCDF, read back with xarray as a Python user would (and
 # as Eradiate's tabulated BSDF checks it: dimension names, coordinates on linspace(0, 1, N)
 # and 2 pi k / NPHI, units). Every value and standard error of brdf, btdf and their _below
 # twins equals `lsqt-cl info --json --bsdf` at the direction the coordinates name (found
@@ -29,6 +30,7 @@ fi
 expect 0 "usage: lsqt-cl export FILE.lss -o OUT.nc" -- "$BIN" export --help
 
 cp "$EX/tutorial/Rough.lsqt" R.lsqt
+cp "$EX/tutorial/Substr.lsqt" S.lsqt
 printf 'Medium\nLayer z=0 LambertianBsdf fR=0.3 fT=0.5\nMedium eta=1.3 mus=2 mua=0.1 HenyeyGreensteinPhase g=0.5\nLayer z=-0.5 LambertianBsdf fR=0.2 fT=0.4\nMedium\n' > t.lsqt
 
 # check.py NC INFO_JSON NO NI NPHI: the NetCDF against info --json --bsdf.
@@ -94,6 +96,10 @@ PY
 "$BIN" -q -p 600 --grid 4,4,8 R.lsqt && "$BIN" export R.lsqt.lss -o R.nc -q && ok || bad "Rough: run and export"
 "$BIN" info R.lsqt.lss --json R.json --bsdf > /dev/null
 "$PY" check.py R.nc R.json 4 4 8 > out.txt 2>&1 && ok || bad "Rough NetCDF: $(cat out.txt)"
+# Substr (a rough dielectric over a Lambertian floor), a 3 x 3 x 6 grid.
+"$BIN" -q -p 600 --grid 3,3,6 S.lsqt && "$BIN" export S.lsqt.lss -o S.nc -q && ok || bad "Substr: run and export"
+"$BIN" info S.lsqt.lss --json S.json --bsdf > /dev/null
+"$PY" check.py S.nc S.json 3 3 6 > out.txt 2>&1 && ok || bad "Substr NetCDF: $(cat out.txt)"
 # A transmitting stack with the slices from below: brdf, btdf, brdf_below, btdf_below.
 "$BIN" -q -p 600 --grid 3,3,6 --from-below t.lsqt && "$BIN" export t.lsqt.lss -o t.nc && ok || bad "transmitting: run and export"
 "$BIN" info t.lsqt.lss --json t.json --bsdf > /dev/null
