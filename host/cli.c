@@ -47,6 +47,7 @@ void lsqt_cli_help(FILE *f)
           "       lsqt-cl merge OUT.lss IN.lss... [-o RAW] [-H] [--json PATH] [--partial] [-q]\n"
           "       lsqt-cl info FILE.lss [--json PATH]   (the same: lssinfo FILE.lss [--json PATH])\n"
           "       lsqt-cl export FILE.lss -o OUT.nc     (an LSS made with --grid, as NetCDF)\n"
+          "       lsqt-cl export FILE.lss -o OUT.bsdf --rgl|--rgl-spectral  (--rgl-grid: RGL tensor)\n"
           "Simulates the emergent BSDF of a layered assembly (LSQT file; - reads stdin) with\n"
           "OpenCL, writing FILE.raw for raw2sqt and FILE.lss (progressive state: running again\n"
           "adds paths to it, with the sampling it was made with: a flag that contradicts it is an\n"
@@ -77,7 +78,14 @@ void lsqt_cli_help(FILE *f)
           "                              2 pi k / NPHI in [0, pi] (the rest are their mirror\n"
           "                              images); cos 0, the horizon, is simulated at 0.001.\n"
           "                              --grid N is N,N,4(N-1). NO, NI >= 2, NPHI >= 2, even\n"
-          "      --from-below            when the stack transmits, also the slices of light entering\n"
+          "      --rgl-grid NT,NU        the nodes of an RGL tensor file (export --rgl, for Mitsuba\n"
+          "                              3 and pbrt-v4) instead of -wo and -wi: NT slices at\n"
+          "                              theta = linspace(0, 90 deg, NT), each with the reflections\n"
+          "                              of wo about an NU x NU grid of half vectors (theta_m =\n"
+          "                              u^2 90 deg, phi_m = 360 deg v - 180 deg from wo's, u and v\n"
+          "                              on linspace(0, 1, NU)); NT 2-1024, NU 2-44\n"
+          , f);
+    fputs("      --from-below            when the stack transmits, also the slices of light entering\n"
           "                              from the bottom medium (the full two-sided BSDF), written\n"
           "                              to OUT.below.raw (the stack turned upside down: negate z of\n"
           "                              wo and wi for its own frame) and flagged in the LSS; OUT\n"
@@ -139,7 +147,7 @@ void lsqt_cli_help(FILE *f)
 
 enum flag_id {
     F_PATHS, F_WO, F_WO_ANGLES, F_WI, F_WI_FILE, F_RX, F_RP, F_RESTART, F_SEED, F_THREADS, F_OUTPUT,
-    F_HEMI, F_SPREAD, F_GRID, F_BELOW, F_CHECKPOINT, F_SHARD, F_REFINE, F_DEVICE, F_LIST, F_DOUBLE, F_TIME, F_TARGET, F_LSS, F_JSON, F_QUIET, F_VERBOSE, F_HELP
+    F_HEMI, F_SPREAD, F_GRID, F_RGL_GRID, F_BELOW, F_CHECKPOINT, F_SHARD, F_REFINE, F_DEVICE, F_LIST, F_DOUBLE, F_TIME, F_TARGET, F_LSS, F_JSON, F_QUIET, F_VERBOSE, F_HELP
 };
 
 static const struct flag {
@@ -160,7 +168,7 @@ static const struct flag {
     {NULL, "--target-error", F_TARGET, 1},  {NULL, "--wi-spread", F_SPREAD, 0},
     {NULL, "--checkpoint", F_CHECKPOINT, 1}, {NULL, "--shard", F_SHARD, 1},
     {NULL, "--refine", F_REFINE, 0}, {NULL, "--from-below", F_BELOW, 0},
-    {NULL, "--grid", F_GRID, 1},
+    {NULL, "--grid", F_GRID, 1},             {NULL, "--rgl-grid", F_RGL_GRID, 1},
 };
 
 /* --grid NO,NI,NPHI or --grid N (= N,N,4(N-1)): NO, NI in 2-1024, NPHI even in 2-2048
@@ -178,6 +186,21 @@ static int parse_grid(const char *v, lsqt_cli *c)
     else if (k != 3) return -1;
     if (n[0] > 1024 || n[1] > 1024 || n[2] % 2) return -1;
     c->grid_no = (int)n[0], c->grid_ni = (int)n[1], c->grid_nphi = (int)n[2];
+    return 0;
+}
+
+/* --rgl-grid NT,NU: NT slices in 2-1024, NU in 2-44 (NU - NU/2 rows of NU directions
+ * fit in the 1024 a slice can have). Kept as a grid of NT slices and NI = NU, NPHI 0. */
+static int parse_rgl_grid(const char *v, lsqt_cli *c)
+{
+    const char *comma = strchr(v, ',');
+    char nt[32];
+    uint64_t t, u;
+    if (!comma || comma - v >= (long)sizeof nt) return -1;
+    memcpy(nt, v, (size_t)(comma - v));
+    nt[comma - v] = '\0';
+    if (lsqt_parse_count(nt, 2, 1024, &t) || lsqt_parse_count(comma + 1, 2, 44, &u)) return -1;
+    c->grid_no = (int)t, c->grid_ni = (int)u, c->grid_nphi = 0, c->grid_rgl = 1;
     return 0;
 }
 
@@ -216,6 +239,7 @@ static int apply(const struct flag *fl, const char *name, const char *v, lsqt_cl
 {
     uint64_t n = 0;
     double d = 0;
+    int both = 0;
     const char *expect = NULL;
     switch (fl->id) {
     case F_PATHS: if (lsqt_parse_count(v, 1, 9.0e15, &c->paths)) expect = "an integer path count from 1 to 9e15 (e.g. 10000 or 1e7)"; c->paths_given = 1; break;
@@ -236,7 +260,13 @@ static int apply(const struct flag *fl, const char *name, const char *v, lsqt_cl
     case F_RESTART: c->restart = 1; break;
     case F_HEMI: c->only_hemispherical = 1; break;
     case F_SPREAD: c->wi_spread = 1; c->sampling_given = 1; break;
-    case F_GRID: if (parse_grid(v, c)) expect = "NO,NI,NPHI (or N for N,N,4(N-1)): NO and NI in 2-1024, NPHI even in 2-2048"; c->sampling_given = 1; break;
+    case F_RGL_GRID: both = c->grid_no && !c->grid_rgl;
+        if (parse_rgl_grid(v, c)) expect = "NT,NU: NT slices in 2-1024, NU (half vectors per axis) in 2-44";
+        c->grid_rgl = both ? 2 : c->grid_rgl, c->sampling_given = 1; break;
+    case F_GRID: both = c->grid_rgl != 0;
+        if (both) c->grid_rgl = 2;
+        if (parse_grid(v, c)) expect = "NO,NI,NPHI (or N for N,N,4(N-1)): NO and NI in 2-1024, NPHI even in 2-2048";
+        c->sampling_given = 1; break;
     case F_BELOW: c->from_below = 1; c->sampling_given = 1; break;
     case F_CHECKPOINT: if (lsqt_parse_double(v, &d) || !(d >= 0)) expect = "seconds >= 0 (0: no checkpoints)"; else c->checkpoint = d; break;
     case F_SHARD: if (parse_shard(v, c)) expect = "K/N with 0 <= K < N <= 65536 (e.g. 0/4; SLURM: $SLURM_ARRAY_TASK_ID/N)"; break;
@@ -323,13 +353,17 @@ int lsqt_cli_parse(int argc, char **argv, lsqt_cli *c, char *err, size_t errcap)
         return 2;
     }
     /* --grid fixes the slices and the directions: any other choice of them contradicts it. */
+    if (c->grid_rgl == 2) {
+        snprintf(err, errcap, "--grid and --rgl-grid both set the slices and the incident directions: give one of them");
+        return 2;
+    }
     if (c->grid_no) {
         const char *other = c->wo_given ? "-wo" : c->n_wo_angles ? "--wo-angles" : wi_name[0] ? wi_name
                           : c->wi_file ? "--wi-file" : c->wi_spread ? "--wi-spread" : c->rx_given ? "-rx"
                           : c->rp_given ? "-rp" : NULL;
         if (other) {
-            snprintf(err, errcap, "--grid sets the slices and the incident directions, and %s chooses them too: give one "
-                                  "of them", other);
+            snprintf(err, errcap, "%s sets the slices and the incident directions, and %s chooses them too: give one "
+                                  "of them", c->grid_rgl ? "--rgl-grid" : "--grid", other);
             return 2;
         }
     }

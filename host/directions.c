@@ -80,6 +80,33 @@ void lsqt_grid_wi(int ni, int nphi, int lower, float *out)
         }
 }
 
+void lsqt_rgl_theta_o(int nt, double *theta)
+{
+    for (int k = 0; k < nt; k++) theta[k] = k == nt - 1 ? acos(LSQT_GRID_HORIZON_COS) : LSQT_PI / 2 * k / (nt - 1);
+}
+
+int lsqt_rgl_wi_count(int nu) { return (nu - nu / 2) * nu; }
+
+int lsqt_rgl_node(double theta_o, int nu, int j, int l, double wi[3])
+{
+    const double u = (double)l / (nu - 1), tm = u * u * (LSQT_PI / 2), pm = (2.0 * j / (nu - 1) - 1.0) * LSQT_PI;
+    const double m[3] = {sin(tm) * cos(pm), sin(tm) * sin(pm), cos(tm)}, wo[3] = {sin(theta_o), 0.0, cos(theta_o)};
+    const double c = wo[0] * m[0] + wo[2] * m[2];
+    for (int i = 0; i < 3; i++) wi[i] = 2.0 * c * m[i] - wo[i];
+    return c > 0 && wi[2] >= LSQT_RGL_MIN_COS;
+}
+
+void lsqt_rgl_wi(double theta_o, int nu, float *out)
+{
+    for (int j = nu / 2; j < nu; j++)
+        for (int l = 0; l < nu; l++) {
+            double w[3];
+            if (!lsqt_rgl_node(theta_o, nu, j, l, w)) w[0] = -sin(theta_o), w[1] = 0.0, w[2] = cos(theta_o);
+            float *d = out + 4 * ((size_t)(j - nu / 2) * nu + l);
+            d[0] = (float)w[0], d[1] = (float)fabs(w[1]), d[2] = (float)w[2], d[3] = 0.0f;
+        }
+}
+
 typedef struct wi_span {
     const char *p;
     size_t n;

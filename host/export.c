@@ -13,6 +13,7 @@
 #include <string.h>
 
 #include "lsqt/directions.h"
+#include "lsqt/export_rgl.h"
 #include "lsqt/lss.h"
 #include "lsqt/tally.h"
 #include "lsqt/util.h"
@@ -25,6 +26,7 @@ static void usage(FILE *f, const char *prog)
 {
     fprintf(f,
             "usage: %s FILE.lss -o OUT.nc [-q]\n"
+            "       %s FILE.lss -o OUT.bsdf --rgl|--rgl-spectral [-q]\n"
             "Writes the BSDF of an LSS made with --grid as NetCDF (netCDF-4): variables brdf\n"
             "and brdf_stderr over (cos_theta_i, phi_d, cos_theta_o), in 1/sr and not\n"
             "cosine-weighted; btdf and btdf_stderr the same when the stack transmits\n"
@@ -34,13 +36,21 @@ static void usage(FILE *f, const char *prog)
             "the grid's: cos theta on linspace(0, 1, N) and phi_d on 2 pi k / NPHI (0: the\n"
             "incident direction on the outgoing one's side), the table Eradiate's mqdiffuse\n"
             "reads. Python: xarray.open_dataset(\"OUT.nc\")[\"brdf\"].\n"
+            "With --rgl, an LSS made with --rgl-grid NT,NU is written as an RGL tensor file\n"
+            "(Dupuy and Jakob 2018), the one Mitsuba 3's measured BSDF reads (field rgb: its RGB\n"
+            "variants; --rgl-spectral: fields wavelengths and spectra, its spectral variants and\n"
+            "pbrt-v4): the reflection from above, f cos(theta) at the grid's nodes, with the\n"
+            "standard errors in an extra field `stderr`; transmission, the slices from below\n"
+            "and colour (one band, in every channel) are not in it.\n"
             "\n"
-            "  -o, --output OUT.nc   the file (a regular file, written atomically)\n"
+            "  -o, --output OUT      the file (a regular file, written atomically)\n"
+            "      --rgl             an RGL tensor file (OUT.bsdf) with an rgb field\n"
+            "      --rgl-spectral    an RGL tensor file with wavelengths and spectra fields\n"
             "  -q, --quiet           print errors only\n"
             "  -h, --help            this text\n"
             "Exit status: 0 success, 1 the output could not be written, 2 bad flags or an LSS\n"
             "that cannot be exported (unreadable, not on a grid).\n",
-            prog);
+            prog, prog);
 }
 
 static int export_fail(const char *prog, int code, const char *msg)
@@ -236,10 +246,10 @@ static int find_grid(const lsqt_state *st, const char *input, grid *g, char *err
 {
     memset(g, 0, sizeof *g);
     if (st->dir_method != LSQT_DIRS_GRID) {
-        static const char *const how[] = {"--wi-spread", "RRSS", "--wi-file", "--grid"};
+        static const char *const how[] = {"--wi-spread", "RRSS", "--wi-file", "--grid", "--rgl-grid"};
         snprintf(err, errcap, "'%s' is not on a grid (its incident directions were chosen by %s): export writes the "
                  "values a run simulated, on their grid; run with --grid NO,NI,NPHI", input,
-                 how[st->dir_method < 4 ? st->dir_method : 0]);
+                 how[st->dir_method <= LSQT_DIRS_RGL ? st->dir_method : 0]);
         return -1;
     }
     if (st->stage != LSQT_STAGE_RUN || st->paths == 0) {
@@ -268,11 +278,42 @@ static int find_grid(const lsqt_state *st, const char *input, grid *g, char *err
     return 0;
 }
 
+/* export --rgl: the tensor file, written as atomically as the NetCDF. */
+static int export_rgl(const char *prog, const char *input, const char *out, const lsqt_state *st, int spectral,
+                      int quiet)
+{
+    char msg[LSQT_PATH_CAP * 2 + 256];
+    int *slices = malloc(sizeof(int) * (size_t)st->n_slices), rc = 0;
+    if (!slices) return export_fail(prog, 1, "out of memory");
+    const int nt = lsqt_rgl_slices(st, input, slices, msg, sizeof msg);
+    if (nt < 0) {
+        free(slices);
+        return export_fail(prog, 2, msg);
+    }
+    lsqt_slice_est *est = lsqt_estimates(st);
+    lsqt_out o;
+    if (!est) rc = export_fail(prog, 1, "out of memory");
+    else if (lsqt_out_open_named(&o, out, msg, sizeof msg)) rc = export_fail(prog, 1, msg);
+    else if (lsqt_rgl_write(lsqt_out_name(&o), st, est, slices, nt, spectral, msg, sizeof msg)) {
+        lsqt_out_abort(&o);
+        rc = export_fail(prog, 1, msg);
+    } else if (lsqt_out_commit_named(&o, msg, sizeof msg)) {
+        rc = export_fail(prog, 1, msg);
+    } else if (!quiet) {
+        printf("wrote %s: RGL tensor file (%s), reflection from above at %d theta_i x %u x %u half vectors, %llu paths "
+               "per slice\n", out, spectral ? "spectral: wavelengths, spectra" : "rgb", nt, st->grid_ni, st->grid_ni,
+               (unsigned long long)st->paths);
+    }
+    if (est) lsqt_estimates_free(est, st->n_slices);
+    free(slices);
+    return rc;
+}
+
 int lsqt_export_main(const char *prog, int argc, char **argv)
 {
     signal(SIGPIPE, SIG_IGN);
     const char *input = NULL, *out = NULL;
-    int quiet = 0;
+    int quiet = 0, rgl = 0; /* 1: --rgl, 2: --rgl-spectral */
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         if (strcmp(a, "-h") == 0 || strcmp(a, "--help") == 0) {
@@ -280,6 +321,9 @@ int lsqt_export_main(const char *prog, int argc, char **argv)
             return 0;
         } else if (strcmp(a, "-q") == 0 || strcmp(a, "--quiet") == 0) {
             quiet = 1;
+        } else if (strcmp(a, "--rgl") == 0 || strcmp(a, "--rgl-spectral") == 0) {
+            if (rgl) return export_fail(prog, 2, "--rgl and --rgl-spectral: give one of them");
+            rgl = a[5] ? 2 : 1;
         } else if (strcmp(a, "-o") == 0 || strcmp(a, "--output") == 0) {
             if (i + 1 >= argc) return export_fail(prog, 2, "-o needs a file name (OUT.nc)");
             out = argv[++i];
@@ -300,13 +344,15 @@ int lsqt_export_main(const char *prog, int argc, char **argv)
         return 2;
     }
     const size_t ol = strlen(out);
-    if (ol < 4 || strcmp(out + ol - 3, ".nc") != 0)
-        return export_fail(prog, 2, "the output's name must end in .nc (NetCDF, the one format export writes)");
+    if (!rgl && (ol < 4 || strcmp(out + ol - 3, ".nc") != 0))
+        return export_fail(prog, 2, "the output's name must end in .nc (NetCDF; --rgl writes an RGL tensor file, OUT.bsdf)");
+    if (rgl && (ol < 6 || strcmp(out + ol - 5, ".bsdf") != 0))
+        return export_fail(prog, 2, "with --rgl the output's name must end in .bsdf (an RGL tensor file)");
     const char *what = NULL;
     if (strcmp(out, "-") == 0 || lsqt_path_type(out, &what) > LSQT_PATH_REGULAR) {
         char msg[LSQT_PATH_CAP + 96];
-        snprintf(msg, sizeof msg, "'%s' is %s%s: NetCDF is written to a regular file (it seeks)", out,
-                 what ? "a " : "", what ? what : "stdout");
+        snprintf(msg, sizeof msg, "'%s' is %s%s: %s is written to a regular file (it is read back)", out,
+                 what ? "a " : "", what ? what : "stdout", rgl ? "a tensor file" : "NetCDF");
         return export_fail(prog, 2, msg);
     }
     if (strcmp(input, "-") != 0 && lsqt_same_file(out, input)) {
@@ -317,6 +363,11 @@ int lsqt_export_main(const char *prog, int argc, char **argv)
     char msg[LSQT_PATH_CAP * 2 + 256];
     lsqt_state st;
     if (lsqt_lss_read(input, &st, msg, sizeof msg)) return export_fail(prog, 2, msg);
+    if (rgl) {
+        const int rc = export_rgl(prog, input, out, &st, rgl == 2, quiet);
+        lsqt_state_free(&st);
+        return rc;
+    }
     grid g;
     if (find_grid(&st, input, &g, msg, sizeof msg)) {
         free(g.side[0]), free(g.side[1]);

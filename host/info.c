@@ -146,6 +146,8 @@ static void print_text(FILE *f, const char *path, const lsqt_state *st, const ls
                 (unsigned long long)st->pilot_paths);
     else if (st->dir_method == LSQT_DIRS_GRID)
         fprintf(f, "directions: grid (--grid: NI %u, NPHI %u)\n", st->grid_ni, st->grid_nphi);
+    else if (st->dir_method == LSQT_DIRS_RGL)
+        fprintf(f, "directions: RGL tensor nodes (--rgl-grid: NU %u)\n", st->grid_ni);
     else fprintf(f, "directions: %s\n", st->dir_method == LSQT_DIRS_FILE ? "from a file (--wi-file)" : "even spread");
     if (st->stage == LSQT_STAGE_PILOT)
         fprintf(f, "stage: RRSS pilot (%d slices x %u candidate blocks of %d; %llu of its %llu paths; the run: %llu)\n",
@@ -204,6 +206,7 @@ static int write_json(const char *out, const char *path, const lsqt_state *st, c
             st->dir_method == LSQT_DIRS_RRSS   ? "rrss"
             : st->dir_method == LSQT_DIRS_FILE ? "file"
             : st->dir_method == LSQT_DIRS_GRID ? "grid"
+            : st->dir_method == LSQT_DIRS_RGL  ? "rgl_grid"
                                                : "spread",
             st->rx, (unsigned long long)st->pilot_paths, st->grid_ni, st->grid_nphi, st->flags, flags);
     info_ranges(f, st, 1);

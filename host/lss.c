@@ -413,8 +413,10 @@ int lsqt_lss_parse(const unsigned char *data, size_t len, lsqt_state *st, char *
     const int grid_ok = dir_method == LSQT_DIRS_GRID
                             ? grid_ni >= 2 && grid_ni <= 1024 && grid_nphi >= 2 && grid_nphi <= 2048 && grid_nphi % 2 == 0 &&
                                   (uint32_t)lsqt_grid_wi_count((int)grid_ni, (int)grid_nphi, (int)transmits) == n_wi
+                        : dir_method == LSQT_DIRS_RGL
+                            ? grid_ni >= 2 && grid_ni <= 44 && grid_nphi == 0 && (uint32_t)lsqt_rgl_wi_count((int)grid_ni) == n_wi
                             : grid_ni == 0 && grid_nphi == 0;
-    if (r.bad || !sane || !grid_ok || use_double > 1 || transmits > 1 || dir_method > LSQT_DIRS_GRID || rx > 8 ||
+    if (r.bad || !sane || !grid_ok || use_double > 1 || transmits > 1 || dir_method > LSQT_DIRS_RGL || rx > 8 ||
         stage > LSQT_STAGE_PILOT || (stage == LSQT_STAGE_PILOT && (rx < 2 || n_slices % rx)) ||
         (stage == LSQT_STAGE_RUN && pilot_paths > span_end)) {
         snprintf(err, errcap, "corrupt LSS header (slices %u, wi %u, text %u bytes, double %u, transmits %u)",

@@ -127,19 +127,24 @@ static int new_state(lsqt_state *st, const lsqt_cli *c, const lsqt_assembly *a, 
 {
     const int grid = c->grid_no > 0, lower = lsqt_assembly_transmits(a);
     int n_slices = grid ? c->grid_no : c->n_wo_angles ? c->n_wo_angles : c->wo_count;
-    int n_wi = grid ? lsqt_grid_wi_count(c->grid_ni, c->grid_nphi, lower) : wi_file ? n_wi_file : c->wi_count;
+    int n_wi = c->grid_rgl ? lsqt_rgl_wi_count(c->grid_ni)
+             : grid        ? lsqt_grid_wi_count(c->grid_ni, c->grid_nphi, lower)
+             : wi_file     ? n_wi_file
+                           : c->wi_count;
     if (lsqt_state_init(st, canonical, lsqt_assembly_hash(a), c->seed, n_slices, n_wi, lower)) return -1;
     st->use_double = c->use_double;
-    if (grid) lsqt_grid_theta_o(n_slices, st->theta_o);
+    if (c->grid_rgl) lsqt_rgl_theta_o(n_slices, st->theta_o);
+    else if (grid) lsqt_grid_theta_o(n_slices, st->theta_o);
     else if (c->n_wo_angles) memcpy(st->theta_o, c->wo_angles, (size_t)n_slices * sizeof(double));
     else lsqt_wo_angles(n_slices, st->theta_o);
     /* RRSS directions are chosen once the device is ready (host/stages.c); the spread stands
      * in until then. */
-    st->dir_method = grid ? LSQT_DIRS_GRID : wi_file ? LSQT_DIRS_FILE : c->wi_spread ? LSQT_DIRS_SPREAD : LSQT_DIRS_RRSS;
+    st->dir_method = c->grid_rgl ? LSQT_DIRS_RGL : grid ? LSQT_DIRS_GRID : wi_file ? LSQT_DIRS_FILE : c->wi_spread ? LSQT_DIRS_SPREAD : LSQT_DIRS_RRSS;
     if (grid) st->grid_ni = (uint32_t)c->grid_ni, st->grid_nphi = (uint32_t)c->grid_nphi;
     for (int s = 0; s < n_slices; s++) {
         float *dst = st->wi + (size_t)s * (size_t)st->n_wi * 4;
-        if (grid) lsqt_grid_wi(c->grid_ni, c->grid_nphi, lower, dst);
+        if (c->grid_rgl) lsqt_rgl_wi(st->theta_o[s], c->grid_ni, dst);
+        else if (grid) lsqt_grid_wi(c->grid_ni, c->grid_nphi, lower, dst);
         else if (wi_file) memcpy(dst, wi_file, (size_t)st->n_wi * 4 * sizeof *dst);
         else lsqt_wi_spread(st->n_wi, st->transmits, dst);
     }
@@ -246,7 +251,8 @@ static int plan_outputs(const lsqt_cli *c, int from_stdin, int transmits, int be
 
 static const char *dirs_name(uint32_t m)
 {
-    return m == LSQT_DIRS_RRSS ? "RRSS" : m == LSQT_DIRS_FILE ? "--wi-file" : m == LSQT_DIRS_GRID ? "--grid" : "--wi-spread";
+    return m == LSQT_DIRS_RRSS ? "RRSS" : m == LSQT_DIRS_FILE ? "--wi-file" : m == LSQT_DIRS_GRID ? "--grid"
+         : m == LSQT_DIRS_RGL  ? "--rgl-grid" : "--wi-spread";
 }
 
 /* A continued run keeps its LSS's sampling. A sampling flag with the LSS's own value is
@@ -286,12 +292,16 @@ static int check_continuation(const lsqt_cli *c, const lsqt_state *st, const cha
             snprintf(why, sizeof why, "its %d outgoing angles are others", n_th);
         }
     }
+    const uint32_t want_method = c->grid_rgl ? LSQT_DIRS_RGL : LSQT_DIRS_GRID;
     if (!flag[0] && c->grid_no &&
-        (st->dir_method != LSQT_DIRS_GRID || (uint32_t)c->grid_ni != st->grid_ni ||
+        (st->dir_method != want_method || (uint32_t)c->grid_ni != st->grid_ni ||
          (uint32_t)c->grid_nphi != st->grid_nphi || c->grid_no != n_th)) {
-        snprintf(flag, sizeof flag, "--grid %d,%d,%d", c->grid_no, c->grid_ni, c->grid_nphi);
+        if (c->grid_rgl) snprintf(flag, sizeof flag, "--rgl-grid %d,%d", c->grid_no, c->grid_ni);
+        else snprintf(flag, sizeof flag, "--grid %d,%d,%d", c->grid_no, c->grid_ni, c->grid_nphi);
         if (st->dir_method == LSQT_DIRS_GRID)
             snprintf(why, sizeof why, "it is on the grid %d,%u,%u", n_th, st->grid_ni, st->grid_nphi);
+        else if (st->dir_method == LSQT_DIRS_RGL)
+            snprintf(why, sizeof why, "it is on the RGL grid %d,%u", n_th, st->grid_ni);
         else snprintf(why, sizeof why, "its incident directions were chosen by %s", dirs_name(st->dir_method));
     }
     if (!flag[0] && ((c->wi_spread && st->dir_method != LSQT_DIRS_SPREAD) ||

@@ -11,9 +11,10 @@ cd "$(dirname "$0")/.."
 source tools/timing.sh
 step setup bash tools/setup.sh
 step build bash tools/build.sh -DLSQT_WERROR=ON
-# The power tests (label "power": many paths, one regime each) and the GPU-path checks
-# (label "gpu": offline GPU builds, oclgrind) are CI's (.ci/run).
-step ctest bash -c '(cd build && ctest --output-on-failure -j 2 -LE "power|gpu" "$@") || { bash tools/ctest_tail.sh build; exit 8; }' \
+# The power tests (label "power": many paths, one regime each), the GPU-path checks
+# (label "gpu": offline GPU builds, oclgrind) and the real clients that come from PyPI
+# (label "clients": Mitsuba 3) are CI's (.ci/run).
+step ctest bash -c '(cd build && ctest --output-on-failure -j 2 -LE "power|gpu|clients" "$@") || { bash tools/ctest_tail.sh build; exit 8; }' \
   ctest "$@"
 step fuzz bash tools/fuzz/run.sh "${LSQT_FUZZ_SECONDS:-30}"
 steps_done "tools/test.sh" 600

@@ -34,6 +34,23 @@ int lsqt_grid_wi_count(int ni, int nphi, int lower);
  * 1 below (z = -cos), i over theta ascending (node ni-1-i), m over the azimuths. */
 void lsqt_grid_wi(int ni, int nphi, int lower, float *out);
 
+/* --rgl-grid NT,NU: the nodes of an RGL tensor file (Dupuy and Jakob 2018, as Mitsuba 3's
+ * and pbrt-v4's `measured` BSDF read it), so that export --rgl writes simulated values
+ * only. Slice k of nt is at theta = k / (nt - 1) * 90 deg (the last, the horizon, at
+ * acos LSQT_GRID_HORIZON_COS). Its directions are reflections of wo about the half
+ * vectors of an nu x nu grid: node (j, l) has theta_m = (l / (nu - 1))^2 * 90 deg and
+ * phi_m = (2 j / (nu - 1) - 1) * 180 deg from wo's azimuth; j < nu / 2 mirrors
+ * nu - 1 - j, so only j >= nu / 2 is simulated: direction (j - nu / 2) * nu + l. */
+#define LSQT_RGL_MIN_COS 1e-4 /* a node's direction nearer the horizon holds 0 */
+void lsqt_rgl_theta_o(int nt, double *theta);
+int lsqt_rgl_wi_count(int nu);
+/* Node (j, l) of the slice at theta_o: 1 and wi (unit) when the reflection is at least
+ * LSQT_RGL_MIN_COS above the horizon, else 0 (the tensor holds 0 there). */
+int lsqt_rgl_node(double theta_o, int nu, int j, int l, double wi[3]);
+/* The slice's directions, 4 floats each; a node without one (lsqt_rgl_node 0) gets the
+ * mirror direction of wo, so that every direction is a valid one. */
+void lsqt_rgl_wi(double theta_o, int nu, float *out);
+
 /* Incident directions given by the user (--wi-file), from text[0 .. len) (NUL bytes are
  * just bad characters). One direction per line, either `x y z` (any length but 0; it is
  * normalised) or `theta_deg phi_deg` (theta from +z, in [0, 180]; phi from +x, the

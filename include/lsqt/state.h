@@ -36,11 +36,12 @@ typedef struct lsqt_state {
     uint32_t dir_method;    /* LSQT_DIRS_*: how the directions were chosen */
     uint32_t rx;            /* RRSS: candidates per direction (0 otherwise) */
     uint64_t pilot_paths;   /* RRSS: paths of the pilot, the first of every slice's paths */
-    uint32_t grid_ni, grid_nphi; /* LSQT_DIRS_GRID: the grid's NI and NPHI (directions.h; 0 otherwise) */
+    uint32_t grid_ni, grid_nphi; /* LSQT_DIRS_GRID: the grid's NI and NPHI; LSQT_DIRS_RGL: NU and 0
+                                  * (directions.h; 0 otherwise) */
     uint32_t lss_version;   /* the LSS format version it was read from (0: not read from a file) */
 } lsqt_state;
 
-enum { LSQT_DIRS_SPREAD = 0, LSQT_DIRS_RRSS = 1, LSQT_DIRS_FILE = 2, LSQT_DIRS_GRID = 3 };
+enum { LSQT_DIRS_SPREAD = 0, LSQT_DIRS_RRSS = 1, LSQT_DIRS_FILE = 2, LSQT_DIRS_GRID = 3, LSQT_DIRS_RGL = 4 };
 /* LSQT_STAGE_PILOT: the RRSS pilot of a sharded run (slices are candidate blocks: slice
  * s * rx + j is slice s's j-th block of n_wi candidates; pilot_paths its length, span_end
  * the first run's -p). Merging all of its shards chooses the directions. */
