@@ -142,7 +142,7 @@ def d2(a, axis, idx):  # |second difference| at idx along axis (one-sided at an 
     c = min(max(i, 1), n - 2)
     g = lambda t: a[tuple(t if ax == axis else idx[ax] for ax in range(3))]
     return abs(g(c - 1) - 2 * g(c) + g(c + 1))
-pairs, worst, zmax, outside = 0, 0.0, 0.0, 0
+pairs, worst, zmax, outside, rel_i, rel_d, rels = 0, 0.0, 0.0, 0, 0.0, 0.0, []
 for s in w["slices"]:
     th = s["theta_o"]
     ks = cell(np.interp(th, theta, np.arange(nt)), nt)
@@ -164,10 +164,13 @@ for s in w["slices"]:
                      % (math.degrees(th), np.round(wo, 4), got, want, werr, tol, interp))
         zmax = max(zmax, abs(got - want) / math.hypot(werr, sig_c))
         worst = max(worst, abs(got - want) / tol)
+        rel_i, rel_d = max(rel_i, interp / abs(want)), max(rel_d, abs(got - want) / abs(want))
+        rels.append(abs(got - want) / abs(want))
         pairs += 1
 if pairs < 50: p.append("only %d pairs" % pairs)
-print("pairs: %d off the nodes, %d outside the tolerance (largest |difference| / tolerance %.2f, / s.e. %.1f)"
-      % (pairs, outside, worst, zmax))
+print("pairs: %d off the nodes, %d outside the tolerance (largest |difference| / tolerance %.2f, / s.e. %.1f, "
+      "/ value %.3f, median %.3f; largest interpolation bound / value %.3f)"
+      % (pairs, outside, worst, zmax, rel_d, float(np.median(rels)), rel_i))
 
 # 3. Mitsuba's sampling of the table against uniform sampling of its eval (the albedo)
 rng = np.random.default_rng(7)
