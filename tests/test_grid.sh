@@ -102,5 +102,67 @@ for v in 3,4,7 1,4,8 3,1,8 3,4 3,4,8,2 a,b,c 3,4,0 1025,4,8; do
 done
 expect 2 "2040 incident directions per slice (NI x (NPHI/2 + 1) x 2: this stack transmits), more than the 1024" -- \
   "$BIN" -R --grid 3,20,100 t.lsqt
+
+# --rgl-grid NT,NU: the nodes of an RGL tensor file, computed here from their definition
+# (slices at linspace(0, 90 deg, NT), the last at acos 0.001; per slice the reflections of
+# wo about the half vectors theta_m = u^2 90 deg, phi_m = (2v - 1) 180 deg, u and v on
+# linspace(0, 1, NU), rows v >= 1/2 only (the rest are mirror images), a reflection below
+# 1e-4 replaced by wo's mirror direction); a Lambertian's value fR/pi at every one.
+cat > rgl.py <<'PY'
+import math, sys
+raw, nt, nu, fr = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), float(sys.argv[4])
+theta = [math.pi / 2 * k / (nt - 1) for k in range(nt)]
+theta[-1] = math.acos(0.001)
+lines = open(raw).read().splitlines()
+p = []
+head = lines[2].split()
+if int(head[0]) != nt or any(abs(float(a) - b) > 1e-8 for a, b in zip(head[1:], theta)):
+    p.append("slices %r, expected %r" % (head, theta))
+rows = [[float(x) for x in l.split()] for l in lines[3:]]
+per = (nu - nu // 2) * nu
+if len(rows) != 2 * nt * per: p.append("%d lines, expected %d" % (len(rows), 2 * nt * per))
+for i, a in enumerate(rows[0::2]):
+    s, k = divmod(i, per)
+    j, l = nu // 2 + k // nu, k % nu
+    u, v = l / (nu - 1), j / (nu - 1)
+    tm, pm = u * u * math.pi / 2, (2 * v - 1) * math.pi
+    m = (math.sin(tm) * math.cos(pm), math.sin(tm) * math.sin(pm), math.cos(tm))
+    wo = (math.sin(theta[s]), 0.0, math.cos(theta[s]))
+    c = wo[0] * m[0] + wo[2] * m[2]
+    d = [2 * c * m[q] - wo[q] for q in range(3)]
+    if not (c > 0 and d[2] >= 1e-4): d = [-wo[0], 0.0, wo[2]]
+    d[1] = abs(d[1])
+    if max(abs(a[q + 1] - d[q]) for q in range(3)) > 3e-7 or abs(a[4] * math.pi / fr - 1) > 1e-5:
+        p.append("slice %d node (%d, %d): %s, expected %s, %g" % (s, j, l, a[1:5], d, fr / math.pi))
+if p: sys.exit("\n".join(p[:10]))
+PY
+"$BIN" -q -p 256 --rgl-grid 4,7 --lss r.lss -o r.raw L.lsqt && python3 rgl.py r.raw 4 7 0.5 && ok || bad "--rgl-grid 4,7"
+"$BIN" -q -p 256 --rgl-grid 3,6 --lss r6.lss -o r6.raw t.lsqt && python3 rgl.py r6.raw 3 6 0.3 && ok \
+  || bad "--rgl-grid 3,6 (even NU, a transmitting stack: reflection directions only)"
+"$BIN" info r.lss --json rj.json > info.txt
+python3 -c 'import json, sys; j = json.load(open("rj.json")); d = j["directions"]
+sys.exit(not (d["method"] == "rgl_grid" and d["grid_ni"] == 7 and d["grid_nphi"] == 0 and j["n_wi"] == 28))' && ok \
+  || bad "info --json: not the RGL grid NU 7 with 28 directions: $(head -c 600 rj.json)"
+grep -q "^directions: RGL tensor nodes (--rgl-grid: NU 7)" info.txt && ok || bad "info text: $(grep directions info.txt)"
+"$BIN" -q -p 256 --rgl-grid 4,7 --lss r.lss -o r.raw L.lsqt && ok || bad "continuing the RGL grid"
+expect 2 "--rgl-grid 4,9 contradicts 'r.lss' (it is on the RGL grid 4,7)" -- "$BIN" --rgl-grid 4,9 --lss r.lss -o r.raw L.lsqt
+expect 2 "--grid 4,7,8 contradicts 'r.lss' (it is on the RGL grid 4,7)" -- \
+  "$BIN" --grid 4,7,8 --lss r.lss -o r.raw L.lsqt
+expect 2 "--rgl-grid 3,4 contradicts 't.lsqt.lss' (it is on the grid 3,4,8)" -- "$BIN" --rgl-grid 3,4 t.lsqt
+expect 2 "--grid and --rgl-grid both set" -- "$BIN" --grid 3 --rgl-grid 3,5 L.lsqt
+expect 2 "--grid and --rgl-grid both set" -- "$BIN" --rgl-grid 3,5 --grid 3 L.lsqt
+for v in 3,45 1,5 3,1 3 3,5,7 a,b 1025,5; do
+  expect 2 "bad value '$v' for --rgl-grid: expected NT,NU" -- "$BIN" --rgl-grid "$v" L.lsqt
+done
+expect 2 "--rgl-grid sets the slices and the incident directions, and -wi chooses them too" -- "$BIN" --rgl-grid 3,5 -wi 20 L.lsqt
+# export: each format from its own sampling only, nothing written otherwise
+expect 2 "'t.lsqt.lss' is not on the nodes of an RGL tensor (its directions were chosen by --grid)" -- \
+  "$BIN" export t.lsqt.lss -o t.bsdf --rgl
+expect 2 "'r.lss' is not on a grid (its incident directions were chosen by --rgl-grid)" -- "$BIN" export r.lss -o r.nc
+expect 2 "with --rgl the output's name must end in .bsdf" -- "$BIN" export r.lss -o r.nc --rgl
+expect 2 "--rgl and --rgl-spectral" -- "$BIN" export r.lss -o r.bsdf --rgl --rgl-spectral
+[ -e t.bsdf ] || [ -e r.nc ] || [ -e r.bsdf ] && bad "a refused export wrote a file" || ok
+"$BIN" export r.lss -o r.bsdf --rgl > out.txt && grep -q "^wrote r.bsdf: RGL tensor file (rgb), reflection from above at 4 theta_i x 7 x 7" out.txt \
+  && head -c 12 r.bsdf | cmp -s - <(printf 'tensor_file\0') && ok || bad "export --rgl: $(cat out.txt)"
 ls ./*.tmp.* >/dev/null 2>&1 && bad "temporary files left behind" || ok
 finish test_grid

@@ -324,6 +324,11 @@ int main(void)
         CHECK(lsqt_lss_write(path, &g, err, sizeof err) == 0, "%s", err);
         CHECK(lsqt_lss_read(path, &b, err, sizeof err) != 0 && strstr(err, "corrupt LSS header"),
               "grid sizes on a --wi-file state accepted: '%s'", err);
+        /* --rgl-grid: NU 4 gives (4 - 2) x 4 = 8 directions, not 16 */
+        g.dir_method = LSQT_DIRS_RGL, g.grid_ni = 4, g.grid_nphi = 0;
+        CHECK(lsqt_lss_write(path, &g, err, sizeof err) == 0, "%s", err);
+        CHECK(lsqt_lss_read(path, &b, err, sizeof err) != 0 && strstr(err, "corrupt LSS header"),
+              "an RGL grid of 8 directions holding 16 accepted: '%s'", err);
         lsqt_state_free(&g);
     }
 
