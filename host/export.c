@@ -53,12 +53,6 @@ static void usage(FILE *f, const char *prog)
             prog, prog);
 }
 
-static int export_fail(const char *prog, int code, const char *msg)
-{
-    fprintf(stderr, "%s: error: %s\n", prog, msg);
-    return code;
-}
-
 /* The NetCDF calls of one file: the first failure is kept (with the call that failed), the
  * rest are skipped, so the writer reads as a list of what the file holds. */
 typedef struct ncw {
@@ -284,21 +278,21 @@ static int export_rgl(const char *prog, const char *input, const char *out, cons
 {
     char msg[LSQT_PATH_CAP * 2 + 256];
     int *slices = malloc(sizeof(int) * (size_t)st->n_slices), rc = 0;
-    if (!slices) return export_fail(prog, 1, "out of memory");
+    if (!slices) return lsqt_prog_error(prog, 1, "out of memory");
     const int nt = lsqt_rgl_slices(st, input, slices, msg, sizeof msg);
     if (nt < 0) {
         free(slices);
-        return export_fail(prog, 2, msg);
+        return lsqt_prog_error(prog, 2, msg);
     }
     lsqt_slice_est *est = lsqt_estimates(st);
     lsqt_out o;
-    if (!est) rc = export_fail(prog, 1, "out of memory");
-    else if (lsqt_out_open_named(&o, out, msg, sizeof msg)) rc = export_fail(prog, 1, msg);
+    if (!est) rc = lsqt_prog_error(prog, 1, "out of memory");
+    else if (lsqt_out_open_named(&o, out, msg, sizeof msg)) rc = lsqt_prog_error(prog, 1, msg);
     else if (lsqt_rgl_write(lsqt_out_name(&o), st, est, slices, nt, spectral, msg, sizeof msg)) {
         lsqt_out_abort(&o);
-        rc = export_fail(prog, 1, msg);
+        rc = lsqt_prog_error(prog, 1, msg);
     } else if (lsqt_out_commit_named(&o, msg, sizeof msg)) {
-        rc = export_fail(prog, 1, msg);
+        rc = lsqt_prog_error(prog, 1, msg);
     } else if (!quiet) {
         printf("wrote %s: RGL tensor file (%s), reflection from above at %d theta_i x %u x %u half vectors, %llu paths "
                "per slice\n", out, spectral ? "spectral: wavelengths, spectra" : "rgb", nt, st->grid_ni, st->grid_ni,
@@ -322,19 +316,19 @@ int lsqt_export_main(const char *prog, int argc, char **argv)
         } else if (strcmp(a, "-q") == 0 || strcmp(a, "--quiet") == 0) {
             quiet = 1;
         } else if (strcmp(a, "--rgl") == 0 || strcmp(a, "--rgl-spectral") == 0) {
-            if (rgl) return export_fail(prog, 2, "--rgl and --rgl-spectral: give one of them");
+            if (rgl) return lsqt_prog_error(prog, 2, "--rgl and --rgl-spectral: give one of them");
             rgl = a[5] ? 2 : 1;
         } else if (strcmp(a, "-o") == 0 || strcmp(a, "--output") == 0) {
-            if (i + 1 >= argc) return export_fail(prog, 2, "-o needs a file name (OUT.nc)");
+            if (i + 1 >= argc) return lsqt_prog_error(prog, 2, "-o needs a file name (OUT.nc)");
             out = argv[++i];
         } else if (strncmp(a, "--output=", 9) == 0) {
             out = a + 9;
         } else if (a[0] == '-' && a[1]) {
             char msg[160];
             snprintf(msg, sizeof msg, "unknown option '%.64s' (see %s --help)", a, prog);
-            return export_fail(prog, 2, msg);
+            return lsqt_prog_error(prog, 2, msg);
         } else if (input) {
-            return export_fail(prog, 2, "more than one input LSS");
+            return lsqt_prog_error(prog, 2, "more than one input LSS");
         } else {
             input = a;
         }
@@ -345,24 +339,24 @@ int lsqt_export_main(const char *prog, int argc, char **argv)
     }
     const size_t ol = strlen(out);
     if (!rgl && (ol < 4 || strcmp(out + ol - 3, ".nc") != 0))
-        return export_fail(prog, 2, "the output's name must end in .nc (NetCDF; --rgl writes an RGL tensor file, OUT.bsdf)");
+        return lsqt_prog_error(prog, 2, "the output's name must end in .nc (NetCDF; --rgl writes an RGL tensor file, OUT.bsdf)");
     if (rgl && (ol < 6 || strcmp(out + ol - 5, ".bsdf") != 0))
-        return export_fail(prog, 2, "with --rgl the output's name must end in .bsdf (an RGL tensor file)");
+        return lsqt_prog_error(prog, 2, "with --rgl the output's name must end in .bsdf (an RGL tensor file)");
     const char *what = NULL;
     if (strcmp(out, "-") == 0 || lsqt_path_type(out, &what) > LSQT_PATH_REGULAR) {
         char msg[LSQT_PATH_CAP + 96];
         snprintf(msg, sizeof msg, "'%s' is %s%s: %s is written to a regular file (it is read back)", out,
                  what ? "a " : "", what ? what : "stdout", rgl ? "a tensor file" : "NetCDF");
-        return export_fail(prog, 2, msg);
+        return lsqt_prog_error(prog, 2, msg);
     }
     if (strcmp(input, "-") != 0 && lsqt_same_file(out, input)) {
         char msg[LSQT_PATH_CAP + 64];
         snprintf(msg, sizeof msg, "the output '%s' would replace the input", out);
-        return export_fail(prog, 2, msg);
+        return lsqt_prog_error(prog, 2, msg);
     }
     char msg[LSQT_PATH_CAP * 2 + 256];
     lsqt_state st;
-    if (lsqt_lss_read(input, &st, msg, sizeof msg)) return export_fail(prog, 2, msg);
+    if (lsqt_lss_read(input, &st, msg, sizeof msg)) return lsqt_prog_error(prog, 2, msg);
     if (rgl) {
         const int rc = export_rgl(prog, input, out, &st, rgl == 2, quiet);
         lsqt_state_free(&st);
@@ -372,18 +366,18 @@ int lsqt_export_main(const char *prog, int argc, char **argv)
     if (find_grid(&st, input, &g, msg, sizeof msg)) {
         free(g.side[0]), free(g.side[1]);
         lsqt_state_free(&st);
-        return export_fail(prog, 2, msg);
+        return lsqt_prog_error(prog, 2, msg);
     }
     int rc = 0;
     lsqt_slice_est *est = lsqt_estimates(&st);
     lsqt_out o;
-    if (!est) rc = export_fail(prog, 1, "out of memory");
-    else if (lsqt_out_open_named(&o, out, msg, sizeof msg)) rc = export_fail(prog, 1, msg);
+    if (!est) rc = lsqt_prog_error(prog, 1, "out of memory");
+    else if (lsqt_out_open_named(&o, out, msg, sizeof msg)) rc = lsqt_prog_error(prog, 1, msg);
     else if (write_nc(lsqt_out_name(&o), input, &st, est, &g, msg, sizeof msg)) {
         lsqt_out_abort(&o);
-        rc = export_fail(prog, 1, msg);
+        rc = lsqt_prog_error(prog, 1, msg);
     } else if (lsqt_out_commit_named(&o, msg, sizeof msg)) {
-        rc = export_fail(prog, 1, msg);
+        rc = lsqt_prog_error(prog, 1, msg);
     } else if (!quiet) {
         printf("wrote %s: brdf%s over (cos_theta_i %d, phi_d %d, cos_theta_o %d)%s, %llu paths per slice\n", out,
                st.transmits ? " and btdf" : "", g.ni, g.nphi, g.no, g.below ? " from above and from below" : "",

@@ -38,12 +38,6 @@ static void usage(FILE *f, const char *prog)
             prog);
 }
 
-static int info_fail(const char *prog, int code, const char *msg)
-{
-    fprintf(stderr, "%s: error: %s\n", prog, msg);
-    return code;
-}
-
 /* The names of the raised device flags, comma separated ("" when none). */
 static void flag_names(uint32_t flags, char *buf, size_t cap, const char *quote)
 {
@@ -288,14 +282,14 @@ int lsqt_info_main(const char *prog, int argc, char **argv)
     const int from_stdin = strcmp(input, "-") == 0;
     if (json && !from_stdin && strcmp(json, "-") != 0 && lsqt_same_file(json, input)) {
         snprintf(msg, sizeof msg, "the JSON output '%s' would replace the input", json);
-        return info_fail(prog, 2, msg);
+        return lsqt_prog_error(prog, 2, msg);
     }
     lsqt_state st;
-    if (lsqt_lss_read(input, &st, msg, sizeof msg)) return info_fail(prog, 2, msg);
+    if (lsqt_lss_read(input, &st, msg, sizeof msg)) return lsqt_prog_error(prog, 2, msg);
     lsqt_slice_est *est = lsqt_estimates(&st);
     if (!est) {
         lsqt_state_free(&st);
-        return info_fail(prog, 1, "out of memory");
+        return lsqt_prog_error(prog, 1, "out of memory");
     }
     const char *name = from_stdin ? "<stdin>" : input;
     FILE *text = json && strcmp(json, "-") == 0 ? stderr : stdout;
@@ -303,9 +297,9 @@ int lsqt_info_main(const char *prog, int argc, char **argv)
     int rc = 0;
     if (fflush(text) != 0 || ferror(text)) {
         snprintf(msg, sizeof msg, "cannot write to %s: %s", text == stdout ? "stdout" : "stderr", strerror(errno));
-        rc = info_fail(prog, 1, msg);
+        rc = lsqt_prog_error(prog, 1, msg);
     }
-    if (json && write_json(json, name, &st, est, bsdf, msg, sizeof msg)) rc = info_fail(prog, 1, msg);
+    if (json && write_json(json, name, &st, est, bsdf, msg, sizeof msg)) rc = lsqt_prog_error(prog, 1, msg);
     lsqt_estimates_free(est, st.n_slices);
     lsqt_state_free(&st);
     return rc;

@@ -64,19 +64,13 @@ static int missing(const uint64_t *r, int n, uint64_t need, char *buf, size_t ca
     return count;
 }
 
-static int fail(int code, const char *prog, const char *msg)
-{
-    fprintf(stderr, "%s: error: %s\n", prog, msg);
-    return code;
-}
-
 int lsqt_merge_main(const char *prog, int argc, char **argv)
 {
     const char *out_lss = NULL, *raw = NULL, *json = NULL;
     int hemi = 0, partial = 0, quiet = 0, n_in = 0;
     const char **in = calloc((size_t)(argc > 0 ? argc : 1), sizeof *in);
     char err[2 * LSQT_PATH_CAP + 512];
-    if (!in) return fail(1, prog, "out of memory");
+    if (!in) return lsqt_prog_error(prog, 1, "out of memory");
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         const char *eq = strchr(a, '=');
@@ -92,7 +86,7 @@ int lsqt_merge_main(const char *prog, int argc, char **argv)
             if (!v || !*v) {
                 snprintf(err, sizeof err, "%.*s needs a value (see --help)", (int)nl, a);
                 free(in);
-                return fail(2, prog, err);
+                return lsqt_prog_error(prog, 2, err);
             }
             if (a[1] == 'o' || a[2] == 'o') raw = v;
             else json = v;
@@ -105,7 +99,7 @@ int lsqt_merge_main(const char *prog, int argc, char **argv)
         } else if (a[0] == '-' && a[1]) {
             snprintf(err, sizeof err, "unknown option '%.64s' (see --help)", a);
             free(in);
-            return fail(2, prog, err);
+            return lsqt_prog_error(prog, 2, err);
         } else if (!out_lss) {
             out_lss = a;
         } else {
@@ -119,7 +113,7 @@ int lsqt_merge_main(const char *prog, int argc, char **argv)
     }
     if (strcmp(out_lss, "-") == 0) {
         free(in);
-        return fail(2, prog, "OUT.lss must be a file");
+        return lsqt_prog_error(prog, 2, "OUT.lss must be a file");
     }
 
     /* Every input is read and checked before anything is written. The output is locked
@@ -129,23 +123,23 @@ int lsqt_merge_main(const char *prog, int argc, char **argv)
     lsqt_lock *locks = calloc((size_t)n_in + 1, sizeof *locks);
     memset(&sum, 0, sizeof sum);
     int rc = 0, n_read = 0, n_locks = 0;
-    if (!st || !locks) rc = fail(1, prog, "out of memory");
+    if (!st || !locks) rc = lsqt_prog_error(prog, 1, "out of memory");
     for (int i = -1; i < n_in && !rc; i++) {
         if (i >= 0 && lsqt_same_file(in[i], out_lss)) continue;
         int r = lsqt_lock_take(&locks[n_locks], i < 0 ? out_lss : in[i], i < 0, err, sizeof err);
         if (r == 0) n_locks++;
         else if (r == 2 && !quiet) fprintf(stderr, "warning: %s\n", err);
-        else if (r == 1) rc = fail(1, prog, err); /* -1: writing OUT.lss fails and says why */
+        else if (r == 1) rc = lsqt_prog_error(prog, 1, err); /* -1: writing OUT.lss fails and says why */
     }
     for (int i = 0; i < n_in && !rc; i++) {
         for (int j = 0; j < i && !rc; j++)
             if (lsqt_same_file(in[i], in[j])) {
                 snprintf(err, sizeof err, "'%s' is given twice: the same paths cannot be added twice", in[i]);
-                rc = fail(2, prog, err);
+                rc = lsqt_prog_error(prog, 2, err);
             }
         if (rc) break;
         if (lsqt_lss_read(in[i], &st[i], err, sizeof err)) {
-            rc = fail(2, prog, err);
+            rc = lsqt_prog_error(prog, 2, err);
             break;
         }
         n_read++;
@@ -154,7 +148,7 @@ int lsqt_merge_main(const char *prog, int argc, char **argv)
         if (what) {
             snprintf(err, sizeof err, "'%s' and '%s' differ in their %s: they are not parts of one run", in[0],
                      in[i], what);
-            rc = fail(2, prog, err);
+            rc = lsqt_prog_error(prog, 2, err);
         }
     }
     /* Disjoint ranges: a path counted twice would be a silent bias. */
@@ -170,17 +164,17 @@ int lsqt_merge_main(const char *prog, int argc, char **argv)
                                  "'%s' and '%s' both hold paths [%llu, %llu): overlapping parts (the same shard "
                                  "twice, or shards of different runs)",
                                  in[j], in[i], (unsigned long long)lo, (unsigned long long)hi);
-                        rc = fail(2, prog, err);
+                        rc = lsqt_prog_error(prog, 2, err);
                     }
                 }
     int total_ranges = 0;
     for (int i = 0; i < n_read; i++) total_ranges += st[i].n_ranges;
     uint64_t *all = rc ? NULL : malloc(((size_t)total_ranges + 1) * 2 * sizeof *all);
-    if (!rc && !all) rc = fail(1, prog, "out of memory");
+    if (!rc && !all) rc = lsqt_prog_error(prog, 1, "out of memory");
     if (!rc) {
         const lsqt_state *f = &st[0];
         if (lsqt_state_init(&sum, f->canonical, f->hash, f->seed, f->n_slices, f->n_wi, f->transmits)) {
-            rc = fail(1, prog, "out of memory");
+            rc = lsqt_prog_error(prog, 1, "out of memory");
         } else {
             sum.use_double = f->use_double, sum.dir_method = f->dir_method, sum.rx = f->rx;
             sum.pilot_paths = f->pilot_paths, sum.stage = f->stage;
@@ -198,13 +192,13 @@ int lsqt_merge_main(const char *prog, int argc, char **argv)
                 memcpy(all + 2 * k, st[i].ranges, (size_t)st[i].n_ranges * 2 * sizeof *all);
                 k += st[i].n_ranges;
             }
-            if (lsqt_state_set_ranges(&sum, all, k)) rc = fail(1, prog, "out of memory");
+            if (lsqt_state_set_ranges(&sum, all, k)) rc = lsqt_prog_error(prog, 1, "out of memory");
         }
     }
     free(all);
     for (int i = 0; i < n_read; i++) lsqt_state_free(&st[i]);
     free(st);
-    if (!rc && lsqt_tally_flags_error(sum.flags, err, sizeof err)) rc = fail(1, prog, err);
+    if (!rc && lsqt_tally_flags_error(sum.flags, err, sizeof err)) rc = lsqt_prog_error(prog, 1, err);
 
     /* The whole run, or (--partial) what there is. */
     const int pilot = !rc && sum.stage == LSQT_STAGE_PILOT;
@@ -216,7 +210,7 @@ int lsqt_merge_main(const char *prog, int argc, char **argv)
             snprintf(err, sizeof err, "the inputs leave out paths %s of the %s [0, %llu): missing shards%s", gaps,
                      pilot ? "RRSS pilot" : "run", (unsigned long long)need,
                      pilot ? " (an RRSS pilot must be whole to choose directions)" : " (--partial writes them anyway)");
-            rc = fail(2, prog, err);
+            rc = lsqt_prog_error(prog, 2, err);
         } else if (n_missing && !quiet) {
             fprintf(stderr, "note: partial: %s holds %llu of the run's %llu paths per slice; missing %s\n", out_lss,
                     (unsigned long long)sum.paths, (unsigned long long)need, gaps);
@@ -228,7 +222,7 @@ int lsqt_merge_main(const char *prog, int argc, char **argv)
         lsqt_rrss_info ri;
         memset(&ri, 0, sizeof ri);
         if (lsqt_rrss_choose(&sum, &chosen, &ri, err, sizeof err)) {
-            rc = fail(1, prog, err);
+            rc = lsqt_prog_error(prog, 1, err);
         } else {
             if (!quiet) lsqt_rrss_notes(stderr, &ri);
             if (!quiet)
@@ -267,22 +261,22 @@ int lsqt_merge_main(const char *prog, int argc, char **argv)
             outs[side ? O_RAW_BT : O_RAW_T] = hemi && sum.transmits ? t : NULL;
         }
         if (two && (!raw_name[0] || strcmp(raw_name, "-") == 0))
-            rc = fail(2, prog, "a two-sided state has a second RAW named from the first: give -o a file name");
+            rc = lsqt_prog_error(prog, 2, "a two-sided state has a second RAW named from the first: give -o a file name");
         for (int i = 0; i < O_N && !rc; i++)
             for (int j = i + 1; j < O_N && !rc; j++)
                 if (outs[i] && outs[j] && lsqt_same_file(outs[i], outs[j])) {
                     snprintf(err, sizeof err, "two outputs would be written to '%s'", outs[i]);
-                    rc = fail(2, prog, err);
+                    rc = lsqt_prog_error(prog, 2, err);
                 }
         /* RAW files hold one side each, as lsqt-cl writes them */
         lsqt_state sides[2];
         memset(sides, 0, sizeof sides);
         lsqt_slice_est *est = rc ? NULL : lsqt_estimates(&sum), *side_est[2] = {NULL, NULL};
-        if (!rc && !est) rc = fail(1, prog, "out of memory");
+        if (!rc && !est) rc = lsqt_prog_error(prog, 1, "out of memory");
         if (!rc && two &&
             (lsqt_state_split_sides(&sum, &sides[0], &sides[1]) || !(side_est[0] = lsqt_estimates(&sides[0])) ||
              !(side_est[1] = lsqt_estimates(&sides[1]))))
-            rc = fail(1, prog, "out of memory");
+            rc = lsqt_prog_error(prog, 1, "out of memory");
         int skipped = 0;
         lsqt_run_info ri = {"(merged: no device)", 0.0, 0.0, 0ULL, NULL, lsqt_work_totals(&sum)};
         for (int i = 0; i < O_N && !rc; i++) {
@@ -294,7 +288,7 @@ int lsqt_merge_main(const char *prog, int argc, char **argv)
             int w = i == O_LSS    ? lsqt_lss_write(outs[i], &sum, err, sizeof err)
                     : i == O_JSON ? lsqt_report_json(outs[i], &sum, est, &ri, err, sizeof err)
                                   : lsqt_raw_write(outs[i], rs, re, mode, &skipped, err, sizeof err);
-            if (w) rc = fail(1, prog, err);
+            if (w) rc = lsqt_prog_error(prog, 1, err);
         }
         if (!rc && !quiet) {
             FILE *info = (raw && strcmp(raw, "-") == 0) || (json && strcmp(json, "-") == 0) ? stderr : stdout;

@@ -646,3 +646,9 @@ void lsqt_lock_release(lsqt_lock *l)
     close(l->fd);
     l->fd = -1;
 }
+
+int lsqt_prog_error(const char *prog, int code, const char *msg)
+{
+    fprintf(stderr, "%s: error: %s\n", prog, msg);
+    return code;
+}

@@ -97,6 +97,9 @@ typedef struct lsqt_lock {
 int lsqt_lock_take(lsqt_lock *l, const char *state, int exclusive, char *err, size_t errcap);
 void lsqt_lock_release(lsqt_lock *l);
 
+/* "PROG: error: MSG" on stderr; returns code (the exit status of the subcommands). */
+int lsqt_prog_error(const char *prog, int code, const char *msg);
+
 #ifdef __cplusplus
 }
 #endif
