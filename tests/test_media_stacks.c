@@ -15,12 +15,13 @@
  *                                reflection, and its own quadrature and Fourier
  *                                truncation at the settings the other sections use.
  *   test_media_stacks quick      the release suite's: thin over thick, thick over thin,
- *                                three media, and two media over a Lambertian ground,
- *                                in float, 2^18 paths a slice.
- *   test_media_stacks float      power (CI): six stacks, 2^21 paths a slice: those four,
- *                                a clear absorbing film over a scatterer, and two equal
- *                                media that must equal one medium of the summed optical
- *                                thickness (its reference is the one medium's).
+ *                                three media, two media over a Lambertian ground, and a
+ *                                clear absorbing film over a scatterer, in float, 2^18
+ *                                paths a slice.
+ *   test_media_stacks float      power (CI): six stacks, 2^21 paths a slice: those five
+ *                                and two equal media that must equal one medium of the
+ *                                summed optical thickness (its reference is the one
+ *                                medium's).
  *   test_media_stacks double     power (CI): five of them in --double, 2^20 paths.
  *
  * Checks: per direction |f - ref| <= ZD sigma + ref REF_TOL; per (slice, side, theta_i)
@@ -379,6 +380,7 @@ static void section_quick(int count_only)
     stack_check(&THICK_OVER_THIN, (uint64_t)1 << 18, 3002, 0, count_only);
     stack_check(&THREE_MEDIA, (uint64_t)1 << 18, 3003, 0, count_only);
     stack_check(&DUST_HAZE_GROUND, (uint64_t)1 << 18, 3004, 0, count_only);
+    stack_check(&FILM_OVER_PIGMENT, (uint64_t)1 << 18, 3005, 0, count_only);
 }
 
 static void section_float(int count_only)

@@ -8,9 +8,12 @@ Kernel files (kernels/*.cl, and shared headers the host never includes) are muta
 copy of kernels/ + include/ and tested with the release build (build/, or LSQT_BUILD_DIR)
 through LSQT_KERNEL_DIR; everything else is mutated in a scratch copy of the source tree,
 built once in a scratch build directory and rebuilt incrementally per mutation. A
-mutation is killed when its tests fail; it survived when they pass; an error (a rotten
-entry, a mutant that does not build, a test that does not exist, a baseline that fails)
-is a failure of the list. Exit status 0 only when every selected mutation is killed."""
+mutation is killed when a test's checks fail on it (ctest: Failed), and the report names
+those tests; it survived when they pass; tests that only time out or crash leave it
+unkilled; the gates (GATES: test_gpu_build's register ceilings) never run against a
+mutant. An error (a rotten entry, a mutant that does not build, a test that does not
+exist, a baseline that fails) is a failure of the list. Exit status 0 only when every
+selected mutation is killed."""
 
 import argparse
 import os
@@ -31,6 +34,15 @@ FIELDS = ("name", "file", "find", "replace", "tests", "why")
 MULTI = ("find", "replace")  # fields that take continuation lines (find+:, replace+:)
 NAME_RE = re.compile(r"^[a-z0-9][a-z0-9._-]*$")
 TEST_RE = re.compile(r"^[A-Za-z0-9_.*+?\[\]-]+$")  # a ctest name, or a simple pattern
+# Tests that fail on any edit of what they watch, whatever its physics: test_gpu_build
+# holds each kernel's register count at its ceiling. They are never run against a mutant
+# (ctest -E), and no mutation may name them: a planted error must be seen by a test of
+# values.
+GATES = ("test_gpu_build",)
+# ctest's reason for a failed test that means its checks saw something; anything else
+# (Timeout, SEGFAULT, Subprocess aborted, Child aborted, ...) is a test that did not
+# finish its checks, and does not kill a mutant.
+FAILED_CHECK = "Failed"
 
 
 class ListError(Exception):
@@ -114,6 +126,10 @@ def check_entry(m, seen):
     tests = m["tests"].split()
     if not tests or not all(TEST_RE.match(t) for t in tests):
         why.append("tests must be ctest names separated by spaces: %r" % m["tests"])
+    gates = [t for t in tests if any(re.fullmatch(t, g) for g in GATES)]
+    if gates:
+        why.append("%s is a gate (a ceiling that any edit can cross), not a test of values; name the test "
+                   "that sees the error" % ", ".join(gates))
     if not m["why"]:
         why.append("empty why")
     return why
@@ -193,18 +209,19 @@ class Ctest:
         return [t for t in names if self.count(t) == 0]
 
     def run(self, names):
-        """Runs ^(names)$; returns (status, failed test names, output). status is 'pass',
-        'fail' (some test failed or timed out), 'hang' (ctest itself ran past its limit)
-        or 'error' (ctest failed without a failing test)."""
+        """Runs ^(names)$ but the GATES; returns (status, failed, output): status 'pass',
+        'fail' (some test failed), 'hang' (ctest itself ran past its limit) or 'error'
+        (ctest failed without a failing test); failed lists (test, ctest's reason:
+        FAILED_CHECK, 'Timeout', 'SEGFAULT', ...)."""
         regex = "^(%s)$" % "|".join(names)
         n = sum(self.count(t) for t in names)
         cmd = ["ctest", "--output-on-failure", "--no-tests=error", "-j", str(self.jobs),
-               "--timeout", str(self.timeout), "-R", regex]
+               "--timeout", str(self.timeout), "-R", regex, "-E", "^(%s)$" % "|".join(GATES)]
         # ctest --timeout does not override a test's own TIMEOUT property (up to 300 s
         # here), so ctest as a whole gets a hard limit too: the per-test limit for every
-        # test it runs, plus 15 s. A mutant that hangs is killed, and counts as killed.
+        # test it runs, plus 15 s. A mutant that hangs is stopped (and not killed).
         rc, out, hung = run(cmd, self.bdir, self.env, self.timeout * max(n, 1) + 15)
-        failed = re.findall(r"^\s*\d+ - (\S+) \(", out, re.M)
+        failed = re.findall(r"^\s*\d+ - (\S+) \(([^)]*)\)", out, re.M)
         if hung:
             return "hang", failed, out
         if rc == 0:
@@ -212,6 +229,20 @@ class Ctest:
         if failed:
             return "fail", failed, out
         return "error", [], out
+
+
+def verdict(status, failed):
+    """A mutant's status from its tests' outcome: 'killed' only when a test's checks
+    failed (ctest's FAILED_CHECK); a mutant whose tests only timed out or crashed is
+    'unkilled'; 'hung' when ctest ran past its limit. Returns (status, note)."""
+    checks = [t for t, why in failed if why == FAILED_CHECK]
+    others = ["%s (%s)" % (t, why) for t, why in failed if why != FAILED_CHECK]
+    rest = ("; not counted: " + ", ".join(others)) if others else ""
+    if checks:
+        return "killed", "killed by " + " ".join(checks) + rest
+    if status == "hang":
+        return "hung", "ctest ran past its limit" + rest
+    return "unkilled", "no test's checks failed" + rest
 
 
 # ---- scratch trees ------------------------------------------------------------------
@@ -484,8 +515,8 @@ def main():
             return report(m, "survived", secs, "(%s pass)" % " ".join(names) if not args.all_tests else "")
         if status == "error":
             return report(m, "error", secs, "ctest failed without a failing test:\n" + out[-3000:])
-        note = "(%s)" % (" ".join(killers) if killers else "hung: ctest ran past its limit")
-        return report(m, "killed", secs, note)
+        v, note = verdict(status, killers)
+        return report(m, v, secs, "(%s)" % note)
 
     def baseline(ct, group, label):
         """The unmutated tree must pass the tests the group names; else nothing it
@@ -499,7 +530,8 @@ def main():
         t0 = time.time()
         status, killers, out = ct.run(names)
         if status != "pass":
-            print("error: unmutated baseline fails in %s (%s):\n%s" % (ct.bdir, " ".join(killers), out[-5000:]))
+            print("error: unmutated baseline fails in %s (%s):\n%s" % (ct.bdir, " ".join("%s (%s)" % k for k in killers),
+                                                                  out[-5000:]))
             return False
         print("%-*s  %-8s %6.1f s  (%s)" % (width, "(baseline, %s)" % label, "ok",
                                            time.time() - t0, " ".join(names)), flush=True)
