@@ -41,8 +41,10 @@ static inline double z_family(int n_checks, double alpha)
     double lo = 1.0, hi = 40.0, p = alpha / n_checks;
     for (int i = 0; i < 60; i++) {
         double mid = 0.5 * (lo + hi);
-        if (t_tail2(mid, NB - 1) > p) lo = mid;
-        else hi = mid;
+        if (t_tail2(mid, NB - 1) > p)
+            lo = mid;
+        else
+            hi = mid;
     }
     return hi;
 }
@@ -99,8 +101,8 @@ static inline lsqt_est batch_ratio(const double *y, const double *x)
 }
 
 /* Mean over the directions ks of f/ref, per path (x = paths) or per unit of *den */
-static inline lsqt_est ratio_over(const lsqt_state *st, int s, const int *ks, int n, const double *ref, const double *den,
-                           double scale)
+static inline lsqt_est ratio_over(const lsqt_state *st, int s, const int *ks, int n, const double *ref,
+                                  const double *den, double scale)
 {
     double y[NB], x[NB];
     for (int b = 0; b < NB; b++) {
@@ -114,8 +116,9 @@ static inline lsqt_est ratio_over(const lsqt_state *st, int s, const int *ks, in
 
 /* Simulates text at the slices deg with the given directions (float x, y, z per row), or
  * n_wi spread ones when dirs is NULL. */
-static inline lsqt_slice_est *run_dirs(const char *text, int n_slices, const double *deg, int n_wi, const double (*dirs)[3],
-                                uint64_t paths, uint64_t seed, int use_double, lsqt_state *st)
+static inline lsqt_slice_est *run_dirs(const char *text, int n_slices, const double *deg, int n_wi,
+                                       const double (*dirs)[3], uint64_t paths, uint64_t seed, int use_double,
+                                       lsqt_state *st)
 {
     lsqt_assembly a;
     fixture_state(text, n_slices, n_wi, seed, use_double, &a, st);

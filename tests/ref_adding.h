@@ -5,11 +5,12 @@
  * program: no kernel code, no sampling.
  *
  * What it computes: for a stack of slabs (optical thickness tau, albedo om, Henyey-
- * Greenstein g; top first), optionally over an opaque Lambertian floor, lit from above by a collimated beam travelling down with
- * direction cosine -mu0, the BSDF f (1/sr, without the cosine: the RAW value) of the
- * scattered light at exit direction cosine mu (up: reflection, down: transmission) and
- * azimuth dphi measured from the beam's direction of travel. The unscattered beam
- * (exp(-tau/mu0), a delta) is kept apart and never put on the grid.
+ * Greenstein g; top first), optionally over an opaque Lambertian floor, lit from above by
+ * a collimated beam travelling down with direction cosine -mu0, the BSDF f (1/sr,
+ * without the cosine: the RAW value) of the scattered light at exit direction cosine mu
+ * (up: reflection, down: transmission) and azimuth dphi measured from the beam's
+ * direction of travel. The unscattered beam (exp(-tau/mu0), a delta) is kept apart and
+ * never put on the grid.
  *
  * How:
  *  - Azimuth: f(dphi) = sum_m a_m cos(m dphi), m < nm. Composing two kernels in azimuth
@@ -52,8 +53,8 @@
 enum { AD_PANELS = 14, AD_NPHI = 256, AD_MAX_SLABS = 8 };
 
 typedef struct {
-    int n, nq, nm;      /* nodes (nq quadrature nodes, then extras of weight 0), modes */
-    double *mu, *w;     /* cosines in (0, 1] and quadrature weights on (0, 1) (0: extra) */
+    int n, nq, nm;  /* nodes (nq quadrature nodes, then extras of weight 0), modes */
+    double *mu, *w; /* cosines in (0, 1] and quadrature weights on (0, 1) (0: extra) */
 } ad_grid;
 
 /* A slab's (or stack's) diffuse kernels: nm matrices of n x n, [m][exit i][incident j];
@@ -66,7 +67,7 @@ typedef struct {
 /* Quadrature of per_panel nodes on each panel, then the extra cosines (each in (0, 1]). */
 static inline void ad_grid_init(ad_grid *G, int per_panel, int nm, const double *extra, int n_extra)
 {
-    static const double edges[AD_PANELS + 1] = {0,    1e-5, 1e-4, 1e-3, 5e-3, 0.02, 0.05, 0.1,
+    static const double edges[AD_PANELS + 1] = {0,   1e-5, 1e-4, 1e-3, 5e-3, 0.02, 0.05, 0.1,
                                                 0.2, 0.35, 0.5,  0.65, 0.8,  0.92, 1};
     G->nq = AD_PANELS * per_panel;
     G->n = G->nq + n_extra;
@@ -206,10 +207,7 @@ static inline void ad_add(const ad_grid *G, const ad_slab *a, const ad_slab *b, 
 
 /* int_0^t e^{-s b - (t - s) a} ds: in at rate b, out at rate a, without the 0 * inf
  * of e^{-t a} t phi1(t (b - a)) when a is huge. */
-static inline double ad_cross(double t, double b, double a)
-{
-    return exp(-t * fmin(a, b)) * t * phi1(t * fabs(a - b));
-}
+static inline double ad_cross(double t, double b, double a) { return exp(-t * fmin(a, b)) * t * phi1(t * fabs(a - b)); }
 
 /* The exact single-scattering kernels of a slab of thickness t, from the phase modes. */
 static inline void ad_thin(const ad_grid *G, double om, double t, const double *pR, const double *pT, ad_slab *s)

@@ -50,8 +50,9 @@ static const double DEG_O[NS] = {0, 60, 85};
 
 typedef struct {
     const char *name;
-    int n;                                                     /* interior media, top first */
-    double tau[MAX_MEDIA], om[MAX_MEDIA], g[MAX_MEDIA], d[MAX_MEDIA]; /* d: geometric thickness */
+    int n; /* interior media, top first */
+    /* optical thickness, albedo, HG g and geometric thickness of each */
+    double tau[MAX_MEDIA], om[MAX_MEDIA], g[MAX_MEDIA], d[MAX_MEDIA];
     int ref_merged; /* the reference is one medium of the summed tau (equal media) */
     int floor;      /* an opaque Lambertian of reflectance floor_fr at the bottom (else null) */
     double floor_fr;
@@ -59,16 +60,19 @@ typedef struct {
 
 /* Thicknesses other than 1, so that a coefficient taken for an optical thickness (or
  * the other way round) is an error the test sees. */
-static const stack_case THIN_OVER_THICK = {"thin over thick", 2, {0.1, 2.0}, {0.9, 0.95}, {0.3, 0.6}, {0.4, 1.7}, 0, 0, 0.0};
-static const stack_case THICK_OVER_THIN = {"thick over thin", 2, {2.0, 0.1}, {0.95, 0.8}, {0.5, -0.3}, {1.3, 0.6}, 0, 0, 0.0};
-static const stack_case FILM_OVER_PIGMENT = {"absorbing film over scatterer", 2, {0.3, 1.0}, {0.0, 0.99}, {0.0, 0.5},
-                                             {0.25, 2.0}, 0, 0, 0.0};
-static const stack_case THREE_MEDIA = {"three media", 3, {0.2, 0.3, 1.0}, {0.9, 0.5, 0.9}, {0.5, 0.0, -0.2},
-                                       {0.5, 1.5, 0.8}, 0, 0, 0.0};
-static const stack_case EQUAL_MEDIA = {"two equal media = one", 2, {0.35, 0.65}, {0.9, 0.9}, {0.4, 0.4}, {0.7, 1.3}, 1, 0, 0.0};
+static const stack_case THIN_OVER_THICK = {
+    "thin over thick", 2, {0.1, 2.0}, {0.9, 0.95}, {0.3, 0.6}, {0.4, 1.7}, 0, 0, 0.0};
+static const stack_case THICK_OVER_THIN = {
+    "thick over thin", 2, {2.0, 0.1}, {0.95, 0.8}, {0.5, -0.3}, {1.3, 0.6}, 0, 0, 0.0};
+static const stack_case FILM_OVER_PIGMENT = {
+    "absorbing film over scatterer", 2, {0.3, 1.0}, {0.0, 0.99}, {0.0, 0.5}, {0.25, 2.0}, 0, 0, 0.0};
+static const stack_case THREE_MEDIA = {
+    "three media", 3, {0.2, 0.3, 1.0}, {0.9, 0.5, 0.9}, {0.5, 0.0, -0.2}, {0.5, 1.5, 0.8}, 0, 0, 0.0};
+static const stack_case EQUAL_MEDIA = {
+    "two equal media = one", 2, {0.35, 0.65}, {0.9, 0.9}, {0.4, 0.4}, {0.7, 1.3}, 1, 0, 0.0};
 /* the layer's point estimates cross both media (the kernels' per-layer tables) */
-static const stack_case DUST_HAZE_GROUND = {"dust over haze over ground", 2, {0.15, 0.8}, {0.85, 0.97}, {0.6, 0.2},
-                                            {0.3, 2.5}, 0, 1, 0.3};
+static const stack_case DUST_HAZE_GROUND = {
+    "dust over haze over ground", 2, {0.15, 0.8}, {0.85, 0.97}, {0.6, 0.2}, {0.3, 2.5}, 0, 1, 0.3};
 
 static void stack_text(const stack_case *c, char *text, size_t size)
 {
@@ -85,8 +89,10 @@ static void stack_text(const stack_case *c, char *text, size_t size)
             at += snprintf(text + at, size - (size_t)at, "Medium mua=%.17g\n", mut);
         z -= c->d[k];
     }
-    if (c->floor) snprintf(text + at, size - (size_t)at, "Layer z=0 LambertianBsdf fR=%.17g fT=0\nMedium\n", c->floor_fr);
-    else snprintf(text + at, size - (size_t)at, "Layer z=0 NullBsdf\nMedium\n");
+    if (c->floor)
+        snprintf(text + at, size - (size_t)at, "Layer z=0 LambertianBsdf fR=%.17g fT=0\nMedium\n", c->floor_fr);
+    else
+        snprintf(text + at, size - (size_t)at, "Layer z=0 NullBsdf\nMedium\n");
 }
 
 /* The test's incident directions (up, then down): theta_i band of each in band[]. */
@@ -170,8 +176,9 @@ static void stack_check(const stack_case *c, uint64_t paths, uint64_t seed, int 
             const double f = e[s].f[k].mean, sg = e[s].f[k].err, dev = fabs(f - ref[k]);
             const double z = (dev - REF_TOL * ref[k]) / sg;
             zmax = fmax(zmax, dev / sg);
-            CHECK(sg > 0 && z <= ZD, "%s (%s) to=%g wi=(%.4f %.4f %.4f): f %.6g +- %.2g vs reference %.6g: %+.2f %%, z = %.2f",
-                  c->name, prec, DEG_O[s], dirs[k][0], dirs[k][1], dirs[k][2], f, sg, ref[k], 100 * (f / ref[k] - 1),
+            CHECK(sg > 0 && z <= ZD,
+                  "%s (%s) to=%g wi=(%.4f %.4f %.4f): f %.6g +- %.2g vs reference %.6g: %+.2f %%, z = %.2f", c->name,
+                  prec, DEG_O[s], dirs[k][0], dirs[k][1], dirs[k][2], f, sg, ref[k], 100 * (f / ref[k] - 1),
                   (f - ref[k]) / sg);
         }
         /* per (side, theta_i): the mean of f/ref over the azimuths */
@@ -190,10 +197,10 @@ static void stack_check(const stack_case *c, uint64_t paths, uint64_t seed, int 
         ad_ref_hemi(&r, mu0, &Rr, &Tr);
         const double dT = c->floor ? 0.0 : exp(-total_tau(c) / mu0);
         Tr += dT;
-        CHECK(fabs(e[s].R.mean - Rr) <= ZA * e[s].R.err + REF_TOL * Rr, "%s (%s) to=%g: R %.6f +- %.2g vs %.6f", c->name,
-              prec, DEG_O[s], e[s].R.mean, e[s].R.err, Rr);
-        CHECK(fabs(e[s].T.mean - Tr) <= ZA * e[s].T.err + REF_TOL * Tr, "%s (%s) to=%g: T %.6f +- %.2g vs %.6f", c->name,
-              prec, DEG_O[s], e[s].T.mean, e[s].T.err, Tr);
+        CHECK(fabs(e[s].R.mean - Rr) <= ZA * e[s].R.err + REF_TOL * Rr, "%s (%s) to=%g: R %.6f +- %.2g vs %.6f",
+              c->name, prec, DEG_O[s], e[s].R.mean, e[s].R.err, Rr);
+        CHECK(fabs(e[s].T.mean - Tr) <= ZA * e[s].T.err + REF_TOL * Tr, "%s (%s) to=%g: T %.6f +- %.2g vs %.6f",
+              c->name, prec, DEG_O[s], e[s].T.mean, e[s].T.err, Tr);
         /* delta_T: binomial; its batch-means error is 0 where no path came through */
         const double sd_dT = fmax(e[s].delta_T.err, sqrt(dT * (1.0 - dT) / (double)paths));
         CHECK(fabs(e[s].delta_T.mean - dT) <= ZA * sd_dT + 1e-6 * dT, "%s (%s) to=%g: delta_T %.6g +- %.2g vs %.6g",
@@ -296,7 +303,8 @@ static void section_reference(void)
         }
         const double want[4] = {iad[i].R0, iad[i].T0, iad[i].R60, iad[i].T60}, got[4] = {R[0], T[0], R[1], T[1]};
         for (int q = 0; q < 4; q++) worst = fmax(worst, fabs(got[q] - want[q]));
-        CHECK(worst < 5e-5, "reference vs iadpython om=%g tau=%g g=%g: R %.7f %.7f, T %.7f %.7f (iad %.7f %.7f, %.7f %.7f)",
+        CHECK(worst < 5e-5,
+              "reference vs iadpython om=%g tau=%g g=%g: R %.7f %.7f, T %.7f %.7f (iad %.7f %.7f, %.7f %.7f)",
               iad[i].om, iad[i].tau, iad[i].g, R[0], R[1], T[0], T[1], iad[i].R0, iad[i].R60, iad[i].T0, iad[i].T60);
         printf("  iadpython om=%.3f tau=%5.1f g=%+.1f: largest difference in R, T %.2g\n", iad[i].om, iad[i].tau,
                iad[i].g, worst);
@@ -339,14 +347,16 @@ static void section_reference(void)
         }
         CHECK(worst < 1e-9, "reference: absorber above/below a scatterer or over a floor off by %.3g relative", worst);
         printf("  absorber above and below a scatterer, over a floor: largest relative difference from the exact "
-               "%.2g\n", worst);
+               "%.2g\n",
+               worst);
         ad_ref_free(&rb), ad_ref_free(&rab), ad_ref_free(&rba), ad_ref_free(&ral);
     }
     /* 4. Unlike conservative slabs (om = 1): R + T + the unscattered beam = 1. 5. Their
      *    reflection is reciprocal, f(mu0 -> mu, dphi) = f(mu -> mu0, dphi), though the
      *    stack is not symmetric (a wrong term of the adding breaks that). */
     {
-        const stack_case c = {"conservative", 3, {0.2, 1.5, 0.4}, {1.0, 1.0, 1.0}, {0.6, -0.4, 0.2}, {1, 1, 1}, 0, 0, 0.0};
+        const stack_case c = {
+            "conservative", 3, {0.2, 1.5, 0.4}, {1.0, 1.0, 1.0}, {0.6, -0.4, 0.2}, {1, 1, 1}, 0, 0, 0.0};
         ad_ref r;
         stack_ref(&c, REF_PER_PANEL, REF_MODES, REF_T0, &r);
         double worst_e = 0.0, worst_r = 0.0;
@@ -364,7 +374,8 @@ static void section_reference(void)
         }
         CHECK(worst_e < 1e-5, "reference: energy not conserved by %.3g", worst_e);
         CHECK(worst_r < 1e-9, "reference: reflection not reciprocal by %.3g", worst_r);
-        printf("  three conservative slabs: energy conserved to %.2g, reflection reciprocal to %.2g\n", worst_e, worst_r);
+        printf("  three conservative slabs: energy conserved to %.2g, reflection reciprocal to %.2g\n", worst_e,
+               worst_r);
         ad_ref_free(&r);
     }
     /* 6. Its resolution, on the stack with the most slabs (the float section checks
