@@ -1,4 +1,4 @@
-/* LSQT parser and validator (SPEC §3).
+/* LSQT parser and validator (docs/guide.md, the LSQT language; docs/design.md section 1).
  *
  * The input is read line by line (media and layers alternate), each line with the model
  * table below, which is the only place that names keys, defaults and valid ranges. Then

@@ -1,4 +1,4 @@
-/* lsqt-cl merge OUT.lss IN.lss...: the parts of one run (shards, SPEC §8) added into one
+/* lsqt-cl merge OUT.lss IN.lss...: the parts of one run (shards, docs/design.md section 4.2) added into one
  * state. Tallies are integers, so the sum is exact: all the shards of a run give the
  * bytes of the run in one process. No OpenCL. */
 #include "lsqt/merge.h"

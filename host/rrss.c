@@ -1,5 +1,5 @@
 /* RRSS (rrss.h): candidates from the slices' own walks, a pilot that estimates the BSDF
- * at all of them, and the redundancy reduction of SPEC §5. */
+ * at all of them, and the redundancy reduction of docs/design.md section 3.5. */
 #include "lsqt/rrss.h"
 
 #include <math.h>

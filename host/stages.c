@@ -1,5 +1,5 @@
-/* What one lsqt-cl run does with its state (SPEC §5, §8): a plain run or the rest of one
- * it owes, an RRSS pilot (fresh, resumed, or a shard's part of it), the choice of the
+/* What one lsqt-cl run does with its state (docs/design.md section 3.5; shards: docs/guide.md):
+ * a plain run or the rest of one it owes, an RRSS pilot (fresh, resumed, or a shard's part of it), the choice of the
  * directions, a shard's part of the paths (resuming its own file), both sides of a
  * two-sided state. main.c reads the input and writes the outputs around it. */
 #include "lsqt/stages.h"

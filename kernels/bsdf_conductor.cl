@@ -1,6 +1,6 @@
 /* MicrosurfaceConductiveBrdf: GGX facets with the exact unpolarised Fresnel reflectance
  * of a conductor of complex relative index eta + i k (the metal below over the medium
- * above). Single scattering (with the cosine of wi, SPEC section 4) with the
+ * above). Single scattering (with the cosine of wi, docs/design.md section 1.3) with the
  * height-correlated Smith masking-shadowing that uniform heights imply:
  *   f = F(wo.h) D(h) G2(wo, wi) / (4 wo.z),  G2 = 1 / (1 + Lambda(wo) + Lambda(wi)),
  * h = normalize(wo + wi), both above; multiple scattering adds the walk's orders >= 2

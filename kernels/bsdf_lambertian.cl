@@ -1,5 +1,5 @@
 /* Lambertian reflector/transmitter: f = fR |cos(wi)| / pi on the side of wo, fT |cos| / pi
- * on the other (cosine of wi included, SPEC section 4). Parameters p[0] = fR, p[1] = fT. */
+ * on the other (cosine of wi included, docs/design.md section 1.3). Parameters p[0] = fR, p[1] = fT. */
 
 LSQT_INLINE realv lambertian_evalv(__global const lsqt_dev_layer *l, real3 wo, dirv wi)
 {

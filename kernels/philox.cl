@@ -31,7 +31,7 @@ LSQT_INLINE uint4 philox4x32_10(uint4 c, uint2 k) { return philox4x32_rounds(c, 
 #define RNG_PURPOSE_CANDIDATES 1u /* RRSS: the analog walks whose exits are candidate directions */
 /* LSQT_RNG_BELOW (device_layout.h) is OR'ed into either for the slices from below. */
 
-/* The counter of a path's first block (SPEC section 6). */
+/* The counter of a path's first block (docs/design.md section 4.1). */
 LSQT_INLINE uint4 rng_counter(uint slice, ulong path, uint purpose)
 {
     return (uint4)(0u, (uint)path, ((uint)(path >> 32) & 0xFFFFu) | (purpose << 16), slice);

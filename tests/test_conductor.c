@@ -187,7 +187,7 @@ static void test_smooth_limit(void)
     lsqt_state_free(&st);
 }
 
-/* Extremes (SPEC section 9): alpha 1e-4 (a peak of 1/(pi alpha^2) = 3e7 in the point
+/* Extremes: alpha 1e-4 (a peak of 1/(pi alpha^2) = 3e7 in the point
  * estimates) and 10, theta_o up to 89.9 degrees, metal index ratios from a dielectric
  * above, float and double: every value finite and non-negative, no flag (nothing
  * dropped, nothing out of the tally range), R <= 1 within 3 sigma. */

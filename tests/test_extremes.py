@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Extremes (issue 12, SPEC section 9): every model at each end of its parameters, in
+"""Extremes (every estimate finite and stable at the extremes): every model at each end of its parameters, in
 float and in double, through the program itself (RAW, LSS, --json and the printed
 summary). Standard library only.
 
@@ -15,7 +15,7 @@ incident directions (the whole sphere where the stack transmits), 1024 paths:
 - no path cut by the safety cap, no overflowed tally, no dropped non-finite contribution
   (the LSS flags);
 - energy: R + T <= 1 + 3 sigma (+1e-6 for rounding), and for Oren-Nayar at most its own
-  formula's directional albedo (which exceeds fR at grazing incidence, SPEC section 9);
+  formula's directional albedo (which exceeds fR at grazing incidence);
 - limits, as pairs that must agree within 4 sigma of their difference (16384 paths): a layer of
   thickness 1e-6 at z = 1e6 and the same optical thickness at z = 0; a medium 1e6 thick
   with mus = 1e-6 and one 1 thick with mus = 1; Rayleigh rho = 1 and isotropic HG; HG

@@ -1,5 +1,6 @@
-/* Unit tests of the LSQT parser, validator and assembly helpers (SPEC §3): every rule,
- * every error message, defaults, pruning, canonical text, hash and build options. */
+/* Unit tests of the LSQT parser, validator and assembly helpers (docs/guide.md, the LSQT
+ * language; docs/design.md section 1): every rule, every error message, defaults, pruning,
+ * canonical text, hash and build options. */
 #include "check.h"
 #include "lsqt/assembly.h"
 
@@ -61,7 +62,7 @@ static const bad_case bad_cases[] = {
     { "medium\n", 1, "unknown line name at 'medium'" },
     { "Medium\nlayer z=0 Null\nMedium\n", 2, "unknown line name at 'layer'; expected Layer" },
     { "eta=1\n", 1, "unknown line name at 'eta=1'" },
-    /* Medium keys; unknown words are errors on Medium lines too (SPEC §10) */
+    /* Medium keys; unknown words are errors on Medium lines too (the original tool ignored them silently) */
     { MEDIUM1("foo"), 1,
       "unknown word at 'foo'; expected one of: eta mua mus or a phase model (" PHASES ")" },
     { MEDIUM1("eta=1.5 colour=red"), 1,
@@ -373,7 +374,7 @@ static void test_tutorials(void)
     }
 }
 
-/* Each model alone with its defaults (SPEC §3 table). */
+/* Each model alone with its defaults (docs/guide.md's table of models). */
 static void test_bsdf_defaults(void)
 {
     static const char *const names[] = {

@@ -1,4 +1,4 @@
-/* End-to-end physics of the three microsurface models (SPEC sections 3-4: Heitz, Hanika,
+/* End-to-end physics of the three microsurface models (docs/design.md section 1.3: Heitz, Hanika,
  * d'Eon, Dachsbacher 2016) through the whole walk, with fixed seeds and tolerances in
  * standard errors (batch means over the LSQT_BATCHES batches).
  *

@@ -1,5 +1,5 @@
 /* Oren-Nayar with both directions beyond 87 degrees, end to end (the walk's point estimate
- * at the layer, the host's RAW value f / |cos i|), against the formula SPEC section 4 and
+ * at the layer, the host's RAW value f / |cos i|), against the published formula and
  * kernels/bsdf_oren_nayar.cl promise, written here in double from the formula:
  *   f |cos i| = fR |cos i| / pi [A + B max(wo'.wi', 0) / max(|cos o|, |cos i|)],
  *   A = 1 - 0.5 s^2 / (s^2 + 0.33), B = 0.45 s^2 / (s^2 + 0.09), wo'.wi' the tangential

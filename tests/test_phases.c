@@ -896,7 +896,7 @@ static double sggx_sigma_d(const model_t *m, const double w[3])
 }
 
 /* Specular SGGX in double, D(h) / (4 sigma(wo)) with h = normalize(wo + wi) and
- * D(m) = 1 / (pi sqrt|S| (m^T S^-1 m)^2), S = diag(sxx, sxx, szz) (SPEC, Heitz et al. 2015). */
+ * D(m) = 1 / (pi sqrt|S| (m^T S^-1 m)^2), S = diag(sxx, sxx, szz) (Heitz et al. 2015). */
 static double sggx_spec_ref(const model_t *m, const double o[3], const double i[3])
 {
     const double sxx = m->M.pp[0], szz = m->M.pp[1];

@@ -38,7 +38,7 @@ static void philox_ref(const uint32_t in[4], const uint32_t key[2], int rounds, 
     memcpy(out, c, sizeof c);
 }
 
-/* SPEC section 6: draw j of a path is word j mod 4 of Philox4x32-10 with key = seed and
+/* docs/design.md section 4.1: draw j of a path is word j mod 4 of Philox4x32-10 with key = seed and
  * counter = (j / 4, path index low 32 bits, high 16 bits | purpose << 16, slice), so a
  * path is a pure function of (seed, slice, path index, purpose). Both forms of the
  * stream: one block at a time (GPUs) and the CPUs' four at a time (LSQT_RNG_WIDE), whose

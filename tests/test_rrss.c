@@ -1,4 +1,4 @@
-/* RRSS (SPEC §5): the selection rule, determinism, and that an RRSS state is exactly a run
+/* RRSS (docs/design.md section 3.5): the selection rule, determinism, and that an RRSS state is exactly a run
  * with its directions.
  *  - selection: with the BSDF of a narrow lobe the kept candidates crowd at the lobe;
  *    with a constant BSDF they keep about the candidates' own share everywhere; with a
@@ -81,7 +81,7 @@ static void test_select(void)
     CHECK(first_kept == M - N, "ties: first kept %d, want %d", first_kept, M - N);
 }
 
-/* An independent reading of the selection (SPEC §5 and rrss.c's documented order), plain
+/* An independent reading of the selection (docs/design.md section 3.5 and rrss.c's documented order), plain
  * and slow: the candidates' density from the 8 nearest, the target q, then m - n times
  * the most redundant enabled candidate off. A disc's sums run over the others in order
  * of nearness (dot product descending, then index), the first 256 of them; a disc that

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Shards and merge (SPEC §8): the parts of a run, merged, are the run in one process byte
+# Shards and merge (docs/design.md section 4.2): the parts of a run, merged, are the run in one process byte
 # for byte (tallies are integers, each path's random numbers depend only on its index);
 # overlapping, missing, foreign or unmerged parts are refused; --partial keeps what there
 # is and a continued partial state completes the run; RRSS progressive runs: the pilot

@@ -1,4 +1,4 @@
-/* End-to-end physics of the walk on the device, against closed forms (SPEC §9). */
+/* End-to-end physics of the walk on the device, against closed forms. */
 #include "cl_fixture.h"
 #include "nee_albedo.h"
 
@@ -286,7 +286,7 @@ static void test_reproducible(void)
     lsqt_state_free(&other);
 }
 
-/* SPEC section 9 extremes: grazing theta_o, thin and thick layers far from z = 0,
+/* Extremes: grazing theta_o, thin and thick layers far from z = 0,
  * g near +-1, optically thick media: never NaN, Inf or negative, never more than 1, and
  * no path cut by the safety cap. (Optical thickness 1e4 is in tools/validate: its
  * lossless paths need ~1e4 events on average, too slow for a unit test.) */

@@ -1,4 +1,4 @@
-/* The parsed, validated and pruned layered assembly (SPEC §3): plain C structs that the
+/* The parsed, validated and pruned layered assembly (docs/design.md section 1): plain C structs that the
  * parser fills and every later stage (device tables, LSS, reports) reads. */
 #ifndef LSQT_ASSEMBLY_H
 #define LSQT_ASSEMBLY_H
@@ -57,7 +57,7 @@ typedef struct lsqt_diag {
 
 /* Parse and validate LSQT text (need not be NUL terminated). `name` is used in messages
  * ("file.lsqt:3: ..."). Returns 0 on success; on error returns 2 and fills diag->error,
- * leaving *out empty. Applies all rules of SPEC §3 including pruning (with notes). */
+ * leaving *out empty. Applies every rule of the LSQT language (docs/guide.md) including pruning (with notes). */
 int lsqt_parse(const char *text, size_t len, const char *name, lsqt_assembly *out,
                lsqt_diag *diag);
 

@@ -1,4 +1,4 @@
-/* Command-line flags of lsqt-cl (SPEC §8). */
+/* Command-line flags of lsqt-cl (docs/guide.md). */
 #ifndef LSQT_CLI_H
 #define LSQT_CLI_H
 

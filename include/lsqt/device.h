@@ -28,9 +28,9 @@ typedef struct lsqt_device_info {
  * count (0 when there is none); *out is heap allocated. */
 int lsqt_devices_list(lsqt_device_info **out);
 
-/* Picks a device by SPEC: NULL (first GPU, else first device), an index of the list, a
+/* Picks a device by spec (the -d value): NULL (first GPU, else first device), an index of the list, a
  * case-insensitive name substring, "cpu" or "gpu". Returns 0, or 3 when no device
- * exists at all, or 2 when SPEC matches none (err says which exist). */
+ * exists at all, or 2 when spec matches none (err says which exist). */
 int lsqt_device_select(const char *spec, lsqt_device_info *out, char *err, size_t errcap);
 
 void lsqt_devices_print(FILE *f);

@@ -1,4 +1,4 @@
-/* LSS: the progressive state file (SPEC §7). Versioned little-endian binary:
+/* LSS: the progressive state file (docs/design.md section 6.1; the bytes: docs/formats.md). Versioned little-endian binary:
  *   "LSQTLSS\0", u32 version, u32 chunk, batches, fix_bits, hist_nmu, hist_nphi, t_count,
  *   u64 seed, u64 assembly hash, u32 double, transmits, flags, u32 direction method
  *   (0 spread, 1 RRSS, 2 file, 3 grid), u32 RRSS rx, u64 RRSS pilot paths,

@@ -1,4 +1,4 @@
-/* RAW text for DIRSIG5's raw2sqt, as the original layered-sqt writes it (SPEC §7). */
+/* RAW text for DIRSIG5's raw2sqt, as the original layered-sqt writes it (docs/design.md section 6.2; docs/formats.md). */
 #ifndef LSQT_RAW_H
 #define LSQT_RAW_H
 

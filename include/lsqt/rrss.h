@@ -1,5 +1,5 @@
-/* RRSS: the incident directions of every slice chosen from the slice's own walks (SPEC §5,
- * the original tool's Redundancy-Reduced Sample Set). */
+/* RRSS: the incident directions of every slice chosen from the slice's own walks
+ * (docs/design.md section 3.5, the original tool's Redundancy-Reduced Sample Set). */
 #ifndef LSQT_RRSS_H
 #define LSQT_RRSS_H
 

@@ -1,5 +1,5 @@
 /* The stages of one lsqt-cl run on a state (host/stages.c): which paths it runs and how
- * (SPEC §5 RRSS pilot and choice, §8 shards), between reading the input and writing the
+ * (the RRSS pilot and choice, docs/design.md section 3.5; shards), between reading the input and writing the
  * outputs (host/main.c). */
 #ifndef LSQT_STAGES_H
 #define LSQT_STAGES_H

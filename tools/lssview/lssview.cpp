@@ -1,4 +1,4 @@
-// lssview: previews of an LSS file (SPEC §7). A sphere under a few directional lights,
+// lssview: previews of an LSS file (docs/guide.md). A sphere under a few directional lights,
 // direct lighting only, from the BSDF estimates of the LSS (read by the project's C
 // library, no second reader); or, with --error, the relative standard error of every
 // pixel's value in false colour with a colour bar.

@@ -1,4 +1,4 @@
-"""Closed forms of SPEC section 9, computed here with the standard library only
+"""Closed forms, computed here with the standard library only
 (Gauss-Legendre quadrature written below): a single Lambertian layer, two Lambertian
 layers by the adding formula, Oren-Nayar's directional albedo, the attenuation and
 single scattering of thin slabs (HG, Rayleigh), and the limits alpha -> 0, mus -> 0 and
@@ -7,7 +7,7 @@ import math
 
 GROUP = "closed form"
 
-DOC = """Closed forms (SPEC section 9), evaluated by the standard library in
+DOC = """Closed forms, evaluated by the standard library in
 `tools/validate/refs_closed.py` (Gauss-Legendre quadrature with 64-96 nodes per dimension;
 the quadrature error, judged by halving the nodes, is below 1e-9 and enters as a floor of
 1e-7 in `ref_err`):
@@ -15,7 +15,7 @@ the quadrature error, judged by halving the nodes, is below 1e-9 and enters as a
 - a single Lambertian layer: R = fR, T = fT, and every point estimate is fR/pi (1/sr);
 - two Lambertian layers in vacuum: R = R1 + T1^2 R2 / (1 - R1 R2) (the adding formula for
   the hemispherical albedo, exact for Lambertian layers);
-- Oren-Nayar ("simpler expression", SPEC section 4): its point estimates are the formula
+- Oren-Nayar ("simpler expression" of the later public layered-sqt guide): its point estimates are the formula
   itself, and R(theta_o) is its directional albedo by a 2-D quadrature (the formula
   reflects slightly more than it receives at grazing incidence: R > fR there, and that is
   the formula's, not the simulator's);

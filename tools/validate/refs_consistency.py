@@ -54,7 +54,7 @@ def integrals(summary, info, n):
         w = (4 if sphere else 2) * math.pi / n
         ir = sum(e[3] * e[2] for e in b if e[2] > 0) * w
         it = sum(e[3] * -e[2] for e in b if e[2] < 0) * w
-        # T counts the unscattered light too, a delta the point estimates leave out (SPEC 4)
+        # T counts the unscattered light too, a delta the point estimates leave out (docs/design.md section 2.2)
         out.append((s["R"], s["T"] - s["delta_T"], ir, it))
     return out
 

@@ -389,7 +389,7 @@ vectors that lsqt-cl's reader keeps bit for bit (it normalises in double and sto
 so both programs see the same directions.
 
 **Conventions.** lsqt-cl's f(wo -> wi) is for paths entering along -wo (the observer side)
-and carries |cos theta_i| of the light direction wi (SPEC section 4); `info` divides it out.
+and carries |cos theta_i| of the light direction wi (docs/design.md section 1.3); `info` divides it out.
 mitsuba's `eval(ctx, si, wo)` returns f(si.wi, wo) |cos theta| of its `wo`; so
 si.wi = lsqt-cl's wo, mitsuba's wo = lsqt-cl's wi, and the reference is eval / |wi.z|.
 Transmission: lsqt-cl's dielectric is in the flux form (a lossless stack has R + T = 1,
