@@ -47,6 +47,20 @@ static inline void fixture_state(const char *text, int n_slices, int n_wi, uint6
     st->use_double = use_double;
 }
 
+/* Simulates `paths` per slice of *st (its angles and directions set) for assembly *a,
+ * then frees *a; ends the test on an error. */
+static inline void fixture_simulate(lsqt_assembly *a, lsqt_state *st, uint64_t paths)
+{
+    lsqt_sim_opts o = {0, 0.0, 0, NULL, NULL, 0, 0.0, 0.0, NULL, NULL};
+    lsqt_sim_stats stats;
+    char err[1024];
+    if (lsqt_simulate(&fixture_cx, a, st, paths, &o, &stats, err, sizeof err)) {
+        fprintf(stderr, "simulate failed: %s\n", err);
+        exit(1);
+    }
+    lsqt_assembly_free(a);
+}
+
 /* Parses text and simulates `paths` per slice at the given angles (degrees) with n_wi
  * spread directions, in double precision when use_double; fills *st (caller frees) and
  * returns the estimates. */
@@ -59,14 +73,7 @@ static inline lsqt_slice_est *fixture_run_prec(const char *text, int n_slices, c
         st->theta_o[s] = deg[s] * 3.14159265358979323846 / 180.0;
         lsqt_wi_spread(n_wi, st->transmits, st->wi + (size_t)s * (size_t)n_wi * 4);
     }
-    lsqt_sim_opts o = {0, 0.0, 0, NULL, NULL, 0, 0.0, 0.0, NULL, NULL};
-    lsqt_sim_stats stats;
-    char err[1024];
-    if (lsqt_simulate(&fixture_cx, &a, st, paths, &o, &stats, err, sizeof err)) {
-        fprintf(stderr, "simulate failed: %s\n", err);
-        exit(1);
-    }
-    lsqt_assembly_free(&a);
+    fixture_simulate(&a, st, paths);
     return lsqt_estimates(st);
 }
 

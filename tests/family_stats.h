@@ -135,14 +135,7 @@ static inline lsqt_slice_est *run_dirs(const char *text, int n_slices, const dou
         }
     }
     st->seed += seed_offset;
-    lsqt_sim_opts o = {0, 0.0, 0, NULL, NULL, 0, 0.0, 0.0, NULL, NULL};
-    lsqt_sim_stats stats;
-    char err[1024];
-    if (lsqt_simulate(&fixture_cx, &a, st, paths, &o, &stats, err, sizeof err)) {
-        fprintf(stderr, "simulate failed: %s\n", err);
-        exit(1);
-    }
-    lsqt_assembly_free(&a);
+    fixture_simulate(&a, st, paths);
     CHECK(st->flags == 0, "flags %u", st->flags);
     return lsqt_estimates(st);
 }

@@ -51,14 +51,7 @@ static lsqt_slice_est *run(const char *text, uint64_t paths, int use_double, lsq
                 w[0] = (float)(sin(t) * cos(p)), w[1] = (float)(sin(t) * sin(p)), w[2] = (float)cos(t), w[3] = 0;
             }
     }
-    lsqt_sim_opts o = {0, 0.0, 0, NULL, NULL, 0, 0.0, 0.0, NULL, NULL};
-    lsqt_sim_stats stats;
-    char err[1024];
-    if (lsqt_simulate(&fixture_cx, &a, st, paths, &o, &stats, err, sizeof err)) {
-        fprintf(stderr, "simulate failed: %s\n", err);
-        exit(1);
-    }
-    lsqt_assembly_free(&a);
+    fixture_simulate(&a, st, paths);
     return lsqt_estimates(st);
 }
 
