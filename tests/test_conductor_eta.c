@@ -1,4 +1,4 @@
-/* Power test (issue 23, regime 7): MicrosurfaceConductiveBrdf with eta > k (weakly
+/* Power test: MicrosurfaceConductiveBrdf with eta > k (weakly
  * absorbing metals, semiconductors, a metal under a dense medium), where the Fresnel
  * reflectance of the complex index is not that of a good conductor: the real part of
  * n^2 - sin^2 is positive (or changes sign with the angle when eta < 1), so a formula or a

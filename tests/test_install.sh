@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Install (issue 22): `cmake --install BUILD --prefix` into a scratch folder, then, from
+# Install: `cmake --install BUILD --prefix` into a scratch folder, then, from
 # another folder with PREFIX/bin on PATH and LSQT_CL unset, the seed guide's tutorial (§1.2,
 # §2.1) as written, with its names: layered-sqt, layered-sqt-lssview, layered-sqt-lssinfo.
 # The scripts must find lsqt-cl and their siblings in the prefix: lssplot,

@@ -1,4 +1,4 @@
-/* Power test (issue 23, regime 4): the branch probabilities of the samplers, with enough
+/* Power test: the branch probabilities of the samplers, with enough
  * samples to see a 1 % error in one of them (the chi-square tests of test_models and
  * test_phases use 1e5 samples over 256 cells: a 2 % change of one branch is far inside
  * their noise).

@@ -1,4 +1,4 @@
-/* Power tests of media (issue 23): enough paths to see a 1 % systematic error in two
+/* Power tests of media: enough paths to see a 1 % systematic error in two
  * regimes that the other tests reach only weakly.
  *
  *   test_power_media double    media walks in --double (LSQT_DOUBLE kernels) against

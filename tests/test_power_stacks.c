@@ -1,4 +1,4 @@
-/* Power test (issue 23, regime 3): asymmetric stacks of two and three transmitting
+/* Power test: asymmetric stacks of two and three transmitting
  * Lambertian layers, optionally with a clear absorber between them, from above and
  * (lsqt_simulate_sides, the host's mirror) from below, with enough paths to see a 1 %
  * error in R or T, whether it comes from the walk (exit tallies) or from the point

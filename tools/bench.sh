@@ -12,7 +12,7 @@
 #        render (PNG, the default lights) of LSS files of the tutorial (-p 1e4, default -wo/-wi
 #        unless given), the best of 3.
 #        tools/bench.sh targets [--csv PATH] [--doc] [-- lsqt-cl options...]: the four speed
-#        targets of issue 13 (tools/bench_targets.py): CPU-seconds, events per CPU-second; with
+#        speed targets (tools/bench_targets.py): CPU-seconds, events per CPU-second; with
 #        --doc it rewrites docs/performance.md (tools/bench_doc.py) when every workload ran
 #        (on another device: tools/bench.sh targets --doc -- -d gpu).
 #        tools/bench.sh study [--quick] [--doc] [--seeds N] [--out DIR] [-- lsqt-cl options...]:

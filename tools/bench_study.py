@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""The speed/accuracy study (issue 13): reference assemblies with known answers, run over a
+"""The speed/accuracy study: reference assemblies with known answers, run over a
 range of settings, each setting over several seeds; the error against the known answer
 beside the CPU time it cost. Writes a CSV, error-against-time plots (log-log) and an
 efficiency plot (1 / (error^2 x CPU-s)) with Debian's matplotlib (as tools/lssplot does,

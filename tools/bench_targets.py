@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The four speed targets of issue 13, measured: each workload once (after one untimed run
+"""The four speed targets (docs/performance.md), measured: each workload once (after one untimed run
 that fills the kernel cache), with wall and CPU seconds (user + sys of the whole process:
 the machine is shared), paths/s, scattering events per second and per CPU-second, and
 next-event evaluations per second, against the target.

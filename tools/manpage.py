@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""manpage.py: lsqt-cl.1, the man page, from the text of `lsqt-cl --help` (issue 22).
+"""manpage.py: lsqt-cl.1, the man page, from the text of `lsqt-cl --help`.
 
 usage: tools/manpage.py LSQT_CL OUT.1 [--version V]
 

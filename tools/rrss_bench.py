@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""RRSS against the even spread on error per second (issue 10).
+"""RRSS against the even spread on error per second.
 
 What a renderer sees is the BSDF between the RAW's directions, so the error measured is
 that of the BSDF rebuilt from the RAW (nearest RAW direction of the slice, both mirror

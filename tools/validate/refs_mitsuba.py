@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Mitsuba 3 references for lsqt-cl's single-scattering GGX microsurfaces (issue 12).
+"""Mitsuba 3 references for lsqt-cl's single-scattering GGX microsurfaces.
 
     /work/venv/bin/python tools/validate/refs_mitsuba.py [--quick] [--paths N]
 

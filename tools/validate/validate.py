@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Validation of lsqt-cl against references it did not write (issue 12).
+"""Validation of lsqt-cl against references it did not write.
 
     python3 tools/validate/validate.py [--quick] [--groups A,B] [--scale F]
                                        [--out DIR] [--write-fixtures] [--doc] [--no-setup]
