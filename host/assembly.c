@@ -45,18 +45,12 @@ void lsqt_assembly_free(lsqt_assembly *a)
 
 int lsqt_layer_transmits(const lsqt_layer *l)
 {
-    switch (l->kind) {
-    case LSQT_BSDF_LAMBERTIAN:
-    case LSQT_BSDF_MS_LAMBERTIAN:
-        return l->fT > 0;
-    case LSQT_BSDF_MS_DIELECTRIC:
-        return l->kT > 0;
-    case LSQT_BSDF_MS_CONDUCTIVE:
-    case LSQT_BSDF_OREN_NAYAR:
-        return 0;
-    default:
-        return 1;
-    }
+#define TRANSMITS(ID, num, name, alias, prefix, sampler, mirror, transmits) \
+    if (l->kind == LSQT_BSDF_##ID)                                          \
+        return LSQT_TRANSMITS_##transmits(l);
+    LSQT_BSDFS(TRANSMITS)
+#undef TRANSMITS
+    return 1; /* NullBsdf */
 }
 
 int lsqt_assembly_transmits(const lsqt_assembly *a)
@@ -97,7 +91,7 @@ static void write_keys(lsqt_sb *sb, const lsqt_model *m, const unsigned char *ba
         if (k->type == LSQT_NUM) {
             lsqt_sb_printf(sb, " %s=%.17g", k->name, *(const double *)field);
         } else {
-            int v = *(const int *)field;
+            int v = k->in_double ? (int)*(const double *)field : *(const int *)field;
             if (k->type == LSQT_INT)
                 lsqt_sb_printf(sb, " %s=%d", k->name, v);
             else

@@ -10,26 +10,29 @@
 #include "lsqt/tally.h"
 #include "lsqt/util.h"
 
-/* A model's mirror image is itself when it treats light from either side alike:
+/* A model's mirror image is itself when it treats light from either side alike (MIRROR in
+ * include/lsqt/model_list.h, which says why for each):
  *  - Null, Lambertian (fR back to the side light came from, fT through, either side);
  *  - the microsurfaces: their walks run in the frame of the ray's side (microsurface.cl
  *    ms_walk flips z, and the uniform heights with c -> 1 - c), GGX slopes are symmetric,
  *    and the dielectric takes the relative index seen from that side, which the device
- *    tables make from the media on each side, so reversing the media mirrors it too.
+ *    tables make from the media on each side, so reversing the media mirrors it too;
+ *  - phase functions of the scattering angle alone (HG, HG2, Rayleigh, Draine), and SGGX,
+ *    whose S = diag(Apara^2, Apara^2, Aperp^2) has no xz or yz terms.
  * The conductor and Oren-Nayar never transmit (a stack with them sends nothing down), so
  * light from below never meets them from above: no mirror is needed nor offered. */
 static int layer_self_mirror(int kind)
 {
-    return kind == LSQT_BSDF_NULL || kind == LSQT_BSDF_LAMBERTIAN || kind == LSQT_BSDF_MS_LAMBERTIAN ||
-           kind == LSQT_BSDF_MS_DIELECTRIC;
+#define MIRRORS(ID, num, name, alias, prefix, sampler, mirror, ...) || (kind == LSQT_BSDF_##ID && mirror)
+    return kind == LSQT_BSDF_NULL LSQT_BSDFS(MIRRORS);
+#undef MIRRORS
 }
 
-/* HG, HG2 and Rayleigh depend on the angle between the directions only; SGGX's
- * S = diag(Apara^2, Apara^2, Aperp^2) has no xz or yz terms, so z -> -z leaves it as is. */
 static int phase_self_mirror(int kind)
 {
-    return kind == LSQT_PHASE_NONE || kind == LSQT_PHASE_HG || kind == LSQT_PHASE_HG2 ||
-           kind == LSQT_PHASE_RAYLEIGH || kind == LSQT_PHASE_SGGX;
+#define MIRRORS(ID, num, name, alias, prefix, sampler, mirror) || (kind == LSQT_PHASE_##ID && mirror)
+    return kind == LSQT_PHASE_NONE LSQT_PHASES(MIRRORS);
+#undef MIRRORS
 }
 
 int lsqt_assembly_mirror(const lsqt_assembly *a, lsqt_assembly *out, char *err, size_t errcap)

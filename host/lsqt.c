@@ -28,22 +28,8 @@
 #define LAY(f) offsetof(lsqt_layer, f)
 
 #define NUM(name, def, lo, lo_open, hi, hi_open, off) \
-    { name, LSQT_NUM, def, lo, hi, lo_open, hi_open, NULL, off, 0 }
-#define CHOICE(name, def, words, off) { name, LSQT_CHOICE, def, 0, 0, 0, 0, words, off, 0 }
-#define FRACTION(name, def, off) NUM(name, def, 0, CLOSED, 1, CLOSED, off)
-/* Henyey-Greenstein's g: its peak, (1 + |g|) / (4 pi (1 - |g|)^2), is a next-event
- * estimate's factor, so it must stay well within the tally's 2^44 per contribution
- * (1.6e11 at the bound; g = 1 - 1e-7 overflows it). */
-#define LSQT_G_MAX 0.999999
-#define G(name, off) NUM(name, 0, -LSQT_G_MAX, CLOSED, LSQT_G_MAX, CLOSED, off)
-#define ALPHA NUM("alpha", 0.5, 0, OPEN, 100, CLOSED, LAY(alpha))
-/* default 0 = auto: resolved from alpha once the line is read */
-#define ITER_COUNT { "iter_count", LSQT_INT, 0, 1, 128, CLOSED, CLOSED, NULL, LAY(iter_count), 0 }
-#define MULTIPLE(def) CHOICE("use_multiple_scattering", def, bool_words, LAY(multiple_scattering))
+    { name, LSQT_NUM, def, lo, hi, lo_open, hi_open, NULL, off, 0, 0 }
 #define MODEL(name, alias, kind, macro, keys) { name, alias, kind, macro, keys, COUNT(keys) }
-
-static const char *const bool_words[] = { "false", "true", NULL };
-static const char *const sggx_types[] = { "Specular", "Diffuse", NULL };
 
 /* Media: upper bounds only keep the numbers sane; eta < 1 is refused later except for
  * the metal below a conductive layer. */
@@ -52,55 +38,36 @@ static const lsqt_key medium_keys[] = {
     NUM("mua", 0, 0, CLOSED, 1e12, CLOSED, MED(mua)),
     NUM("mus", 0, 0, CLOSED, 1e12, CLOSED, MED(mus)),
 };
-static const lsqt_key hg_keys[] = { G("g", PHASE(g)) };
-static const lsqt_key hg2_keys[] = { G("g0", PHASE(g0)), G("g1", PHASE(g1)), FRACTION("b", 0, PHASE(b)) };
-static const lsqt_key rayleigh_keys[] = { NUM("rho", 0, -1, CLOSED, 1, CLOSED, PHASE(rho)) };
-static const lsqt_key sggx_keys[] = {
-    NUM("Apara", 1, 0, OPEN, 1e6, CLOSED, PHASE(apara)),
-    NUM("Aperp", 1, 0, OPEN, 1e6, CLOSED, PHASE(aperp)),
-    CHOICE("type", 0, sggx_types, PHASE(sggx_diffuse)),
-};
 
 /* Layers: |z| is bounded so that thicknesses stay finite. */
 static const lsqt_key layer_keys[] = {
-    { "z", LSQT_NUM, 0, -1e12, 1e12, CLOSED, CLOSED, NULL, LAY(z), 1 },
-};
-static const lsqt_key lambertian_keys[] = { FRACTION("fR", 1, LAY(fR)), FRACTION("fT", 0, LAY(fT)) };
-static const lsqt_key ms_lambertian_keys[] = {
-    ALPHA, FRACTION("fR", 1, LAY(fR)), FRACTION("fT", 0, LAY(fT)), ITER_COUNT, MULTIPLE(1),
-};
-static const lsqt_key ms_dielectric_keys[] = {
-    ALPHA, FRACTION("kR", 1, LAY(kR)), FRACTION("kT", 1, LAY(kT)), ITER_COUNT, MULTIPLE(1),
-};
-static const lsqt_key ms_conductive_keys[] = { ALPHA, ITER_COUNT, MULTIPLE(0) };
-static const lsqt_key oren_nayar_keys[] = {
-    FRACTION("fR", 1, LAY(fR)),
-    NUM("sigma", 0.1, 0, CLOSED, 0.8, CLOSED, LAY(sigma)),
+    { "z", LSQT_NUM, 0, -1e12, 1e12, CLOSED, CLOSED, NULL, LAY(z), 1, 0 },
 };
 
 static const lsqt_model medium_head = MODEL("Medium", NULL, 0, NULL, medium_keys);
 static const lsqt_model layer_head = MODEL("Layer", NULL, 0, NULL, layer_keys);
 
-static const lsqt_model phase_models[] = {
-    MODEL("HenyeyGreensteinPhase", "HenyeyGreenstein", LSQT_PHASE_HG, "PHASE_HG", hg_keys),
-    MODEL("HenyeyGreenstein2Phase", "HenyeyGreenstein2", LSQT_PHASE_HG2, "PHASE_HG2", hg2_keys),
-    MODEL("RayleighPhase", "Rayleigh", LSQT_PHASE_RAYLEIGH, "PHASE_RAYLEIGH", rayleigh_keys),
-    MODEL("SggxPhase", "Sggx", LSQT_PHASE_SGGX, "PHASE_SGGX", sggx_keys),
-};
+/* The models' keys and tables, expanded from include/lsqt/model_list.h. A phase key
+ * fills its slot of lsqt_phase.v (a double, choices too); a BSDF key its lsqt_layer field. */
+#define PHASE_KEY(ID, F, name, type, def, lo, lo_open, hi, hi_open, words) \
+    { name, LSQT_##type, def, lo, hi, lo_open, hi_open, words, PHASE(v) + LSQT_##ID##_##F * sizeof(double), 0, 1 },
+#define BSDF_KEY(ID, F, name, type, def, lo, lo_open, hi, hi_open, words) \
+    { name, LSQT_##type, def, lo, hi, lo_open, hi_open, words, LAY(F), 0, 0 },
+#define PHASE_KEYS(ID, ...) static const lsqt_key ID##_phase_keys[] = { LSQT_KEYS_##ID(PHASE_KEY, ID) };
+#define BSDF_KEYS(ID, ...) static const lsqt_key ID##_bsdf_keys[] = { LSQT_KEYS_##ID(BSDF_KEY, ID) };
+LSQT_PHASES(PHASE_KEYS)
+LSQT_BSDFS(BSDF_KEYS)
 
+#define PHASE_MODEL(ID, num, name, alias, ...) MODEL(name, alias, LSQT_PHASE_##ID, "PHASE_" #ID, ID##_phase_keys),
+#define BSDF_MODEL(ID, num, name, alias, ...) MODEL(name, alias, LSQT_BSDF_##ID, "BSDF_" #ID, ID##_bsdf_keys),
+static const lsqt_model phase_models[] = { LSQT_PHASES(PHASE_MODEL) };
 static const lsqt_model bsdf_models[] = {
     { "NullBsdf", "Null", LSQT_BSDF_NULL, NULL, NULL, 0 },
-    MODEL("LambertianBsdf", "Lambertian", LSQT_BSDF_LAMBERTIAN, "BSDF_LAMBERTIAN",
-          lambertian_keys),
-    MODEL("MicrosurfaceLambertianBrdf", "MicrosurfaceLambertian", LSQT_BSDF_MS_LAMBERTIAN,
-          "BSDF_MS_LAMBERTIAN", ms_lambertian_keys),
-    MODEL("MicrosurfaceDielectricBsdf", "MicrosurfaceDielectric", LSQT_BSDF_MS_DIELECTRIC,
-          "BSDF_MS_DIELECTRIC", ms_dielectric_keys),
-    MODEL("MicrosurfaceConductiveBrdf", "MicrosurfaceConductive", LSQT_BSDF_MS_CONDUCTIVE,
-          "BSDF_MS_CONDUCTIVE", ms_conductive_keys),
-    MODEL("OrenNayarDiffuseBrdf", "OrenNayarDiffuse", LSQT_BSDF_OREN_NAYAR, "BSDF_OREN_NAYAR",
-          oren_nayar_keys),
+    LSQT_BSDFS(BSDF_MODEL)
 };
+
+#define PHASE_FITS(ID, ...) _Static_assert(LSQT_##ID##_N_KEYS <= LSQT_MAX_MODEL_KEYS, "lsqt_phase.v too small");
+LSQT_PHASES(PHASE_FITS)
 
 const lsqt_line_desc lsqt_medium_line = {
     &medium_head, phase_models, COUNT(phase_models), "phase model", PHASE(kind),
@@ -454,7 +421,7 @@ static const char *parse_value(const lsqt_key *k, span text, double *v)
 
 static void store(unsigned char *base, const lsqt_key *k, double v)
 {
-    if (k->type == LSQT_NUM)
+    if (k->type == LSQT_NUM || k->in_double)
         *(double *)(void *)(base + k->offset) = v;
     else
         *(int *)(void *)(base + k->offset) = (int)v;

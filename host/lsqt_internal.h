@@ -24,6 +24,7 @@ typedef struct lsqt_key {
     const char *const *choices; /* LSQT_CHOICE: NULL-terminated words */
     size_t offset;              /* field in the line's struct (lsqt_medium or lsqt_layer) */
     int required;               /* no default: the key must be written */
+    int in_double;              /* LSQT_INT, LSQT_CHOICE: stored in a double (a phase's v) */
 } lsqt_key;
 
 typedef struct lsqt_model {

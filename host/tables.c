@@ -3,16 +3,19 @@
 
 #include <string.h>
 
-/* Models the kernels can run today; the parser knows them all. */
+/* Models the kernels can run: every model of include/lsqt/model_list.h (the parser knows
+ * no other, but a hand-made assembly might hold any number). */
 static int bsdf_supported(const lsqt_layer *l)
 {
-    return l->kind == LSQT_BSDF_NULL || l->kind == LSQT_BSDF_LAMBERTIAN || l->kind == LSQT_BSDF_MS_LAMBERTIAN ||
-           l->kind == LSQT_BSDF_MS_DIELECTRIC || l->kind == LSQT_BSDF_MS_CONDUCTIVE || l->kind == LSQT_BSDF_OREN_NAYAR;
+#define KNOWN(ID, ...) || l->kind == LSQT_BSDF_##ID
+    return l->kind == LSQT_BSDF_NULL LSQT_BSDFS(KNOWN);
+#undef KNOWN
 }
 static int phase_supported(int kind)
 {
-    return kind == LSQT_PHASE_NONE || kind == LSQT_PHASE_HG || kind == LSQT_PHASE_HG2 || kind == LSQT_PHASE_RAYLEIGH ||
-           kind == LSQT_PHASE_SGGX;
+#define KNOWN(ID, ...) || kind == LSQT_PHASE_##ID
+    return kind == LSQT_PHASE_NONE LSQT_PHASES(KNOWN);
+#undef KNOWN
 }
 
 const char *lsqt_unsupported_model(const lsqt_assembly *a, int *line)
@@ -40,23 +43,26 @@ static double medium_tau(const lsqt_assembly *a, int m)
     return (a->media[m].mua + a->media[m].mus) * medium_thickness(a, m);
 }
 
-/* A phase model's parameters as the kernels read them (kernels/phase_*.cl). */
+/* A phase model's parameters as the kernels read them (kernels/phase_*.cl): the packing
+ * of include/lsqt/model_list.h. */
 static void phase_params(const lsqt_phase *p, double pp[4])
 {
-    switch (p->kind) {
-    case LSQT_PHASE_HG: pp[0] = p->g; break;
-    case LSQT_PHASE_HG2: pp[0] = p->g0, pp[1] = p->g1, pp[2] = p->b; break;
-    case LSQT_PHASE_RAYLEIGH: pp[0] = p->rho / (2.0 - p->rho); break; /* gamma, as in the seed */
-    case LSQT_PHASE_SGGX: {
-        /* S = diag(Apara^2, Apara^2, Aperp^2), scaled to a largest entry of 1 (the phase
-         * function does not change with the scale of S, and float keeps its range) */
-        double a = p->apara > p->aperp ? p->apara : p->aperp;
-        pp[0] = (p->apara / a) * (p->apara / a), pp[1] = (p->aperp / a) * (p->aperp / a);
-        pp[2] = p->sggx_diffuse ? 1.0 : 0.0;
-        break;
-    }
-    default: break;
-    }
+    const double *v = p->v;
+#define PACK(ID, ...) \
+    if (p->kind == LSQT_PHASE_##ID) LSQT_PACK_##ID(v, pp)
+    LSQT_PHASES(PACK)
+#undef PACK
+}
+
+/* A layer's parameters as the kernels read them (kernels/bsdf_*.cl), from the layer and
+ * the media on each side of it. */
+static void layer_params(const lsqt_layer *l, const lsqt_medium *up, const lsqt_medium *down, double p[8])
+{
+#define PACK(ID, ...) \
+    if (l->kind == LSQT_BSDF_##ID) LSQT_PACK_##ID(l, up, down, p)
+    LSQT_BSDFS(PACK)
+#undef PACK
+    (void)up, (void)down;
 }
 
 void lsqt_device_tables(const lsqt_assembly *a, lsqt_dev_scene *scene, lsqt_dev_medium_d *media,
@@ -72,29 +78,7 @@ void lsqt_device_tables(const lsqt_assembly *a, lsqt_dev_scene *scene, lsqt_dev_
         layers[i].kind = l->kind;
         layers[i].iter_count = l->iter_count;
         layers[i].multiple_scattering = l->multiple_scattering;
-        const lsqt_medium *up = &a->media[i], *down = &a->media[i + 1];
-        if (l->kind == LSQT_BSDF_MS_CONDUCTIVE) {
-            /* alpha, and the metal's complex index relative to the medium above */
-            layers[i].p[0] = l->alpha;
-            layers[i].p[1] = down->eta / up->eta;
-            layers[i].p[2] = down->mua / up->eta;
-        } else if (l->kind == LSQT_BSDF_MS_DIELECTRIC) {
-            /* alpha, the index below relative to the one above, the Fresnel scales */
-            layers[i].p[0] = l->alpha;
-            layers[i].p[1] = down->eta / up->eta;
-            layers[i].p[2] = l->kR;
-            layers[i].p[3] = l->kT;
-        } else if (l->kind == LSQT_BSDF_MS_LAMBERTIAN) {
-            layers[i].p[0] = l->alpha;
-            layers[i].p[1] = l->fR;
-            layers[i].p[2] = l->fT;
-        } else if (l->kind == LSQT_BSDF_OREN_NAYAR) {
-            layers[i].p[0] = l->fR;
-            layers[i].p[1] = l->sigma;
-        } else {
-            layers[i].p[0] = l->fR;
-            layers[i].p[1] = l->fT;
-        }
+        layer_params(l, &a->media[i], &a->media[i + 1], layers[i].p);
         if (l->kind != LSQT_BSDF_NULL) {
             if (scene->top_nonnull < 0) scene->top_nonnull = i;
             scene->bottom_nonnull = i;

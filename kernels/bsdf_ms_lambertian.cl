@@ -26,3 +26,17 @@ LSQT_INLINE real mslambert_scatter(__global const lsqt_dev_layer *l, const ms_vt
     *r = normalize(c.x * t + c.y * b + c.z * n);
     return tot;
 }
+
+/* No closed-form single scattering: next-event estimation and the density come from the
+ * walk alone (models.cl evaluates these as 0, as for every order of the walk's own). */
+LSQT_INLINE realv mslambert_evalv(__global const lsqt_dev_layer *l, real3 wo, dirv wi)
+{
+    (void)l, (void)wo, (void)wi;
+    return (realv)(R(0.0));
+}
+
+LSQT_INLINE real mslambert_pdf(__global const lsqt_dev_layer *l, real3 wo, real3 wi)
+{
+    (void)l, (void)wo, (void)wi;
+    return R(0.0);
+}

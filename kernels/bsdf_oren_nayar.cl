@@ -31,8 +31,9 @@ LSQT_INLINE real oren_nayar_pdf(__global const lsqt_dev_layer *l, real3 wo, real
 }
 
 /* Cosine-weighted on wo's side; the weight f / pdf = fR [A + B ...]. */
-LSQT_INLINE real oren_nayar_sample(__global const lsqt_dev_layer *l, real3 wo, real u1, real u2, real3 *wi)
+LSQT_INLINE real oren_nayar_sample(__global const lsqt_dev_layer *l, real3 wo, real u0, real u1, real u2, real3 *wi)
 {
+    (void)u0;
     real3 w = sample_cosine_hemisphere(u1, u2);
     w.z *= wo.z >= R(0.0) ? R(1.0) : R(-1.0);
     *wi = w;

@@ -189,3 +189,9 @@ LSQT_INLINE realv lgamma_ge1_v(realv x)
     realv lg = (y - R(0.5)) * log(y) - y + R(0.91893853320467274178) + series;
     return lg - select((realv)(R(0.0)), log(p), small);
 }
+
+/* What a phase function fixes at a vertex for every direction it is evaluated towards and
+ * for its sample (models.cl phase_vertex): a diffuse SGGX flake's visible normal. */
+typedef struct {
+    real3 m;
+} phase_vtx;

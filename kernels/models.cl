@@ -1,6 +1,25 @@
-/* Dispatch from a layer or medium table entry to its model. Only the models the assembly
- * uses are compiled in (the host passes -DLSQT_HAS_<MODEL>=1), so a scene pays for
- * nothing it does not contain. */
+/* Dispatch from a layer or medium table entry to its model, expanded from the model list
+ * (include/lsqt/model_list.h). Only the models the assembly uses are compiled in: the host
+ * passes -DLSQT_HAS_<CLASS>_<ID>=1 for each, and LSQT_ON(<CLASS>_<ID>) is 1 for those and
+ * 0 for the rest, whose branches are dead code, so a scene pays for nothing it does not
+ * contain (on a GPU, not even registers). */
+
+/* LSQT_ON(M): 1 when LSQT_HAS_M is defined as 1, else 0 (usable inside a macro, where
+ * #ifdef is not). */
+#define LSQT_ON_ARG_1_ 0,
+#define LSQT_ON_SECOND_(a, b, ...) b
+#define LSQT_ON_3_(junk) LSQT_ON_SECOND_(junk 1, 0, ~)
+#define LSQT_ON_2_(v) LSQT_ON_3_(LSQT_ON_ARG_##v##_)
+#define LSQT_ON_1_(v) LSQT_ON_2_(v)
+#define LSQT_ON(M) LSQT_ON_1_(LSQT_HAS_##M)
+
+/* The list's SAMPLER column, as text kept or dropped. */
+#define LSQT_IF_CLOSED_CLOSED(...) __VA_ARGS__
+#define LSQT_IF_CLOSED_WALK(...)
+#define LSQT_IF_WALK_CLOSED(...)
+#define LSQT_IF_WALK_WALK(...) __VA_ARGS__
+#define LSQT_IF_VERTEX_EXACT(...)
+#define LSQT_IF_VERTEX_VERTEX(...) __VA_ARGS__
 
 /* Evaluation takes LSQT_VW directions at once (next-event estimation's inner loop); the
  * single-direction form used by the test harness is lane 0 of the same code. For the
@@ -9,37 +28,23 @@
  * loop runs itself. */
 LSQT_INLINE realv bsdf_evalv(__global const lsqt_dev_layer *l, real3 wo, dirv wi)
 {
-    switch (l->kind) {
-#ifdef LSQT_HAS_BSDF_LAMBERTIAN
-    case LSQT_BSDF_LAMBERTIAN: return lambertian_evalv(l, wo, wi);
-#endif
-#ifdef LSQT_HAS_BSDF_MS_CONDUCTIVE
-    case LSQT_BSDF_MS_CONDUCTIVE: return conductor_evalv(l, wo, wi);
-#endif
-#ifdef LSQT_HAS_BSDF_MS_DIELECTRIC
-    case LSQT_BSDF_MS_DIELECTRIC: return dielectric_evalv(l, wo, wi);
-#endif
-#ifdef LSQT_HAS_BSDF_OREN_NAYAR
-    case LSQT_BSDF_OREN_NAYAR: return oren_nayar_evalv(l, wo, wi);
-#endif
-    default: return (realv)(R(0.0));
-    }
+#define X(ID, num, name, alias, p, ...) \
+    if (LSQT_ON(BSDF_##ID) && l->kind == LSQT_BSDF_##ID) return p##_evalv(l, wo, wi);
+    LSQT_BSDFS(X)
+#undef X
+    return (realv)(R(0.0));
 }
 
 /* The same for the layers a next-event estimate evaluates this way: every kind but the
- * microsurfaces, whose terms are their walks' (a smaller switch: on a GPU the unused
+ * microsurfaces, whose terms are their walks' (fewer branches: on a GPU the unused
  * branches' registers would count). */
 LSQT_INLINE realv bsdf_evalv_closed(__global const lsqt_dev_layer *l, real3 wo, dirv wi)
 {
-    switch (l->kind) {
-#ifdef LSQT_HAS_BSDF_LAMBERTIAN
-    case LSQT_BSDF_LAMBERTIAN: return lambertian_evalv(l, wo, wi);
-#endif
-#ifdef LSQT_HAS_BSDF_OREN_NAYAR
-    case LSQT_BSDF_OREN_NAYAR: return oren_nayar_evalv(l, wo, wi);
-#endif
-    default: return (realv)(R(0.0));
-    }
+#define X(ID, num, name, alias, p, sampler, ...) \
+    LSQT_IF_CLOSED_##sampler(if (LSQT_ON(BSDF_##ID) && l->kind == LSQT_BSDF_##ID) return p##_evalv(l, wo, wi);)
+    LSQT_BSDFS(X)
+#undef X
+    return (realv)(R(0.0));
 }
 
 LSQT_INLINE real bsdf_eval(__global const lsqt_dev_layer *l, real3 wo, real3 wi)
@@ -47,83 +52,55 @@ LSQT_INLINE real bsdf_eval(__global const lsqt_dev_layer *l, real3 wo, real3 wi)
     return bsdf_evalv(l, wo, dirv_broadcast(wi)).s0;
 }
 
-/* Samples wi given wo; returns the weight f / pdf, 0 when the path is absorbed. */
+/* Samples wi given wo; returns the weight f / pdf, 0 when the path is absorbed. The
+ * microsurfaces sample by their walk; the others take three draws (u0 picks a lobe). */
 LSQT_INLINE real bsdf_sample(__global const lsqt_dev_layer *l, real3 wo, rng_t *rng, real3 *wi)
 {
-#if defined(LSQT_HAS_BSDF_MS_LAMBERTIAN) || defined(LSQT_HAS_BSDF_MS_DIELECTRIC) || defined(LSQT_HAS_BSDF_MS_CONDUCTIVE)
-    if (l->kind == LSQT_BSDF_MS_LAMBERTIAN || l->kind == LSQT_BSDF_MS_DIELECTRIC || l->kind == LSQT_BSDF_MS_CONDUCTIVE)
-        return ms_sample(l, wo, rng, wi);
-#endif
+#define X(ID, num, name, alias, p, sampler, ...) \
+    LSQT_IF_WALK_##sampler(if (LSQT_ON(BSDF_##ID) && l->kind == LSQT_BSDF_##ID) return ms_sample(l, wo, rng, wi);)
+    LSQT_BSDFS(X)
+#undef X
     real u0 = rng_uniform(rng), u1 = rng_uniform(rng), u2 = rng_uniform(rng);
-    switch (l->kind) {
-#ifdef LSQT_HAS_BSDF_LAMBERTIAN
-    case LSQT_BSDF_LAMBERTIAN: return lambertian_sample(l, wo, u0, u1, u2, wi);
-#endif
-#ifdef LSQT_HAS_BSDF_OREN_NAYAR
-    case LSQT_BSDF_OREN_NAYAR: return oren_nayar_sample(l, wo, u1, u2, wi);
-#endif
-    default: return R(0.0);
-    }
+#define X(ID, num, name, alias, p, sampler, ...)                                     \
+    LSQT_IF_CLOSED_##sampler(if (LSQT_ON(BSDF_##ID) && l->kind == LSQT_BSDF_##ID) \
+                                 return p##_sample(l, wo, u0, u1, u2, wi);)
+    LSQT_BSDFS(X)
+#undef X
+    return R(0.0);
 }
 
 LSQT_INLINE real bsdf_pdf(__global const lsqt_dev_layer *l, real3 wo, real3 wi)
 {
-    switch (l->kind) {
-#ifdef LSQT_HAS_BSDF_LAMBERTIAN
-    case LSQT_BSDF_LAMBERTIAN: return lambertian_pdf(l, wo, wi);
-#endif
-#ifdef LSQT_HAS_BSDF_MS_CONDUCTIVE
-    case LSQT_BSDF_MS_CONDUCTIVE: return conductor_pdf(l, wo, wi);
-#endif
-#ifdef LSQT_HAS_BSDF_MS_DIELECTRIC
-    case LSQT_BSDF_MS_DIELECTRIC: return dielectric_pdf(l, wo, wi);
-#endif
-#ifdef LSQT_HAS_BSDF_OREN_NAYAR
-    case LSQT_BSDF_OREN_NAYAR: return oren_nayar_pdf(l, wo, wi);
-#endif
-    default: return R(0.0);
-    }
+#define X(ID, num, name, alias, p, ...) \
+    if (LSQT_ON(BSDF_##ID) && l->kind == LSQT_BSDF_##ID) return p##_pdf(l, wo, wi);
+    LSQT_BSDFS(X)
+#undef X
+    return R(0.0);
 }
 
 /* What a phase function fixes at a vertex for every direction it is evaluated towards
- * and for the sample that continues the path: for diffuse SGGX flakes one visible normal,
- * so the point estimate's cost does not grow with its stochastic evaluation. */
-typedef struct {
-    real3 m;
-} phase_vtx;
-
+ * and for the sample that continues the path (phase_vtx, common.cl): for diffuse SGGX
+ * flakes one visible normal, so the point estimate's cost does not grow with its
+ * stochastic evaluation. The EXACT samplers fix nothing. */
 LSQT_INLINE phase_vtx phase_vertex(__global const lsqt_dev_medium *m, real3 wo, rng_t *rng)
 {
     phase_vtx v = {make_real3(R(0.0), R(0.0), R(1.0))};
-#ifdef LSQT_HAS_PHASE_SGGX
-    if (m->phase_kind == LSQT_PHASE_SGGX && m->pp[2] > R(0.5)) {
-        real u1 = rng_uniform(rng), u2 = rng_uniform(rng);
-        v.m = sggx_sample_vndf(m->pp[0], m->pp[1], wo, u1, u2);
-    }
-#else
+#define X(ID, num, name, alias, p, sampler, ...) \
+    LSQT_IF_VERTEX_##sampler(if (LSQT_ON(PHASE_##ID) && m->phase_kind == LSQT_PHASE_##ID) p##_phase_vertex(m, wo, rng, &v);)
+    LSQT_PHASES(X)
+#undef X
     (void)m, (void)wo, (void)rng;
-#endif
     return v;
 }
 
 LSQT_INLINE realv phase_evalv(__global const lsqt_dev_medium *m, const phase_vtx *v, real3 wo, dirv wi)
 {
-    (void)v;
-    switch (m->phase_kind) {
-#ifdef LSQT_HAS_PHASE_HG
-    case LSQT_PHASE_HG: return hg_evalv(m->pp[0], wo, wi);
-#endif
-#ifdef LSQT_HAS_PHASE_HG2
-    case LSQT_PHASE_HG2: return hg2_evalv(m, wo, wi);
-#endif
-#ifdef LSQT_HAS_PHASE_RAYLEIGH
-    case LSQT_PHASE_RAYLEIGH: return rayleigh_evalv(m, wo, wi);
-#endif
-#ifdef LSQT_HAS_PHASE_SGGX
-    case LSQT_PHASE_SGGX: return m->pp[2] > R(0.5) ? sggx_diffuse_evalv(v->m, wi) : sggx_specular_evalv(m, wo, wi);
-#endif
-    default: return (realv)(R(0.0));
-    }
+#define X(ID, num, name, alias, p, ...) \
+    if (LSQT_ON(PHASE_##ID) && m->phase_kind == LSQT_PHASE_##ID) return p##_phase_evalv(m, v, wo, wi);
+    LSQT_PHASES(X)
+#undef X
+    (void)v, (void)wo, (void)wi;
+    return (realv)(R(0.0));
 }
 
 LSQT_INLINE real phase_eval(__global const lsqt_dev_medium *m, const phase_vtx *v, real3 wo, real3 wi)
@@ -131,36 +108,29 @@ LSQT_INLINE real phase_eval(__global const lsqt_dev_medium *m, const phase_vtx *
     return phase_evalv(m, v, wo, dirv_broadcast(wi)).s0;
 }
 
-/* Density of phase_sample's directions: the phase function itself for the exact
- * samplers; 0 for diffuse SGGX, whose density has no closed form. */
+/* Density of phase_sample's directions: the phase function itself for the EXACT
+ * samplers; the VERTEX ones say (0 for diffuse SGGX, whose density has no closed form). */
 LSQT_INLINE real phase_pdf(__global const lsqt_dev_medium *m, real3 wo, real3 wi)
 {
+#define X(ID, num, name, alias, p, sampler, ...) \
+    LSQT_IF_VERTEX_##sampler(if (LSQT_ON(PHASE_##ID) && m->phase_kind == LSQT_PHASE_##ID) return p##_phase_pdf(m, wo, wi);)
+    LSQT_PHASES(X)
+#undef X
     phase_vtx none = {make_real3(R(0.0), R(0.0), R(1.0))};
-    if (m->phase_kind == LSQT_PHASE_SGGX && m->pp[2] > R(0.5)) return R(0.0);
     return phase_eval(m, &none, wo, wi);
 }
 
-/* Samples wi given wo; returns the weight p / pdf (1: every sampler here is exact). */
+/* Samples wi given wo; returns the weight p / pdf (1 for the exact samplers). */
 LSQT_INLINE real phase_sample(__global const lsqt_dev_medium *m, const phase_vtx *v, real3 wo, rng_t *rng, real3 *wi)
 {
     /* Every phase function draws two (HG2 picks its lobe by splitting u1, so with b = 0
      * it is HG sample for sample: test_phases); with the free flight's, a scattering
      * event takes one Philox block of four draws less a quarter. */
     real u1 = rng_uniform(rng), u2 = rng_uniform(rng);
-    (void)v;
-    switch (m->phase_kind) {
-#ifdef LSQT_HAS_PHASE_HG
-    case LSQT_PHASE_HG: *wi = hg_sample(m->pp[0], wo, u1, u2); return R(1.0);
-#endif
-#ifdef LSQT_HAS_PHASE_HG2
-    case LSQT_PHASE_HG2: *wi = hg2_sample(m, wo, u1, u2); return R(1.0);
-#endif
-#ifdef LSQT_HAS_PHASE_RAYLEIGH
-    case LSQT_PHASE_RAYLEIGH: *wi = rayleigh_sample(m, wo, u1, u2); return R(1.0);
-#endif
-#ifdef LSQT_HAS_PHASE_SGGX
-    case LSQT_PHASE_SGGX: *wi = sggx_sample(m, wo, v->m, u1, u2); return R(1.0);
-#endif
-    default: return R(0.0);
-    }
+#define X(ID, num, name, alias, p, ...) \
+    if (LSQT_ON(PHASE_##ID) && m->phase_kind == LSQT_PHASE_##ID) return p##_phase_sample(m, v, wo, u1, u2, rng, wi);
+    LSQT_PHASES(X)
+#undef X
+    (void)v, (void)wo, (void)wi;
+    return R(0.0);
 }

@@ -38,18 +38,37 @@ LSQT_INLINE real3 hg_sample(real g, real3 wo, real u1, real u2)
     return direction_around_q(axis, clamp(q, R(0.0), R(2.0)), u2);
 }
 
+/* The phase model HenyeyGreensteinPhase, pp = {g}. */
+LSQT_INLINE realv hg_phase_evalv(__global const lsqt_dev_medium *m, const phase_vtx *v, real3 wo, dirv wi)
+{
+    (void)v;
+    return hg_evalv(m->pp[0], wo, wi);
+}
+
+LSQT_INLINE real hg_phase_sample(__global const lsqt_dev_medium *m, const phase_vtx *v, real3 wo, real u1, real u2,
+                                 rng_t *rng, real3 *wi)
+{
+    (void)v, (void)rng;
+    *wi = hg_sample(m->pp[0], wo, u1, u2);
+    return R(1.0);
+}
+
 /* Two lobes: (1 - b) HG(g0) + b HG(g1); pp = {g0, g1, b}. The sampler picks lobe 1 with
  * probability b, so the weight is exactly 1: lobe 1 when u1 < b, and u1 rescaled to the
  * chosen part of [0, 1) is again uniform, for the lobe's own sample. */
-LSQT_INLINE realv hg2_evalv(__global const lsqt_dev_medium *m, real3 wo, dirv wi)
+LSQT_INLINE realv hg2_phase_evalv(__global const lsqt_dev_medium *m, const phase_vtx *v, real3 wo, dirv wi)
 {
+    (void)v;
     const real b = m->pp[2];
     return (R(1.0) - b) * hg_evalv(m->pp[0], wo, wi) + b * hg_evalv(m->pp[1], wo, wi);
 }
 
-LSQT_INLINE real3 hg2_sample(__global const lsqt_dev_medium *m, real3 wo, real u1, real u2)
+LSQT_INLINE real hg2_phase_sample(__global const lsqt_dev_medium *m, const phase_vtx *v, real3 wo, real u1, real u2,
+                                  rng_t *rng, real3 *wi)
 {
+    (void)v, (void)rng;
     const real b = m->pp[2];
-    if (u1 < b) return hg_sample(m->pp[1], wo, u1 / b, u2);
-    return hg_sample(m->pp[0], wo, fmin((u1 - b) / (R(1.0) - b), R(1.0)), u2);
+    if (u1 < b) *wi = hg_sample(m->pp[1], wo, u1 / b, u2);
+    else *wi = hg_sample(m->pp[0], wo, fmin((u1 - b) / (R(1.0) - b), R(1.0)), u2);
+    return R(1.0);
 }

@@ -3,8 +3,9 @@
  * normalised over the sphere for every gamma in [-1/3, 1] (rho in [-1, 1]); gamma = 1 is
  * isotropic, gamma = -1/3 (rho = -1) is pure cos^2. pp = {gamma}. cos t = -dot(wo, wi)
  * as for HG. */
-LSQT_INLINE realv rayleigh_evalv(__global const lsqt_dev_medium *m, real3 wo, dirv wi)
+LSQT_INLINE realv rayleigh_phase_evalv(__global const lsqt_dev_medium *m, const phase_vtx *v, real3 wo, dirv wi)
 {
+    (void)v;
     const real gam = m->pp[0];
     realv c = wo.x * wi.x + wo.y * wi.y + wo.z * wi.z;
     return (R(3.0) / (R(16.0) * LSQT_PI)) * ((R(1.0) + R(3.0) * gam) + (R(1.0) - gam) * c * c) / (R(1.0) + R(2.0) * gam);
@@ -31,7 +32,10 @@ LSQT_INLINE real rayleigh_cos(real gam, real u)
     return clamp(mu, R(-1.0), R(1.0));
 }
 
-LSQT_INLINE real3 rayleigh_sample(__global const lsqt_dev_medium *m, real3 wo, real u1, real u2)
+LSQT_INLINE real rayleigh_phase_sample(__global const lsqt_dev_medium *m, const phase_vtx *v, real3 wo, real u1,
+                                       real u2, rng_t *rng, real3 *wi)
 {
-    return direction_around(-wo, rayleigh_cos(m->pp[0], u1), u2);
+    (void)v, (void)rng;
+    *wi = direction_around(-wo, rayleigh_cos(m->pp[0], u1), u2);
+    return R(1.0);
 }

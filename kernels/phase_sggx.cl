@@ -67,3 +67,34 @@ LSQT_INLINE real3 sggx_sample(__global const lsqt_dev_medium *m, real3 wo, real3
     real3 h = sggx_sample_vndf(m->pp[0], m->pp[1], wo, u1, u2);
     return normalize(R(2.0) * dot(wo, h) * h - wo);
 }
+
+/* The phase model SggxPhase, pp = {Sxx, Szz, diffuse}: a VERTEX sampler, as diffuse
+ * flakes draw one visible normal per vertex for the point estimate and the sample alike. */
+LSQT_INLINE void sggx_phase_vertex(__global const lsqt_dev_medium *m, real3 wo, rng_t *rng, phase_vtx *v)
+{
+    if (m->pp[2] > R(0.5)) {
+        real u1 = rng_uniform(rng), u2 = rng_uniform(rng);
+        v->m = sggx_sample_vndf(m->pp[0], m->pp[1], wo, u1, u2);
+    }
+}
+
+LSQT_INLINE realv sggx_phase_evalv(__global const lsqt_dev_medium *m, const phase_vtx *v, real3 wo, dirv wi)
+{
+    return m->pp[2] > R(0.5) ? sggx_diffuse_evalv(v->m, wi) : sggx_specular_evalv(m, wo, wi);
+}
+
+/* The density of sggx_phase_sample: the specular phase function; 0 for diffuse flakes,
+ * whose density has no closed form. */
+LSQT_INLINE real sggx_phase_pdf(__global const lsqt_dev_medium *m, real3 wo, real3 wi)
+{
+    if (m->pp[2] > R(0.5)) return R(0.0);
+    return sggx_specular_evalv(m, wo, dirv_broadcast(wi)).s0;
+}
+
+LSQT_INLINE real sggx_phase_sample(__global const lsqt_dev_medium *m, const phase_vtx *v, real3 wo, real u1, real u2,
+                                   rng_t *rng, real3 *wi)
+{
+    (void)rng;
+    *wi = sggx_sample(m, wo, v->m, u1, u2);
+    return R(1.0);
+}

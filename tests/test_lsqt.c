@@ -38,7 +38,7 @@ static char *canonical(const lsqt_assembly *a)
 #define MEDIUM1(x) "Medium " x "\nLayer z=0 Null\nMedium\n"                    /* line 1 */
 #define LAYER2(x) "Medium\nLayer z=0 " x "\nMedium\n"                          /* line 2 */
 #define MEDIUM3(x) "Medium\nLayer z=1 Null\nMedium " x "\nLayer z=0 Null\nMedium\n" /* line 3 */
-#define PHASES "HenyeyGreensteinPhase, HenyeyGreenstein2Phase, RayleighPhase, SggxPhase"
+#define PHASES "HenyeyGreensteinPhase, HenyeyGreenstein2Phase, RayleighPhase, SggxPhase, DrainePhase"
 #define BSDFS "NullBsdf, LambertianBsdf, MicrosurfaceLambertianBrdf, " \
     "MicrosurfaceDielectricBsdf, MicrosurfaceConductiveBrdf, OrenNayarDiffuseBrdf"
 
@@ -360,7 +360,7 @@ static void test_tutorials(void)
         CHECK(a.n_layers == 2 && d.n_notes == 0, "%d layers, %d notes", a.n_layers, d.n_notes);
         CHECK(a.layers[0].kind == LSQT_BSDF_NULL && a.layers[0].z == 1, "null layer");
         CHECK(a.media[1].mus == 1 && a.media[1].phase.kind == LSQT_PHASE_HG &&
-              a.media[1].phase.g == 0.2, "dust");
+              a.media[1].phase.v[LSQT_HG_g] == 0.2, "dust");
         CHECK(a.layers[1].fR == 1 && a.layers[1].fT == 0, "ground");
         lsqt_assembly_free(&a);
     }
@@ -369,7 +369,7 @@ static void test_tutorials(void)
         const lsqt_layer *l = &a.layers[1];
         CHECK(l->kind == LSQT_BSDF_MS_DIELECTRIC && l->alpha == 0.1 && l->kR == 1 && l->kT == 1 &&
               l->iter_count == 1 && l->multiple_scattering == 1, "dielectric");
-        CHECK(a.media[2].eta == 1.5 && a.media[1].phase.g == -0.2, "media");
+        CHECK(a.media[2].eta == 1.5 && a.media[1].phase.v[LSQT_HG_g] == -0.2, "media");
         lsqt_assembly_free(&a);
     }
 }
@@ -426,9 +426,9 @@ static void test_bsdf_defaults(void)
 static void test_phase_defaults(void)
 {
     static const char *const names[] = {
-        "HenyeyGreensteinPhase", "HenyeyGreenstein2Phase", "RayleighPhase", "SggxPhase",
+        "HenyeyGreensteinPhase", "HenyeyGreenstein2Phase", "RayleighPhase", "SggxPhase", "DrainePhase",
     };
-    for (int i = 0; i < 4; i++) {
+    for (int i = 0; i < 5; i++) {
         char text[160];
         lsqt_assembly a;
         lsqt_diag d;
@@ -438,9 +438,11 @@ static void test_phase_defaults(void)
         const lsqt_phase *p = &a.media[1].phase;
         CHECK(p->kind == i + 1, "%s: kind %d", names[i], p->kind);
         CHECK(strcmp(lsqt_phase_name(i + 1), names[i]) == 0, "%s", lsqt_phase_name(i + 1));
-        CHECK(p->g == 0 && p->g0 == 0 && p->g1 == 0 && p->b == 0 && p->rho == 0, "zeros");
         if (p->kind == LSQT_PHASE_SGGX)
-            CHECK(p->apara == 1 && p->aperp == 1 && p->sggx_diffuse == 0, "SGGX defaults");
+            CHECK(p->v[LSQT_SGGX_apara] == 1 && p->v[LSQT_SGGX_aperp] == 1 && p->v[LSQT_SGGX_type] == 0,
+                  "SGGX defaults");
+        else
+            CHECK(p->v[0] == 0 && p->v[1] == 0 && p->v[2] == 0 && p->v[3] == 0, "zeros");
         CHECK(a.media[1].mus == 2 && a.media[1].eta == 1 && a.media[1].mua == 0, "medium");
         lsqt_assembly_free(&a);
     }
@@ -473,17 +475,17 @@ static void test_every_key(void)
     const lsqt_medium *M = a.media;
     CHECK(M[0].eta == 1.2, "top eta");
     CHECK(L[0].z == 5 && L[0].fR == 0.5 && L[0].fT == 0.25, "Lambertian");
-    CHECK(M[1].eta == 1.3 && M[1].mua == 0.5 && M[1].mus == 3 && M[1].phase.g == -0.5, "HG");
+    CHECK(M[1].eta == 1.3 && M[1].mua == 0.5 && M[1].mus == 3 && M[1].phase.v[LSQT_HG_g] == -0.5, "HG");
     CHECK(L[1].alpha == 0.05 && L[1].fR == 0.6 && L[1].fT == 0.3 && L[1].iter_count == 9 &&
           L[1].multiple_scattering == 0, "microsurface Lambertian");
-    CHECK(M[2].phase.kind == LSQT_PHASE_HG2 && M[2].phase.g0 == 0.75 && M[2].phase.g1 == -0.5 &&
-          M[2].phase.b == 0.25, "HG2");
+    CHECK(M[2].phase.kind == LSQT_PHASE_HG2 && M[2].phase.v[LSQT_HG2_g0] == 0.75 && M[2].phase.v[LSQT_HG2_g1] == -0.5 &&
+          M[2].phase.v[LSQT_HG2_b] == 0.25, "HG2");
     CHECK(L[2].alpha == 0.15 && L[2].kR == 0.5 && L[2].kT == 0.75 && L[2].iter_count == 10 &&
           L[2].multiple_scattering == 1, "microsurface dielectric");
-    CHECK(M[3].phase.kind == LSQT_PHASE_RAYLEIGH && M[3].phase.rho == -1 && M[3].eta == 1.5,
+    CHECK(M[3].phase.kind == LSQT_PHASE_RAYLEIGH && M[3].phase.v[LSQT_RAYLEIGH_rho] == -1 && M[3].eta == 1.5,
           "Rayleigh");
-    CHECK(M[4].phase.kind == LSQT_PHASE_SGGX && M[4].phase.apara == 0.5 &&
-          M[4].phase.aperp == 2 && M[4].phase.sggx_diffuse == 1, "SGGX");
+    CHECK(M[4].phase.kind == LSQT_PHASE_SGGX && M[4].phase.v[LSQT_SGGX_apara] == 0.5 &&
+          M[4].phase.v[LSQT_SGGX_aperp] == 2 && M[4].phase.v[LSQT_SGGX_type] == 1, "SGGX");
     CHECK(L[4].kind == LSQT_BSDF_OREN_NAYAR && L[4].sigma == 0.8 && L[4].fR == 0, "Oren-Nayar");
     /* the medium below Oren-Nayar cannot be reached: vacuum */
     CHECK(is_vacuum(&M[5]) && a.n_pruned_layers == 0, "bottom medium");
@@ -656,7 +658,7 @@ static void test_notes(void)
     lsqt_diag d;
     /* a phase model with mus=0 is read, then dropped */
     if (parse_good(MEDIUM3("eta=1.5 RayleighPhase rho=0.5"), &a, &d)) {
-        CHECK(a.media[1].phase.kind == LSQT_PHASE_NONE && a.media[1].phase.rho == 0, "phase kept");
+        CHECK(a.media[1].phase.kind == LSQT_PHASE_NONE && a.media[1].phase.v[LSQT_RAYLEIGH_rho] == 0, "phase kept");
         CHECK(has_note(&d, NAME ":3: note: RayleighPhase ignored: mus=0, the medium does not "
                        "scatter"), "phase note missing");
         char opts[256];

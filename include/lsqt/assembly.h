@@ -10,15 +10,13 @@
 extern "C" {
 #endif
 
-#include "lsqt/model_kinds.h"
+#include "lsqt/model_list.h"
+
+#define LSQT_MAX_MODEL_KEYS 4 /* most keys a phase function has (a static check in host/lsqt.c) */
 
 typedef struct lsqt_phase {
-    int kind;          /* enum lsqt_phase_kind */
-    double g;          /* HG */
-    double g0, g1, b;  /* two-lobe HG: (1-b) HG(g0) + b HG(g1) */
-    double rho;        /* Rayleigh depolarisation factor */
-    double apara, aperp; /* SGGX */
-    int sggx_diffuse;  /* SGGX type: 0 Specular, 1 Diffuse */
+    int kind;                  /* enum lsqt_phase_kind */
+    double v[LSQT_MAX_MODEL_KEYS]; /* its keys' values, slot LSQT_<ID>_<key> (model_list.h) */
 } lsqt_phase;
 
 typedef struct lsqt_medium {

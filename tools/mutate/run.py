@@ -248,12 +248,20 @@ def verdict(status, failed):
 # ---- scratch trees ------------------------------------------------------------------
 
 def kernel_files():
-    """The kernel sources in the order they are embedded (CMakeLists.txt)."""
+    """The kernel sources in the order they are embedded (CMakeLists.txt: the core list,
+    every kernels/phase_*.cl and kernels/bsdf_*.cl but the core's in name order, the engine)."""
     with open(os.path.join(ROOT, "CMakeLists.txt"), encoding="utf-8") as f:
-        m = re.search(r"set\(LSQT_KERNEL_FILES\s+([^)]*)\)", f.read())
-    if not m:
-        raise ListError("CMakeLists.txt has no set(LSQT_KERNEL_FILES ...)")
-    return m.group(1).split()
+        text = f.read()
+    lists = {}
+    for name in ("CORE", "ENGINE"):
+        m = re.search(r"set\(LSQT_KERNEL_%s\s+([^)]*)\)" % name, text)
+        if not m:
+            raise ListError("CMakeLists.txt has no set(LSQT_KERNEL_%s ...)" % name)
+        lists[name] = m.group(1).split()
+    kdir = os.path.join(ROOT, "kernels")
+    models = sorted("kernels/" + f for f in os.listdir(kdir)
+                    if f.endswith(".cl") and f.startswith(("phase_", "bsdf_")))
+    return lists["CORE"] + [f for f in models if f not in lists["CORE"]] + lists["ENGINE"]
 
 
 def host_includes():

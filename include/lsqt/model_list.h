@@ -1,0 +1,138 @@
+/* The one list of models (docs/architecture.md, "Adding a model"). Every phase function and
+ * BSDF is declared here once: its kind number, its names, its keys (range and default), how
+ * its parameters pack into the device tables, and its properties. The parser's key tables,
+ * the kind enums, the device-table packing, the angle-only and transmission properties,
+ * the kernel build flags (-DLSQT_HAS_<CLASS>_<ID>=1) and the kernels' dispatch
+ * (kernels/models.cl) are all expanded from it.
+ *
+ * Prepended to the OpenCL sources, so only plain C that is also OpenCL C here; the key
+ * lists and packing are expanded by the host alone.
+ *
+ * Phase functions: X(ID, kind number, seed name, short name, kernel prefix, SAMPLER,
+ * MIRROR). Kernel prefix p: kernels/phase_*.cl defines p_phase_evalv(m, v, wo, wi) and
+ * p_phase_sample(m, v, wo, u1, u2, rng, wi) (the weight p / pdf); SAMPLER is EXACT (draws
+ * exactly the phase function: its pdf is its value) or VERTEX (p_phase_vertex fixes a
+ * random state per vertex and p_phase_pdf gives the density). MIRROR is 1 when the phase
+ * function is its own mirror image under z -> -z (light from below, host/below.c). */
+#ifndef LSQT_MODEL_LIST_H
+#define LSQT_MODEL_LIST_H
+
+#define LSQT_PHASES(X)                                                                     \
+    X(HG, 1, "HenyeyGreensteinPhase", "HenyeyGreenstein", hg, EXACT, 1)                  \
+    X(HG2, 2, "HenyeyGreenstein2Phase", "HenyeyGreenstein2", hg2, EXACT, 1)              \
+    X(RAYLEIGH, 3, "RayleighPhase", "Rayleigh", rayleigh, EXACT, 1)                        \
+    X(SGGX, 4, "SggxPhase", "Sggx", sggx, VERTEX, 1)                                       \
+    X(DRAINE, 5, "DrainePhase", "Draine", draine, EXACT, 1)
+
+/* BSDFs (NullBsdf, kind 0, is the host's own): X(ID, kind number, seed name, short name,
+ * kernel prefix, SAMPLER, MIRROR, TRANSMITS). kernels/bsdf_*.cl defines p_evalv(l, wo, wi)
+ * and p_pdf(l, wo, wi); SAMPLER is CLOSED (p_sample(l, wo, u0, u1, u2, wi) returns the
+ * weight f / pdf; next-event estimation evaluates p_evalv) or WALK (a microsurface: the
+ * random walk of kernels/microsurface.cl samples and estimates it, p_evalv is its single-
+ * scattering term). TRANSMITS is ALWAYS, NEVER, or the key whose value > 0 lets light
+ * through (FT, KT): a layer that transmits nothing prunes what lies below it. */
+#define LSQT_BSDFS(X)                                                                                  \
+    X(LAMBERTIAN, 1, "LambertianBsdf", "Lambertian", lambertian, CLOSED, 1, FT)                        \
+    X(MS_LAMBERTIAN, 2, "MicrosurfaceLambertianBrdf", "MicrosurfaceLambertian", mslambert, WALK, 1, FT) \
+    X(MS_DIELECTRIC, 3, "MicrosurfaceDielectricBsdf", "MicrosurfaceDielectric", dielectric, WALK, 1, KT) \
+    X(MS_CONDUCTIVE, 4, "MicrosurfaceConductiveBrdf", "MicrosurfaceConductive", conductor, WALK, 0, NEVER) \
+    X(OREN_NAYAR, 5, "OrenNayarDiffuseBrdf", "OrenNayarDiffuse", oren_nayar, CLOSED, 0, NEVER)
+
+#define LSQT_X_PHASE_KIND_(ID, NUM, ...) LSQT_PHASE_##ID = NUM,
+#define LSQT_X_BSDF_KIND_(ID, NUM, ...) LSQT_BSDF_##ID = NUM,
+enum lsqt_phase_kind { LSQT_PHASE_NONE = 0, LSQT_PHASES(LSQT_X_PHASE_KIND_) };
+enum lsqt_bsdf_kind { LSQT_BSDF_NULL = 0, LSQT_BSDFS(LSQT_X_BSDF_KIND_) };
+#undef LSQT_X_PHASE_KIND_
+#undef LSQT_X_BSDF_KIND_
+
+/* ---- Keys: K(ID, FIELD, "name", TYPE, default, lo, lo_open, hi, hi_open, words) --------------
+ * TYPE is NUM (a finite double), INT or CHOICE (one of the NULL-terminated words, stored as
+ * its index). A phase key's FIELD names its slot in lsqt_phase.v (LSQT_<ID>_<FIELD>); a BSDF
+ * key's FIELD is the lsqt_layer member it fills. Keys are written back in this order. */
+
+/* Henyey-Greenstein's g: its peak, (1 + |g|) / (4 pi (1 - |g|)^2), is a next-event
+ * estimate's factor, so it must stay well within the tally's 2^44 per contribution
+ * (1.6e11 at the bound; g = 1 - 1e-7 overflows it). */
+#define LSQT_G_MAX 0.999999
+#define LSQT_KEY_G_(K, ID, F, NAME) K(ID, F, NAME, NUM, 0, -LSQT_G_MAX, 0, LSQT_G_MAX, 0, 0)
+#define LSQT_KEY_FRACTION_(K, ID, F, NAME, DEF) K(ID, F, NAME, NUM, DEF, 0, 0, 1, 0, 0)
+
+#define LSQT_KEYS_HG(K, ID) LSQT_KEY_G_(K, ID, g, "g")
+#define LSQT_KEYS_HG2(K, ID) \
+    LSQT_KEY_G_(K, ID, g0, "g0") LSQT_KEY_G_(K, ID, g1, "g1") LSQT_KEY_FRACTION_(K, ID, b, "b", 0)
+#define LSQT_KEYS_RAYLEIGH(K, ID) K(ID, rho, "rho", NUM, 0, -1, 0, 1, 0, 0)
+#define LSQT_KEYS_SGGX(K, ID)                         \
+    K(ID, apara, "Apara", NUM, 1, 0, 1, 1e6, 0, 0) \
+    K(ID, aperp, "Aperp", NUM, 1, 0, 1, 1e6, 0, 0) \
+    K(ID, type, "type", CHOICE, 0, 0, 0, 0, 0, LSQT_WORDS("Specular", "Diffuse"))
+/* Draine's alpha: 0 is Henyey-Greenstein, 1 at g = 0 is Rayleigh's shape; the bound only
+ * keeps the numbers sane (the sampler's acceptance stays above 1/3 for any alpha). */
+#define LSQT_KEYS_DRAINE(K, ID) LSQT_KEY_G_(K, ID, g, "g") K(ID, alpha, "alpha", NUM, 0, 0, 0, 1e3, 0, 0)
+
+/* Microsurfaces: alpha's default 0.5; iter_count's default 0 means "auto" (resolved from
+ * alpha once the line is read). */
+#define LSQT_KEY_ALPHA_(K, ID) K(ID, alpha, "alpha", NUM, 0.5, 0, 1, 100, 0, 0)
+#define LSQT_KEY_ITER_(K, ID) K(ID, iter_count, "iter_count", INT, 0, 1, 0, 128, 0, 0)
+#define LSQT_KEY_MULTIPLE_(K, ID, DEF) \
+    K(ID, multiple_scattering, "use_multiple_scattering", CHOICE, DEF, 0, 0, 0, 0, LSQT_WORDS("false", "true"))
+
+#define LSQT_KEYS_LAMBERTIAN(K, ID) LSQT_KEY_FRACTION_(K, ID, fR, "fR", 1) LSQT_KEY_FRACTION_(K, ID, fT, "fT", 0)
+#define LSQT_KEYS_MS_LAMBERTIAN(K, ID)                                                                      \
+    LSQT_KEY_ALPHA_(K, ID) LSQT_KEY_FRACTION_(K, ID, fR, "fR", 1) LSQT_KEY_FRACTION_(K, ID, fT, "fT", 0) \
+    LSQT_KEY_ITER_(K, ID) LSQT_KEY_MULTIPLE_(K, ID, 1)
+#define LSQT_KEYS_MS_DIELECTRIC(K, ID)                                                                      \
+    LSQT_KEY_ALPHA_(K, ID) LSQT_KEY_FRACTION_(K, ID, kR, "kR", 1) LSQT_KEY_FRACTION_(K, ID, kT, "kT", 1) \
+    LSQT_KEY_ITER_(K, ID) LSQT_KEY_MULTIPLE_(K, ID, 1)
+#define LSQT_KEYS_MS_CONDUCTIVE(K, ID) LSQT_KEY_ALPHA_(K, ID) LSQT_KEY_ITER_(K, ID) LSQT_KEY_MULTIPLE_(K, ID, 0)
+#define LSQT_KEYS_OREN_NAYAR(K, ID) \
+    LSQT_KEY_FRACTION_(K, ID, fR, "fR", 1) K(ID, sigma, "sigma", NUM, 0.1, 0, 0, 0.8, 0, 0)
+
+/* ---- Packing into the device tables (host only) -------------------------------------------
+ * A phase function's pp[4] from its key values v (indexed LSQT_<ID>_<key>); a BSDF's p[8]
+ * from its layer l and the media up (above) and down (below). Doubles; the float tables
+ * are rounded from them. */
+#define LSQT_PACK_HG(v, pp) pp[0] = v[LSQT_HG_g];
+#define LSQT_PACK_HG2(v, pp) pp[0] = v[LSQT_HG2_g0], pp[1] = v[LSQT_HG2_g1], pp[2] = v[LSQT_HG2_b];
+#define LSQT_PACK_RAYLEIGH(v, pp) pp[0] = v[LSQT_RAYLEIGH_rho] / (2.0 - v[LSQT_RAYLEIGH_rho]); /* gamma, as the seed */
+/* S = diag(Apara^2, Apara^2, Aperp^2), scaled to a largest entry of 1 (the phase function
+ * does not change with the scale of S, and float keeps its range) */
+#define LSQT_PACK_SGGX(v, pp)                                                           \
+    {                                                                                   \
+        double a_ = v[LSQT_SGGX_apara] > v[LSQT_SGGX_aperp] ? v[LSQT_SGGX_apara] : v[LSQT_SGGX_aperp]; \
+        pp[0] = (v[LSQT_SGGX_apara] / a_) * (v[LSQT_SGGX_apara] / a_);                \
+        pp[1] = (v[LSQT_SGGX_aperp] / a_) * (v[LSQT_SGGX_aperp] / a_);                \
+        pp[2] = v[LSQT_SGGX_type];                                                      \
+    }
+/* g, alpha and the normalisation 1 / (1 + alpha (1 + 2 g^2) / 3) (kernels/phase_draine.cl) */
+#define LSQT_PACK_DRAINE(v, pp)                                                                      \
+    pp[0] = v[LSQT_DRAINE_g], pp[1] = v[LSQT_DRAINE_alpha],                                          \
+    pp[2] = 1.0 / (1.0 + v[LSQT_DRAINE_alpha] * (1.0 + 2.0 * v[LSQT_DRAINE_g] * v[LSQT_DRAINE_g]) / 3.0);
+
+#define LSQT_PACK_LAMBERTIAN(l, up, down, p) p[0] = l->fR, p[1] = l->fT;
+#define LSQT_PACK_MS_LAMBERTIAN(l, up, down, p) p[0] = l->alpha, p[1] = l->fR, p[2] = l->fT;
+/* alpha, the index below relative to the one above, the Fresnel scales */
+#define LSQT_PACK_MS_DIELECTRIC(l, up, down, p) \
+    p[0] = l->alpha, p[1] = down->eta / up->eta, p[2] = l->kR, p[3] = l->kT;
+/* alpha, and the metal's complex index relative to the medium above */
+#define LSQT_PACK_MS_CONDUCTIVE(l, up, down, p) p[0] = l->alpha, p[1] = down->eta / up->eta, p[2] = down->mua / up->eta;
+#define LSQT_PACK_OREN_NAYAR(l, up, down, p) p[0] = l->fR, p[1] = l->sigma;
+
+#define LSQT_TRANSMITS_ALWAYS(l) 1
+#define LSQT_TRANSMITS_NEVER(l) 0
+#define LSQT_TRANSMITS_FT(l) ((l)->fT > 0)
+#define LSQT_TRANSMITS_KT(l) ((l)->kT > 0)
+
+/* A choice key's words: a NULL-terminated array (host only). */
+#define LSQT_WORDS(...) ((const char *const[]){ __VA_ARGS__, 0 })
+
+/* The slots of each phase function's keys in lsqt_phase.v: LSQT_<ID>_<key>, and
+ * LSQT_<ID>_N_KEYS (host only: the kernels read the packed pp). */
+#ifndef __OPENCL_VERSION__
+#define LSQT_X_KEY_SLOT_(ID, F, ...) LSQT_##ID##_##F,
+#define LSQT_X_PHASE_SLOTS_(ID, ...) enum { LSQT_KEYS_##ID(LSQT_X_KEY_SLOT_, ID) LSQT_##ID##_N_KEYS };
+LSQT_PHASES(LSQT_X_PHASE_SLOTS_)
+#undef LSQT_X_PHASE_SLOTS_
+#undef LSQT_X_KEY_SLOT_
+#endif
+
+#endif
