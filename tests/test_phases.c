@@ -76,8 +76,12 @@
  *    point estimate), within 4 sigma (batch means of the difference on the same paths)
  *    plus the quadrature error of the direction rule, bounded by the difference between
  *    1024 and 256 directions on the same paths (required below 2 % of the value).
+ * 8. Draine (section draine): the sampler against the value for (g, alpha) = (0, 1),
+ *    (0.7, 0.5), (-0.5, 3), (0.95, 20) as in 1 (normalisation to 1e-4 included); the value
+ *    against the formula in double; alpha = 0 is HG bit for bit; g = 0, alpha = 1 is
+ *    Rayleigh rho = 0; a lossless Draine slab as in 7.
  * usage: test_phases [SECTION...] (all by default; sections: hg2 rayleigh sggx-specular
- * sggx-diffuse oren-nayar peaks rayleigh-ks limits reciprocity stacks). */
+ * sggx-diffuse oren-nayar peaks rayleigh-ks limits reciprocity stacks draine). */
 #include <stdint.h>
 #include <time.h>
 
@@ -107,7 +111,7 @@
 #define SKEW 0.02
 #define NS 1000000
 #define FAMILY_ALPHA 1e-3
-#define N_FAMILY 92 /* p-values of a full run: the Bonferroni divisor of every run, full or a section */
+#define N_FAMILY 100 /* p-values of a full run: the Bonferroni divisor of every run, full or a section */
 
 static cl_program prog;
 static double t_kernel = 0;
@@ -286,6 +290,15 @@ static model_t rayleigh_model(double rho, const double wo[3])
     char nm[96];
     snprintf(nm, sizeof nm, "Rayleigh rho=%g", rho);
     return phase_model(nm, LSQT_PHASE_RAYLEIGH, rho / (2 - rho), 0, 0, wo); /* gamma, as the host passes it */
+}
+
+/* Draine (g, alpha): the table holds {g, alpha, 1 / (1 + alpha (1 + 2 g^2) / 3)}, the
+ * normalisation written here from HG's mean cos^2 = (1 + 2 g^2) / 3 (docs/design.md 1.2). */
+static model_t draine_model(double g, double alpha, const double wo[3])
+{
+    char nm[96];
+    snprintf(nm, sizeof nm, "Draine (g %g, alpha %g)", g, alpha);
+    return phase_model(nm, LSQT_PHASE_DRAINE, g, alpha, 1 / (1 + alpha * (1 + 2 * g * g) / 3), wo);
 }
 
 /* Apara / Aperp = ratio; the table holds S / a^2 with a = max(Apara, Aperp), as the host
@@ -1467,6 +1480,85 @@ static void stacks(void)
           100000);
 }
 
+/* ---------------------------------------------------------------- section 11: draine */
+
+/* Draine's phase function in double, from its definition (Draine 2003, eq. 4):
+ * (1 - g^2) (1 + alpha cos^2 t) / (4 pi (1 + alpha (1 + 2 g^2) / 3) (1 + g^2 - 2 g cos t)^1.5),
+ * cos t = -wo.wi. */
+static double draine_ref(double g, double alpha, double cost)
+{
+    return (1 - g * g) * (1 + alpha * cost * cost) /
+           (4 * PI * (1 + alpha * (1 + 2 * g * g) / 3) * pow(1 + g * g - 2 * g * cost, 1.5));
+}
+
+/* DrainePhase: the sampler against the value (goodness of fit, as section 1, with the
+ * normalisation to 1e-4 in it) for four (g, alpha) from Rayleigh-like to a sharp forward
+ * peak with a strong cos^2 term; the value against the formula in double (relative 2e-5,
+ * float); alpha = 0 is HG(g) bit for bit, values and samples (the sampler then draws as
+ * HG's); g = 0, alpha = 1 is Rayleigh rho = 0, 3 / (16 pi) (1 + cos^2) (relative 1e-6);
+ * and a lossless Draine slab end to end (as section 7). */
+static void draine(void)
+{
+    const double gs[] = {0.0, 0.7, -0.5, 0.95}, as[] = {1.0, 0.5, 3.0, 20.0};
+    const double wos[][3] = {{0, 0, 1}, {0.3, -0.2, 0.9327379}, {-0.48, 0.6, 0.64}, {0.99, 0.1, -0.0995}};
+    for (int i = 0; i < 4; i++) {
+        gof_case gc = {.m = draine_model(gs[i], as[i], wos[i]), .lo = -1, .integral = 1, .int_tol = 1e-4};
+        for (int k = 0; k < 3; k++) gc.axis[k] = -wos[i][k];
+        gof(&gc, 100 + i); /* seeds of their own, whichever sections run */
+    }
+
+    static float f[4 * NLIM], fp[2 * NLIM], fq[2 * NLIM];
+    static double d[NLIM][3];
+    rand_dirs(11, NLIM, f, d);
+    double worst = 0;
+    for (int i = 0; i < 4; i++) {
+        model_t m = draine_model(gs[i], as[i], wos[i]);
+        double o[3];
+        wo_double(m.wo, o);
+        k_eval(&m, m.wo, f, NLIM, fp);
+        for (int k = 0; k < NLIM; k++) {
+            double ref = draine_ref(m.M.pp[0], m.M.pp[1], -dot3(o, d[k]));
+            worst = fmax(worst, fabs(fp[2 * k] / ref - 1));
+            worst = fmax(worst, fabs(fp[2 * k + 1] / ref - 1)); /* the density: exact sampler */
+        }
+    }
+    CHECK(worst <= 2e-5, "Draine: largest relative departure from the formula %.3g", worst);
+
+    int neq = 0, nsame = 0;
+    for (int i = 0; i < 4; i++) {
+        const double g = i == 3 ? -0.999 : gs[i] + 0.1;
+        model_t a = phase_model("HG", LSQT_PHASE_HG, g, 0, 0, wos[i]), b = draine_model(g, 0, wos[i]);
+        k_eval(&a, a.wo, f, NLIM, fp);
+        k_eval(&b, b.wo, f, NLIM, fq);
+        for (int k = 0; k < 2 * NLIM; k++) neq += fp[k] != fq[k];
+        enum { NSAMP = 20000 };
+        static float sa[4 * NSAMP], sb[4 * NSAMP];
+        k_sample(&a, 199u + (cl_uint)i, NSAMP, sa);
+        k_sample(&b, 199u + (cl_uint)i, NSAMP, sb);
+        for (int k = 0; k < 4 * NSAMP; k++) nsame += sa[k] != sb[k];
+    }
+    CHECK(neq == 0, "Draine with alpha = 0: %d values differ from HG(g)", neq);
+    CHECK(nsame == 0, "Draine with alpha = 0: %d sample coordinates differ from HG(g)'s", nsame);
+
+    double worst_r = 0;
+    for (int w = 0; w < 4; w++) {
+        model_t m = draine_model(0, 1, wos[w]);
+        double o[3];
+        wo_double(m.wo, o);
+        k_eval(&m, m.wo, f, NLIM, fp);
+        for (int k = 0; k < NLIM; k++) {
+            double c = dot3(o, d[k]);
+            worst_r = fmax(worst_r, fabs(fp[2 * k] / (3 / (16 * PI) * (1 + c * c)) - 1));
+        }
+    }
+    CHECK(worst_r <= 1e-6, "Draine g = 0, alpha = 1: largest relative departure from Rayleigh rho = 0 %.3g", worst_r);
+    printf("draine: formula within %.2g, alpha = 0 is HG (%d values, samples bit for bit), g = 0 alpha = 1 is"
+           " Rayleigh within %.2g\n", worst, 2 * NLIM * 4, worst_r);
+
+    stack("Draine (0.6, 2) slab",
+          "Medium\nLayer z=1 NullBsdf\nMedium mus=1 DrainePhase g=0.6 alpha=2\nLayer z=0 NullBsdf\nMedium\n", 100000);
+}
+
 /* ---------------------------------------------------------------- main */
 
 static int want(int argc, char **argv, const char *sec)
@@ -1493,24 +1585,25 @@ int main(int argc, char **argv)
     char err[1024], *log = NULL;
     prog = lsqt_program_build(&fixture_cx,
                               "-cl-std=CL1.2 -DLSQT_HAS_PHASE_HG=1 -DLSQT_HAS_PHASE_HG2=1 -DLSQT_HAS_PHASE_RAYLEIGH=1 "
-                              "-DLSQT_HAS_PHASE_SGGX=1 -DLSQT_HAS_BSDF_OREN_NAYAR=1",
+                              "-DLSQT_HAS_PHASE_SGGX=1 -DLSQT_HAS_PHASE_DRAINE=1 -DLSQT_HAS_BSDF_OREN_NAYAR=1",
                               &log, err, sizeof err);
     CHECK(prog != NULL, "%s\n%s", err, log ? log : "");
     free(log);
     if (!prog) return check_finish("test_phases");
     printf("build %.1f s\n", now() - t_start);
     const char *secs[] = {"hg2", "rayleigh", "sggx-specular", "sggx-diffuse", "oren-nayar", "peaks", "rayleigh-ks",
-                          "limits", "reciprocity", "stacks"};
-    static const int n_pvalues[10] = {6, 8, 18, 18, 30, 6, 5, 0, 1, 0}; /* per section; they sum to N_FAMILY */
+                          "limits", "reciprocity", "stacks", "draine"};
+    enum { NSEC = 11 };
+    static const int n_pvalues[NSEC] = {6, 8, 18, 18, 30, 6, 5, 0, 1, 0, 8}; /* per section; they sum to N_FAMILY */
     int sum = 0;
-    for (int k = 0; k < 10; k++) sum += n_pvalues[k];
+    for (int k = 0; k < NSEC; k++) sum += n_pvalues[k];
     CHECK(sum == N_FAMILY, "n_pvalues sum to %d, N_FAMILY is %d", sum, N_FAMILY);
     for (int i = 1; i < argc; i++) {
         int ok = 0;
-        for (int k = 0; k < 10; k++) ok |= !strcmp(argv[i], secs[k]);
+        for (int k = 0; k < NSEC; k++) ok |= !strcmp(argv[i], secs[k]);
         CHECK(ok, "unknown section '%s'", argv[i]);
     }
-    for (int k = 0; k < 10; k++) {
+    for (int k = 0; k < NSEC; k++) {
         if (!want(argc, argv, secs[k])) {
             if (k < 5) n_case += k == 0 ? 3 : k == 1 ? 4 : k == 4 ? 10 : 9; /* the same seeds whatever runs */
             continue;
@@ -1527,6 +1620,7 @@ int main(int argc, char **argv)
         case 7: limits(); break;
         case 8: reciprocity(); break;
         case 9: stacks(); break;
+        case 10: draine(); break;
         }
         printf("[%s: %.1f s]\n", secs[k], now() - t0);
     }
@@ -1534,7 +1628,7 @@ int main(int argc, char **argv)
     /* the family: Bonferroni over every p-value of a full run, so that a section alone
      * (ctest runs each as its own test) rejects exactly what the full run rejects */
     int expect = 0;
-    for (int k = 0; k < 10; k++) expect += want(argc, argv, secs[k]) ? n_pvalues[k] : 0;
+    for (int k = 0; k < NSEC; k++) expect += want(argc, argv, secs[k]) ? n_pvalues[k] : 0;
     CHECK(n_tests == expect, "%d p-values recorded, %d expected: update n_pvalues and N_FAMILY", n_tests, expect);
     const double thr = FAMILY_ALPHA / N_FAMILY;
     double pmin = 1;
