@@ -47,7 +47,7 @@ int lsqt_layer_transmits(const lsqt_layer *l)
 {
 #define TRANSMITS(ID, num, name, alias, prefix, sampler, mirror, transmits) \
     if (l->kind == LSQT_BSDF_##ID)                                          \
-        return LSQT_TRANSMITS_##transmits(l);
+        return LSQT_TRANSMITS_##transmits(ID, l->v);
     LSQT_BSDFS(TRANSMITS)
 #undef TRANSMITS
     return 1; /* NullBsdf */

@@ -47,12 +47,12 @@ static const lsqt_key layer_keys[] = {
 static const lsqt_model medium_head = MODEL("Medium", NULL, 0, NULL, medium_keys);
 static const lsqt_model layer_head = MODEL("Layer", NULL, 0, NULL, layer_keys);
 
-/* The models' keys and tables, expanded from include/lsqt/model_list.h. A phase key
- * fills its slot of lsqt_phase.v (a double, choices too); a BSDF key its lsqt_layer field. */
+/* The models' keys and tables, expanded from include/lsqt/model_list.h. A key fills its
+ * slot of lsqt_phase.v or lsqt_layer.v (a double, integers and choices too). */
 #define PHASE_KEY(ID, F, name, type, def, lo, lo_open, hi, hi_open, words) \
     { name, LSQT_##type, def, lo, hi, lo_open, hi_open, words, PHASE(v) + LSQT_##ID##_##F * sizeof(double), 0, 1 },
 #define BSDF_KEY(ID, F, name, type, def, lo, lo_open, hi, hi_open, words) \
-    { name, LSQT_##type, def, lo, hi, lo_open, hi_open, words, LAY(F), 0, 0 },
+    { name, LSQT_##type, def, lo, hi, lo_open, hi_open, words, LAY(v) + LSQT_##ID##_##F * sizeof(double), 0, 1 },
 #define PHASE_KEYS(ID, ...) static const lsqt_key ID##_phase_keys[] = { LSQT_KEYS_##ID(PHASE_KEY, ID) };
 #define BSDF_KEYS(ID, ...) static const lsqt_key ID##_bsdf_keys[] = { LSQT_KEYS_##ID(BSDF_KEY, ID) };
 LSQT_PHASES(PHASE_KEYS)
@@ -66,8 +66,9 @@ static const lsqt_model bsdf_models[] = {
     LSQT_BSDFS(BSDF_MODEL)
 };
 
-#define PHASE_FITS(ID, ...) _Static_assert(LSQT_##ID##_N_KEYS <= LSQT_MAX_MODEL_KEYS, "lsqt_phase.v too small");
-LSQT_PHASES(PHASE_FITS)
+#define FITS(ID, ...) _Static_assert(LSQT_##ID##_N_KEYS <= LSQT_MAX_MODEL_KEYS, "v[] too small for " #ID);
+LSQT_PHASES(FITS)
+LSQT_BSDFS(FITS)
 
 const lsqt_line_desc lsqt_medium_line = {
     &medium_head, phase_models, COUNT(phase_models), "phase model", PHASE(kind),
@@ -600,6 +601,13 @@ static int finish_medium(parser *P, line_state *ls, lsqt_medium *m)
     return 0;
 }
 
+/* The value of the model's key `name` in the layer, NULL when the model has no such key. */
+static double *layer_key(lsqt_layer *l, const lsqt_model *m, const char *name)
+{
+    const lsqt_key *k = find_key(m, word(name));
+    return k ? (double *)(void *)((unsigned char *)l + k->offset) : NULL;
+}
+
 static int finish_layer(parser *P, line_state *ls, lsqt_layer *l)
 {
     char buf[256];
@@ -616,17 +624,22 @@ static int finish_layer(parser *P, line_state *ls, lsqt_layer *l)
                     "layer not below the previous one",
                     "z < %g (z of the layer on line %d; z decreases down the file)", prev->z,
                     prev->line);
-    if (find_key(ls->model, word("fT")) && l->fR + l->fT > 1 + 1e-12) {
+    const double *fR = layer_key(l, ls->model, "fR"), *fT = layer_key(l, ls->model, "fT");
+    if (fR && fT && *fR + *fT > 1 + 1e-12) {
         /* name whichever of fR, fT was written last */
         const span *fr = token_of(ls->model_tok, ls->model, "fR");
         const span *ft = token_of(ls->model_tok, ls->model, "fT");
         const span *tok = (!ft || (fr && fr->p > ft->p)) ? fr : ft;
-        snprintf(buf, sizeof buf, "fR + fT = %g exceeds 1", l->fR + l->fT);
-        return fail(P, P->line, tok, buf, "fR + fT <= 1 (fR=%g, fT=%g; the rest is absorbed)",
-                    l->fR, l->fT);
+        snprintf(buf, sizeof buf, "fR + fT = %g exceeds 1", *fR + *fT);
+        return fail(P, P->line, tok, buf, "fR + fT <= 1 (fR=%g, fT=%g; the rest is absorbed)", *fR, *fT);
     }
-    if (find_key(ls->model, word("iter_count")) && l->iter_count == 0)
-        l->iter_count = auto_iter_count(l->alpha);
+    /* a microsurface's walks: iter_count 0 is auto, from alpha */
+    double *iter = layer_key(l, ls->model, "iter_count");
+    const double *ms = layer_key(l, ls->model, "use_multiple_scattering");
+    if (iter && *iter == 0)
+        *iter = auto_iter_count(*layer_key(l, ls->model, "alpha"));
+    l->iter_count = iter ? (int)*iter : 0;
+    l->multiple_scattering = ms ? (int)*ms : 0;
     l->line = P->line;
     lsqt_layer *layers = grow(P->layers, &P->cap_layers, P->n_layers, sizeof *P->layers);
     if (!layers)

@@ -58,8 +58,9 @@ static void phase_params(const lsqt_phase *p, double pp[4])
  * the media on each side of it. */
 static void layer_params(const lsqt_layer *l, const lsqt_medium *up, const lsqt_medium *down, double p[8])
 {
+    const double *v = l->v;
 #define PACK(ID, ...) \
-    if (l->kind == LSQT_BSDF_##ID) LSQT_PACK_##ID(l, up, down, p)
+    if (l->kind == LSQT_BSDF_##ID) LSQT_PACK_##ID(v, up, down, p)
     LSQT_BSDFS(PACK)
 #undef PACK
     (void)up, (void)down;

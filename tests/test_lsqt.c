@@ -342,7 +342,7 @@ static void test_tutorials(void)
     if (parse_good(tutorial_lambertian, &a, &d)) {
         CHECK(a.n_layers == 1 && a.n_pruned_layers == 0 && d.n_notes == 0, "%d", a.n_layers);
         CHECK(a.layers[0].kind == LSQT_BSDF_LAMBERTIAN, "kind %d", a.layers[0].kind);
-        CHECK(a.layers[0].fR == 0.6 && a.layers[0].fT == 0 && a.layers[0].z == 0, "values");
+        CHECK(a.layers[0].v[LSQT_LAMBERTIAN_fR] == 0.6 && a.layers[0].v[LSQT_LAMBERTIAN_fT] == 0 && a.layers[0].z == 0, "values");
         CHECK(a.layers[0].line == 2 && a.media[0].line == 1 && a.media[1].line == 3, "lines");
         CHECK(is_vacuum(&a.media[0]) && is_vacuum(&a.media[1]), "media");
         CHECK(!lsqt_assembly_transmits(&a), "fT=0 transmits");
@@ -350,7 +350,8 @@ static void test_tutorials(void)
     }
     if (parse_good(tutorial_rough, &a, &d)) {
         const lsqt_layer *l = &a.layers[0];
-        CHECK(l->kind == LSQT_BSDF_MS_LAMBERTIAN && l->alpha == 2.4 && l->fR == 0.6 && l->fT == 0,
+        CHECK(l->kind == LSQT_BSDF_MS_LAMBERTIAN && l->v[LSQT_MS_LAMBERTIAN_alpha] == 2.4 && l->v[LSQT_MS_LAMBERTIAN_fR] == 0.6 &&
+                  l->v[LSQT_MS_LAMBERTIAN_fT] == 0,
               "values");
         CHECK(l->iter_count == 6 && l->multiple_scattering == 1, "%d %d", l->iter_count,
               l->multiple_scattering);
@@ -361,13 +362,14 @@ static void test_tutorials(void)
         CHECK(a.layers[0].kind == LSQT_BSDF_NULL && a.layers[0].z == 1, "null layer");
         CHECK(a.media[1].mus == 1 && a.media[1].phase.kind == LSQT_PHASE_HG &&
               a.media[1].phase.v[LSQT_HG_g] == 0.2, "dust");
-        CHECK(a.layers[1].fR == 1 && a.layers[1].fT == 0, "ground");
+        CHECK(a.layers[1].v[LSQT_LAMBERTIAN_fR] == 1 && a.layers[1].v[LSQT_LAMBERTIAN_fT] == 0, "ground");
         lsqt_assembly_free(&a);
     }
     if (parse_good(tutorial_dusty_dielectric, &a, &d)) {
         CHECK(a.n_layers == 3 && a.n_pruned_layers == 0, "%d", a.n_layers);
         const lsqt_layer *l = &a.layers[1];
-        CHECK(l->kind == LSQT_BSDF_MS_DIELECTRIC && l->alpha == 0.1 && l->kR == 1 && l->kT == 1 &&
+        CHECK(l->kind == LSQT_BSDF_MS_DIELECTRIC && l->v[LSQT_MS_DIELECTRIC_alpha] == 0.1 && l->v[LSQT_MS_DIELECTRIC_kR] == 1 &&
+                  l->v[LSQT_MS_DIELECTRIC_kT] == 1 &&
               l->iter_count == 1 && l->multiple_scattering == 1, "dielectric");
         CHECK(a.media[2].eta == 1.5 && a.media[1].phase.v[LSQT_HG_g] == -0.2, "media");
         lsqt_assembly_free(&a);
@@ -397,22 +399,24 @@ static void test_bsdf_defaults(void)
         CHECK(strcmp(lsqt_bsdf_name(kinds[i]), names[i]) == 0, "%s", lsqt_bsdf_name(kinds[i]));
         switch (kinds[i]) {
         case LSQT_BSDF_LAMBERTIAN:
-            CHECK(l->fR == 1 && l->fT == 0, "Lambertian defaults");
+            CHECK(l->v[LSQT_LAMBERTIAN_fR] == 1 && l->v[LSQT_LAMBERTIAN_fT] == 0, "Lambertian defaults");
             break;
         case LSQT_BSDF_MS_LAMBERTIAN:
-            CHECK(l->alpha == 0.5 && l->fR == 1 && l->fT == 0 && l->iter_count == 4 &&
+            CHECK(l->v[LSQT_MS_LAMBERTIAN_alpha] == 0.5 && l->v[LSQT_MS_LAMBERTIAN_fR] == 1 && l->v[LSQT_MS_LAMBERTIAN_fT] == 0 &&
+                  l->iter_count == 4 &&
                   l->multiple_scattering == 1, "microsurface Lambertian defaults");
             break;
         case LSQT_BSDF_MS_DIELECTRIC:
-            CHECK(l->alpha == 0.5 && l->kR == 1 && l->kT == 1 && l->iter_count == 4 &&
+            CHECK(l->v[LSQT_MS_DIELECTRIC_alpha] == 0.5 && l->v[LSQT_MS_DIELECTRIC_kR] == 1 && l->v[LSQT_MS_DIELECTRIC_kT] == 1 &&
+                  l->iter_count == 4 &&
                   l->multiple_scattering == 1, "microsurface dielectric defaults");
             break;
         case LSQT_BSDF_MS_CONDUCTIVE:
-            CHECK(l->alpha == 0.5 && l->iter_count == 4 && l->multiple_scattering == 0,
+            CHECK(l->v[LSQT_MS_CONDUCTIVE_alpha] == 0.5 && l->iter_count == 4 && l->multiple_scattering == 0,
                   "microsurface conductive defaults");
             break;
         case LSQT_BSDF_OREN_NAYAR:
-            CHECK(l->fR == 1 && l->sigma == 0.1, "Oren-Nayar defaults");
+            CHECK(l->v[LSQT_OREN_NAYAR_fR] == 1 && l->v[LSQT_OREN_NAYAR_sigma] == 0.1, "Oren-Nayar defaults");
             break;
         default:
             break;
@@ -474,19 +478,21 @@ static void test_every_key(void)
     const lsqt_layer *L = a.layers;
     const lsqt_medium *M = a.media;
     CHECK(M[0].eta == 1.2, "top eta");
-    CHECK(L[0].z == 5 && L[0].fR == 0.5 && L[0].fT == 0.25, "Lambertian");
+    CHECK(L[0].z == 5 && L[0].v[LSQT_LAMBERTIAN_fR] == 0.5 && L[0].v[LSQT_LAMBERTIAN_fT] == 0.25, "Lambertian");
     CHECK(M[1].eta == 1.3 && M[1].mua == 0.5 && M[1].mus == 3 && M[1].phase.v[LSQT_HG_g] == -0.5, "HG");
-    CHECK(L[1].alpha == 0.05 && L[1].fR == 0.6 && L[1].fT == 0.3 && L[1].iter_count == 9 &&
+    CHECK(L[1].v[LSQT_MS_LAMBERTIAN_alpha] == 0.05 && L[1].v[LSQT_MS_LAMBERTIAN_fR] == 0.6 &&
+          L[1].v[LSQT_MS_LAMBERTIAN_fT] == 0.3 && L[1].iter_count == 9 &&
           L[1].multiple_scattering == 0, "microsurface Lambertian");
     CHECK(M[2].phase.kind == LSQT_PHASE_HG2 && M[2].phase.v[LSQT_HG2_g0] == 0.75 && M[2].phase.v[LSQT_HG2_g1] == -0.5 &&
           M[2].phase.v[LSQT_HG2_b] == 0.25, "HG2");
-    CHECK(L[2].alpha == 0.15 && L[2].kR == 0.5 && L[2].kT == 0.75 && L[2].iter_count == 10 &&
+    CHECK(L[2].v[LSQT_MS_DIELECTRIC_alpha] == 0.15 && L[2].v[LSQT_MS_DIELECTRIC_kR] == 0.5 &&
+          L[2].v[LSQT_MS_DIELECTRIC_kT] == 0.75 && L[2].iter_count == 10 &&
           L[2].multiple_scattering == 1, "microsurface dielectric");
     CHECK(M[3].phase.kind == LSQT_PHASE_RAYLEIGH && M[3].phase.v[LSQT_RAYLEIGH_rho] == -1 && M[3].eta == 1.5,
           "Rayleigh");
     CHECK(M[4].phase.kind == LSQT_PHASE_SGGX && M[4].phase.v[LSQT_SGGX_apara] == 0.5 &&
           M[4].phase.v[LSQT_SGGX_aperp] == 2 && M[4].phase.v[LSQT_SGGX_type] == 1, "SGGX");
-    CHECK(L[4].kind == LSQT_BSDF_OREN_NAYAR && L[4].sigma == 0.8 && L[4].fR == 0, "Oren-Nayar");
+    CHECK(L[4].kind == LSQT_BSDF_OREN_NAYAR && L[4].v[LSQT_OREN_NAYAR_sigma] == 0.8 && L[4].v[LSQT_OREN_NAYAR_fR] == 0, "Oren-Nayar");
     /* the medium below Oren-Nayar cannot be reached: vacuum */
     CHECK(is_vacuum(&M[5]) && a.n_pruned_layers == 0, "bottom medium");
     CHECK(has_note(&d, NAME ":10: note: OrenNayarDiffuseBrdf transmits nothing: the medium on "
@@ -499,7 +505,7 @@ static void test_every_key(void)
     const char *metal = "Medium\nLayer z=0 MicrosurfaceConductiveBrdf alpha=0.3 iter_count=3 "
                         "use_multiple_scattering=true\nMedium eta=0.2 mua=3.1\n";
     if (parse_good(metal, &a, &d)) {
-        CHECK(a.layers[0].alpha == 0.3 && a.layers[0].iter_count == 3 &&
+        CHECK(a.layers[0].v[LSQT_MS_CONDUCTIVE_alpha] == 0.3 && a.layers[0].iter_count == 3 &&
               a.layers[0].multiple_scattering == 1, "conductive");
         CHECK(a.media[1].eta == 0.2 && a.media[1].mua == 3.1 && d.n_notes == 0, "metal");
         lsqt_assembly_free(&a);
@@ -795,9 +801,8 @@ static void test_round_trip(void)
             CHECK(a.n_layers == b.n_layers && b.n_pruned_layers == 0, "layers");
             for (int k = 0; k < a.n_layers; k++) {
                 const lsqt_layer *x = &a.layers[k], *y = &b.layers[k];
-                CHECK(x->z == y->z && x->kind == y->kind && x->fR == y->fR && x->fT == y->fT &&
-                      x->alpha == y->alpha && x->kR == y->kR && x->kT == y->kT &&
-                      x->sigma == y->sigma && x->iter_count == y->iter_count &&
+                CHECK(x->z == y->z && x->kind == y->kind && !memcmp(x->v, y->v, sizeof x->v) &&
+                      x->iter_count == y->iter_count &&
                       x->multiple_scattering == y->multiple_scattering, "layer %d differs", k);
             }
             for (int k = 0; k <= a.n_layers; k++) {

@@ -12,7 +12,7 @@ extern "C" {
 
 #include "lsqt/model_list.h"
 
-#define LSQT_MAX_MODEL_KEYS 4 /* most keys a phase function has (a static check in host/lsqt.c) */
+#define LSQT_MAX_MODEL_KEYS 6 /* most keys a model has (a static check in host/lsqt.c) */
 
 typedef struct lsqt_phase {
     int kind;                  /* enum lsqt_phase_kind */
@@ -28,12 +28,9 @@ typedef struct lsqt_medium {
 typedef struct lsqt_layer {
     double z;
     int kind;          /* enum lsqt_bsdf_kind */
-    double fR, fT;     /* Lambertian, microsurface Lambertian, Oren-Nayar (fR) */
-    double alpha;      /* microsurface roughness */
-    double kR, kT;     /* microsurface dielectric Fresnel scales */
-    double sigma;      /* Oren-Nayar, radians */
-    int iter_count;    /* resolved (auto already applied) */
-    int multiple_scattering; /* 0/1 */
+    double v[LSQT_MAX_MODEL_KEYS]; /* its BSDF's keys, slot LSQT_<ID>_<key> (model_list.h) */
+    int iter_count;    /* a microsurface's walks per vertex, resolved (auto applied); else 0 */
+    int multiple_scattering; /* a microsurface's use_multiple_scattering (0/1); else 0 */
     int line;
 } lsqt_layer;
 

@@ -47,8 +47,8 @@ enum lsqt_bsdf_kind { LSQT_BSDF_NULL = 0, LSQT_BSDFS(LSQT_X_BSDF_KIND_) };
 
 /* ---- Keys: K(ID, FIELD, "name", TYPE, default, lo, lo_open, hi, hi_open, words) --------------
  * TYPE is NUM (a finite double), INT or CHOICE (one of the NULL-terminated words, stored as
- * its index). A phase key's FIELD names its slot in lsqt_phase.v (LSQT_<ID>_<FIELD>); a BSDF
- * key's FIELD is the lsqt_layer member it fills. Keys are written back in this order. */
+ * its index). Every key has a slot in its line's v[] (lsqt_phase.v, lsqt_layer.v), named
+ * LSQT_<ID>_<FIELD>, in the order of the list, which is also the order keys are written back. */
 
 /* Henyey-Greenstein's g: its peak, (1 + |g|) / (4 pi (1 - |g|)^2), is a next-event
  * estimate's factor, so it must stay well within the tally's 2^44 per contribution
@@ -89,7 +89,7 @@ enum lsqt_bsdf_kind { LSQT_BSDF_NULL = 0, LSQT_BSDFS(LSQT_X_BSDF_KIND_) };
 
 /* ---- Packing into the device tables (host only) -------------------------------------------
  * A phase function's pp[4] from its key values v (indexed LSQT_<ID>_<key>); a BSDF's p[8]
- * from its layer l and the media up (above) and down (below). Doubles; the float tables
+ * from its key values v and the media up (above) and down (below). Doubles; the float tables
  * are rounded from them. */
 #define LSQT_PACK_HG(v, pp) pp[0] = v[LSQT_HG_g];
 #define LSQT_PACK_HG2(v, pp) pp[0] = v[LSQT_HG2_g0], pp[1] = v[LSQT_HG2_g1], pp[2] = v[LSQT_HG2_b];
@@ -108,30 +108,34 @@ enum lsqt_bsdf_kind { LSQT_BSDF_NULL = 0, LSQT_BSDFS(LSQT_X_BSDF_KIND_) };
     pp[0] = v[LSQT_DRAINE_g], pp[1] = v[LSQT_DRAINE_alpha],                                          \
     pp[2] = 1.0 / (1.0 + v[LSQT_DRAINE_alpha] * (1.0 + 2.0 * v[LSQT_DRAINE_g] * v[LSQT_DRAINE_g]) / 3.0);
 
-#define LSQT_PACK_LAMBERTIAN(l, up, down, p) p[0] = l->fR, p[1] = l->fT;
-#define LSQT_PACK_MS_LAMBERTIAN(l, up, down, p) p[0] = l->alpha, p[1] = l->fR, p[2] = l->fT;
+#define LSQT_PACK_LAMBERTIAN(v, up, down, p) p[0] = v[LSQT_LAMBERTIAN_fR], p[1] = v[LSQT_LAMBERTIAN_fT];
+#define LSQT_PACK_MS_LAMBERTIAN(v, up, down, p) \
+    p[0] = v[LSQT_MS_LAMBERTIAN_alpha], p[1] = v[LSQT_MS_LAMBERTIAN_fR], p[2] = v[LSQT_MS_LAMBERTIAN_fT];
 /* alpha, the index below relative to the one above, the Fresnel scales */
-#define LSQT_PACK_MS_DIELECTRIC(l, up, down, p) \
-    p[0] = l->alpha, p[1] = down->eta / up->eta, p[2] = l->kR, p[3] = l->kT;
+#define LSQT_PACK_MS_DIELECTRIC(v, up, down, p)                                                \
+    p[0] = v[LSQT_MS_DIELECTRIC_alpha], p[1] = down->eta / up->eta, p[2] = v[LSQT_MS_DIELECTRIC_kR], \
+    p[3] = v[LSQT_MS_DIELECTRIC_kT];
 /* alpha, and the metal's complex index relative to the medium above */
-#define LSQT_PACK_MS_CONDUCTIVE(l, up, down, p) p[0] = l->alpha, p[1] = down->eta / up->eta, p[2] = down->mua / up->eta;
-#define LSQT_PACK_OREN_NAYAR(l, up, down, p) p[0] = l->fR, p[1] = l->sigma;
+#define LSQT_PACK_MS_CONDUCTIVE(v, up, down, p) \
+    p[0] = v[LSQT_MS_CONDUCTIVE_alpha], p[1] = down->eta / up->eta, p[2] = down->mua / up->eta;
+#define LSQT_PACK_OREN_NAYAR(v, up, down, p) p[0] = v[LSQT_OREN_NAYAR_fR], p[1] = v[LSQT_OREN_NAYAR_sigma];
 
-#define LSQT_TRANSMITS_ALWAYS(l) 1
-#define LSQT_TRANSMITS_NEVER(l) 0
-#define LSQT_TRANSMITS_FT(l) ((l)->fT > 0)
-#define LSQT_TRANSMITS_KT(l) ((l)->kT > 0)
+#define LSQT_TRANSMITS_ALWAYS(ID, v) 1
+#define LSQT_TRANSMITS_NEVER(ID, v) 0
+#define LSQT_TRANSMITS_FT(ID, v) (v[LSQT_##ID##_fT] > 0)
+#define LSQT_TRANSMITS_KT(ID, v) (v[LSQT_##ID##_kT] > 0)
 
 /* A choice key's words: a NULL-terminated array (host only). */
 #define LSQT_WORDS(...) ((const char *const[]){ __VA_ARGS__, 0 })
 
-/* The slots of each phase function's keys in lsqt_phase.v: LSQT_<ID>_<key>, and
- * LSQT_<ID>_N_KEYS (host only: the kernels read the packed pp). */
+/* The slots of each model's keys in v[]: LSQT_<ID>_<key>, and LSQT_<ID>_N_KEYS (host
+ * only: the kernels read the packed tables). */
 #ifndef __OPENCL_VERSION__
 #define LSQT_X_KEY_SLOT_(ID, F, ...) LSQT_##ID##_##F,
-#define LSQT_X_PHASE_SLOTS_(ID, ...) enum { LSQT_KEYS_##ID(LSQT_X_KEY_SLOT_, ID) LSQT_##ID##_N_KEYS };
-LSQT_PHASES(LSQT_X_PHASE_SLOTS_)
-#undef LSQT_X_PHASE_SLOTS_
+#define LSQT_X_SLOTS_(ID, ...) enum { LSQT_KEYS_##ID(LSQT_X_KEY_SLOT_, ID) LSQT_##ID##_N_KEYS };
+LSQT_PHASES(LSQT_X_SLOTS_)
+LSQT_BSDFS(LSQT_X_SLOTS_)
+#undef LSQT_X_SLOTS_
 #undef LSQT_X_KEY_SLOT_
 #endif
 
