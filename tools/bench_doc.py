@@ -170,10 +170,16 @@ def render(rows, workloads, extra, started, binary):
             files.append(f"- {w['name']}: {w['about']}\n\n  ```\n  " + "\n  ".join(w["text"].strip().splitlines())
                          + "\n  ```")
     files = "\n".join(files)
+    kept = kept_gpu_section()
     if gpu:
         gpu_line = ("**GPUs.** The device measured here is a GPU: CPU s is then the host's time (the launches,\n"
                     "the RRSS choice) and wall s is the measure. The CPU figures come from\n"
                     "`bash tools/bench.sh targets --doc` with a CPU device.")
+    elif kept:
+        gpu_line = ("**GPUs.** A GPU runs the GPU code path\n"
+                    "([architecture.md](architecture.md#the-cpu-and-gpu-code-paths)). Its figures are in\n"
+                    "[GPUs](#gpus) below: `tools/bench_targets.py` run on the GPU machine with `-- -d gpu`, and\n"
+                    "this command keeps that section as it is when it rewrites the page for a CPU.")
     else:
         gpu_line = ("**GPUs.** No GPU has been measured yet. NVIDIA and AMD figures will come from the same\n"
                     "command on a machine with such a GPU, the device chosen by lsqt-cl's `-d` after `--`:\n"
@@ -234,7 +240,20 @@ Their sizes are those the targets are set at; `command` above runs each (`-R` st
     def fill(p):  # no break inside a code span
         p = re.sub(r"`[^`]*`", lambda m: m[0].replace(" ", "\0"), " ".join(p.split()))
         return textwrap.fill(p, 92, break_long_words=False, break_on_hyphens=False).replace("\0", " ")
-    return "\n\n".join(fill(p) if p.startswith(("**How", "**GPUs")) else p for p in text.split("\n\n"))
+    text = "\n\n".join(fill(p) if p.startswith(("**How", "**GPUs")) else p for p in text.split("\n\n"))
+    return text + ("\n" + kept if kept and not gpu else "")
+
+
+def kept_gpu_section(path=DOC):
+    """The page's "## GPUs" section, to the next "## " heading or the end: measured on a GPU
+    machine, which a CPU run of this command cannot measure again, so it is kept."""
+    try:
+        with open(path, encoding="utf-8") as f:
+            text = f.read()
+    except OSError:
+        return ""
+    m = re.search(r"^## GPUs\n.*?(?=^## |\Z)", text, re.S | re.M)
+    return m.group(0).rstrip("\n") + "\n" if m else ""
 
 
 def write_atomic(text, path=DOC):

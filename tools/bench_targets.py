@@ -17,8 +17,8 @@ Workloads (the original layered-sqt's CPU-seconds on this kind of machine in bra
           (target in scattering events per CPU-second; MCX-CL does about 5.1e6; 1e4 paths of
           560 events each per slice make start-up and the RRSS candidate walks a few percent)
 Start-up: the wall and CPU seconds of a 1-path run of the workload (context, kernel build,
-tables, the launches), cold (an empty PoCL kernel cache: POCL_CACHE_DIR in a fresh
-folder) and cached."""
+tables, the launches), cold (an empty kernel cache: POCL_CACHE_DIR for PoCL and
+CUDA_CACHE_PATH for NVIDIA's driver, each a fresh folder) and cached."""
 import csv
 import json
 import os
@@ -114,7 +114,7 @@ def main():
             try:
                 with tempfile.TemporaryDirectory() as cache:
                     cold_w, cold_c, _ = run(binary, text, one + ["-p", "1"], extra, d,
-                                            dict(os.environ, POCL_CACHE_DIR=cache))
+                                            dict(os.environ, POCL_CACHE_DIR=cache, CUDA_CACHE_PATH=cache))
                 run(binary, text, flags, extra, d)  # fills the kernel cache
                 warm_w, warm_c, _ = run(binary, text, one + ["-p", "1"], extra, d)
                 wall, cpu, j = run(binary, text, flags, extra, d)
