@@ -137,7 +137,7 @@ static int new_state(lsqt_state *st, const lsqt_cli *c, const lsqt_assembly *a, 
     else if (grid) lsqt_grid_theta_o(n_slices, st->theta_o);
     else if (c->n_wo_angles) memcpy(st->theta_o, c->wo_angles, (size_t)n_slices * sizeof(double));
     else lsqt_wo_angles(n_slices, st->theta_o);
-    /* RRSS directions are chosen once the device is ready (host/stages.c); the spread stands
+    /* RRSS directions are chosen once the device is ready (host/sim/stages.c); the spread stands
      * in until then. */
     st->dir_method = c->grid_rgl ? LSQT_DIRS_RGL : grid ? LSQT_DIRS_GRID : wi_file ? LSQT_DIRS_FILE : c->wi_spread ? LSQT_DIRS_SPREAD : LSQT_DIRS_RRSS;
     if (grid) st->grid_ni = (uint32_t)c->grid_ni, st->grid_nphi = (uint32_t)c->grid_nphi;
@@ -442,11 +442,11 @@ static int plan_sides(const lsqt_cli *c, int from_stdin, const lsqt_assembly *a,
 
 int main(int argc, char **argv)
 {
-    /* lsqt-cl info FILE.lss: reads an LSS, no OpenCL (host/info.c; lssinfo is the same). */
+    /* lsqt-cl info FILE.lss: reads an LSS, no OpenCL (host/commands/info.c; lssinfo is the same). */
     if (argc >= 2 && strcmp(argv[1], "info") == 0) return lsqt_info_main("lsqt-cl info", argc - 1, argv + 1);
-    /* lsqt-cl merge OUT.lss IN.lss...: adds shards (host/merge.c), no OpenCL. */
+    /* lsqt-cl merge OUT.lss IN.lss...: adds shards (host/commands/merge.c), no OpenCL. */
     if (argc >= 2 && strcmp(argv[1], "merge") == 0) return lsqt_merge_main("lsqt-cl merge", argc - 1, argv + 1);
-    /* lsqt-cl export FILE.lss -o OUT.nc: a grid LSS as NetCDF (host/export.c). */
+    /* lsqt-cl export FILE.lss -o OUT.nc: a grid LSS as NetCDF (host/commands/export.c). */
     if (argc >= 2 && strcmp(argv[1], "export") == 0) return lsqt_export_main("lsqt-cl export", argc - 1, argv + 1);
     /* Signals first: a Ctrl-C during device setup or the kernel build must not be lost,
      * and a closed pipe is a write error to report (other outputs still get written). */

@@ -1,4 +1,4 @@
-/* Private to host/lsqt.c and host/assembly.c: the one table that describes LSQT lines
+/* Private to host/input/lsqt.c and host/input/assembly.c: the one table that describes LSQT lines
  * and models (names, keys, defaults, valid ranges), and a small bounded string builder.
  * The parser reads input with the table and the canonical writer writes with it, so
  * whatever is written reads back the same. */
