@@ -7,41 +7,7 @@
 
 #include "lsqt/util.h"
 
-int lsqt_parse_double(const char *s, double *out)
-{
-    if (!s || !*s || isspace((unsigned char)*s)) return -1;
-    for (const char *p = s; *p; p++)
-        if (!strchr("0123456789+-.eE", *p)) return -1; /* no hex, inf, nan */
-    char *end = NULL;
-    double v = strtod(s, &end);
-    if (*end != '\0' || !isfinite(v)) return -1;
-    *out = v;
-    return 0;
-}
-
-int lsqt_parse_count(const char *s, double lo, double hi, uint64_t *out)
-{
-    double v;
-    if (lsqt_parse_double(s, &v) || v != floor(v) || v < lo || v > hi) return -1;
-    *out = (uint64_t)v;
-    return 0;
-}
-
-int lsqt_parse_u64(const char *s, uint64_t *out)
-{
-    if (!s || !*s) return -1;
-    uint64_t v = 0;
-    for (const char *p = s; *p; p++) {
-        if (*p < '0' || *p > '9') return -1;
-        unsigned d = (unsigned)(*p - '0');
-        if (v > (UINT64_MAX - d) / 10) return -1; /* above 2^64 - 1 */
-        v = v * 10 + d;
-    }
-    *out = v;
-    return 0;
-}
-
-/* --help, part: The usage lines, what a run does, and the flags that choose its directions. */
+/* --help, part 1: the usage lines, what a run does, and the flags that choose its directions. */
 static void help_usage_and_sampling(FILE *f)
 {
     fputs("usage: lsqt-cl [OPTIONS] FILE|-\n"
@@ -88,7 +54,7 @@ static void help_usage_and_sampling(FILE *f)
           , f);
 }
 
-/* --help, part: The flags of the sides, the seed, the device and the outputs. */
+/* --help, part 2: the flags of the sides, the seed, the device and the outputs. */
 static void help_run_flags(FILE *f)
 {
     fputs("      --from-below            when the stack transmits, also the slices of light entering\n"
@@ -109,7 +75,7 @@ static void help_run_flags(FILE *f)
           , f);
 }
 
-/* --help, part: The stop rules, shards, the other flags, and the notes on subcommands, outputs,
+/* --help, part 3: the stop rules, shards, the other flags, and the notes on subcommands, outputs,
  * the environment and the exit status. */
 static void help_stops_and_notes(FILE *f)
 {

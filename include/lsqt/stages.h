@@ -1,6 +1,6 @@
 /* The stages of one lsqt-cl run on a state (host/sim/stages.c): which paths it runs and how
  * (the RRSS pilot and choice, docs/design.md section 3.5; shards), between reading the input and writing the
- * outputs (host/commands/main.c). */
+ * outputs (host/commands/run_command.c). */
 #ifndef LSQT_STAGES_H
 #define LSQT_STAGES_H
 
