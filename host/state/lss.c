@@ -434,7 +434,7 @@ static int check_crc(const unsigned char *data, size_t len, const lss_header *h,
         return -1;
     }
 #else
-    (void)crc, (void)want;
+    (void)crc, (void)want, (void)len, (void)err, (void)errcap;
 #endif
     return 0;
 }
