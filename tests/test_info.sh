@@ -27,7 +27,7 @@ expect 0 "lsqt-cl info FILE.lss" -- "$BIN" --help
 expect 0 "usage: lsqt-cl info FILE.lss [--json PATH [--bsdf]]" -- "$BIN" info --help
 expect 0 "usage: lssinfo FILE.lss [--json PATH [--bsdf]]" -- "$INFO" -h
 
-# Both programs print the same text (they are one function, host/info.c), to stdout.
+# Both programs print the same text (they are one function, host/commands/info.c), to stdout.
 for f in L S; do
   "$BIN" info $f.lsqt.lss >$f.info.txt 2>$f.info.err && ok || bad "lsqt-cl info $f: $(cat $f.info.err)"
   "$INFO" $f.lsqt.lss >$f.lssinfo.txt 2>&1 && ok || bad "lssinfo $f: $(cat $f.lssinfo.txt)"

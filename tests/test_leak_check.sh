@@ -13,7 +13,7 @@ grep -q "leak_canary: compiled and ran a kernel" <<<"$out" || bad "the canary di
 grep -q "Direct leak of 4242 byte(s)" <<<"$out" || bad "the 4242-byte leak is not reported"
 grep -A8 "Direct leak of 4242 byte(s)" <<<"$out" | grep -q "canary_leak" || bad "its stack does not name canary_leak"
 grep -q "lsqt_state_init" <<<"$out" || bad "the leaked state (lsqt_state_init) is not reported"
-# The check runs from an exit handler that host/device.c registers once the OpenCL
+# The check runs from an exit handler that host/sim/device.c registers once the OpenCL
 # platform is up, before PoCL and LLVM tear down (LSQT_LSAN_EARLY): their compiler state
 # is still reachable then and is not reported at all; what they do leak by then is
 # suppressed, and a suppression used may name only those libraries.

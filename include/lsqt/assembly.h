@@ -12,7 +12,7 @@ extern "C" {
 
 #include "lsqt/model_list.h"
 
-#define LSQT_MAX_MODEL_KEYS 6 /* most keys a model has (a static check in host/lsqt.c) */
+#define LSQT_MAX_MODEL_KEYS 6 /* most keys a model has (a static check in host/input/lsqt.c) */
 
 typedef struct lsqt_phase {
     int kind;                  /* enum lsqt_phase_kind */

@@ -1,4 +1,4 @@
-/* lsqt-cl export: the BSDF of a grid LSS as NetCDF (host/export.c; no OpenCL). */
+/* lsqt-cl export: the BSDF of a grid LSS as NetCDF (host/commands/export.c; no OpenCL). */
 #ifndef LSQT_EXPORT_H
 #define LSQT_EXPORT_H
 

@@ -1,4 +1,4 @@
-/* lsqt-cl export --rgl: an --rgl-grid LSS as an RGL tensor file (host/export_rgl.c). */
+/* lsqt-cl export --rgl: an --rgl-grid LSS as an RGL tensor file (host/commands/export_rgl.c). */
 #ifndef LSQT_EXPORT_RGL_H
 #define LSQT_EXPORT_RGL_H
 

@@ -13,7 +13,7 @@
  * p_phase_sample(m, v, wo, u1, u2, rng, wi) (the weight p / pdf); SAMPLER is EXACT (draws
  * exactly the phase function: its pdf is its value) or VERTEX (p_phase_vertex fixes a
  * random state per vertex and p_phase_pdf gives the density). MIRROR is 1 when the phase
- * function is its own mirror image under z -> -z (light from below, host/below.c). */
+ * function is its own mirror image under z -> -z (light from below, host/sim/below.c). */
 #ifndef LSQT_MODEL_LIST_H
 #define LSQT_MODEL_LIST_H
 

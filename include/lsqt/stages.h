@@ -1,10 +1,9 @@
-/* The stages of one lsqt-cl run on a state (host/stages.c): which paths it runs and how
+/* The stages of one lsqt-cl run on a state (host/sim/stages.c): which paths it runs and how
  * (the RRSS pilot and choice, docs/design.md section 3.5; shards), between reading the input and writing the
- * outputs (host/main.c). */
+ * outputs (host/commands/run_command.c). */
 #ifndef LSQT_STAGES_H
 #define LSQT_STAGES_H
 
-#include "lsqt/cli.h"
 #include "lsqt/rrss.h"
 #include "lsqt/simulate.h"
 #include "lsqt/tally.h"
@@ -12,6 +11,19 @@
 #ifdef __cplusplus
 extern "C" {
 #endif
+
+/* What a run asks of the paths (lsqt-cl fills it from its flags). */
+typedef struct lsqt_run_plan {
+    uint64_t paths;      /* -p: paths per slice to add */
+    int paths_given;     /* -p was given (with a target error it is then a cap) */
+    double target_error; /* --target-error, 0 = none */
+    double rp;           /* -rp: a fresh RRSS run's pilot is ceil(rp paths) */
+    int rx;              /* -rx: RRSS candidates per direction */
+    int shard_k, shard_n; /* --shard K/N (shard_n 0: not sharded) */
+    int refine;          /* --refine: a shard does only what its state owes */
+    int restart;         /* -R: a shard does not continue its own LSS */
+    int quiet;           /* -q: no notes on stderr */
+} lsqt_run_plan;
 
 typedef struct lsqt_stages {
     lsqt_sim_stats stats;   /* this run: paths added, seconds, why it stopped */
@@ -24,7 +36,7 @@ typedef struct lsqt_stages {
     lsqt_state ps;          /* (free it when have_ps) */
 } lsqt_stages;
 
-/* Runs what C asks of ST (read from lss_path, or fresh; a shard's own LSS is own_lss):
+/* Runs what the plan P asks of ST (read from lss_path, or fresh; a shard's own LSS is own_lss):
  *  - a state that owes paths (a merged RRSS pilot, a partial merge) runs what it owes;
  *  - a fresh RRSS state: the pilot of ceil(rp p) paths, the choice, the rest; a saved
  *    pilot (stage pilot) is finished (no -p, or its run's -p) or chosen from (another -p);
@@ -32,8 +44,9 @@ typedef struct lsqt_stages {
  *    continuing own_lss when it holds the start of that part; ST then holds the part only;
  *  - a state with slices from below runs both sides (below.h).
  * Returns 0; 1 with err filled (a run failed); 2 with err filled (bad input or flags). */
-int lsqt_run_stages(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, const lsqt_cli *c, const char *lss_path,
-                    const char *own_lss, const lsqt_sim_opts *so, lsqt_stages *o, char *err, size_t errcap);
+int lsqt_run_stages(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, const lsqt_run_plan *p,
+                    const char *lss_path, const char *own_lss, const lsqt_sim_opts *so, lsqt_stages *o, char *err,
+                    size_t errcap);
 
 #ifdef __cplusplus
 }

@@ -45,7 +45,7 @@ H_REFRACT = ((0.0, 0.0), (0.5, 180.0), (1.0, 0.0), (1.0, 90.0), (2.0, 180.0), (3
 # ---- float32 directions that lsqt-cl keeps exactly --------------------------------------
 
 def lsqt_normalise(v):
-    """What lsqt-cl's --wi-file reader does (host/directions.c): scale by the largest
+    """What lsqt-cl's --wi-file reader does (host/input/directions.c): scale by the largest
     component, normalise in double, store as float."""
     v = np.asarray(v, dtype=np.float64)
     v = v / np.max(np.abs(v))

@@ -90,6 +90,48 @@ static void *directions_of(const lsqt_state *st, int group, int vw, size_t *byte
     return buf;
 }
 
+/* The scene's run-wide fields, and the slices' outgoing directions (wo, and wo_f in float). */
+static void scene_and_wo(const lsqt_session *s, const lsqt_state *st, lsqt_dev_scene *scene, double *wo, float *wo_f,
+                         size_t n_wo)
+{
+    scene->n_wi = st->n_wi;
+    scene->slice_group = s->slice_group;
+    scene->seed_lo = (lsqt_u32)st->seed;
+    scene->seed_hi = (lsqt_u32)(st->seed >> 32);
+    scene->rng_side = st->n_slices > 0 && (st->slice_flags[0] & LSQT_SLICE_BELOW) ? LSQT_RNG_BELOW : 0u;
+    for (int sl = 0; sl < st->n_slices; sl++) {
+        wo[4 * sl] = sin(st->theta_o[sl]);
+        wo[4 * sl + 2] = cos(st->theta_o[sl]);
+    }
+    for (size_t i = 0; i < n_wo; i++) wo_f[i] = (float)wo[i];
+}
+
+/* The buffers as the kernels' arguments (those of the launches are set per launch). */
+static cl_int set_kernel_args(lsqt_session *s)
+{
+    cl_int e = CL_SUCCESS;
+    cl_mem *args[] = {&s->scene, &s->media, &s->layers, &s->wo, &s->wi, &s->tab};
+    for (cl_uint i = 0; i < 6; i++) e |= clSetKernelArg(s->walk, i, sizeof(cl_mem), args[i]);
+    e |= clSetKernelArg(s->walk, 9, sizeof(cl_mem), &s->nee);
+    e |= clSetKernelArg(s->walk, 10, sizeof(cl_mem), &s->scalars);
+    e |= clSetKernelArg(s->walk, 11, sizeof(cl_mem), &s->hist);
+    e |= clSetKernelArg(s->walk, 12, sizeof(cl_mem), &s->flags);
+    /* The CPU path ignores the records' arguments: any buffer will do. */
+    cl_int zero = 0;
+    e |= clSetKernelArg(s->walk, 13, sizeof(cl_mem), &s->flags);
+    e |= clSetKernelArg(s->walk, 14, sizeof(cl_mem), &s->flags);
+    e |= clSetKernelArg(s->walk, 15, sizeof zero, &zero);
+    if (s->records) {
+        for (cl_uint i = 0; i < 5; i++)
+            e |= clSetKernelArg(s->estimate, i, sizeof(cl_mem), args[i == 3 ? 4 : i == 4 ? 5 : i]);
+        e |= clSetKernelArg(s->estimate, 10, sizeof(cl_mem), &s->nee);
+        e |= clSetKernelArg(s->estimate, 11, sizeof(cl_mem), &s->flags);
+    }
+    cl_mem *pargs[] = {&s->scene, &s->media, &s->layers, &s->wi, &s->tab};
+    for (cl_uint i = 0; i < 5; i++) e |= clSetKernelArg(s->prepare, i, sizeof(cl_mem), pargs[i]);
+    return e;
+}
+
 /* The tables, the directions and the tallies go up; the direction tables (T, Lambda,
  * lgamma(1 + Lambda) per slice, layer and direction) are made on the device, once. */
 static int upload(lsqt_session *s, const lsqt_assembly *a, const lsqt_state *st, char *err, size_t errcap)
@@ -120,16 +162,7 @@ static int upload(lsqt_session *s, const lsqt_assembly *a, const lsqt_state *st,
     const void *layers_up = st->use_double ? (const void *)layers : (const void *)layers_f;
     const size_t media_size = st->use_double ? sizeof *media : sizeof *media_f;
     const size_t layer_size = st->use_double ? sizeof *layers : sizeof *layers_f;
-    scene.n_wi = st->n_wi;
-    scene.slice_group = s->slice_group;
-    scene.seed_lo = (lsqt_u32)st->seed;
-    scene.seed_hi = (lsqt_u32)(st->seed >> 32);
-    scene.rng_side = st->n_slices > 0 && (st->slice_flags[0] & LSQT_SLICE_BELOW) ? LSQT_RNG_BELOW : 0u;
-    for (int sl = 0; sl < st->n_slices; sl++) {
-        wo[4 * sl] = sin(st->theta_o[sl]);
-        wo[4 * sl + 2] = cos(st->theta_o[sl]);
-    }
-    for (size_t i = 0; i < n_wo; i++) wo_f[i] = (float)wo[i];
+    scene_and_wo(s, st, &scene, wo, wo_f, n_wo);
     const size_t dir_size = st->use_double ? sizeof(double) : sizeof(float);
     void *wo_up = st->use_double ? (void *)wo : (void *)wo_f;
     cl_mem_flags ro = CL_MEM_READ_ONLY, rw = CL_MEM_READ_WRITE;
@@ -149,24 +182,7 @@ static int upload(lsqt_session *s, const lsqt_assembly *a, const lsqt_state *st,
         snprintf(err, errcap, "cannot allocate device buffers: %s (%d)", lsqt_cl_error_name(e), (int)e);
         goto done;
     }
-    cl_mem *args[] = {&s->scene, &s->media, &s->layers, &s->wo, &s->wi, &s->tab};
-    for (cl_uint i = 0; i < 6; i++) e |= clSetKernelArg(s->walk, i, sizeof(cl_mem), args[i]);
-    e |= clSetKernelArg(s->walk, 9, sizeof(cl_mem), &s->nee);
-    e |= clSetKernelArg(s->walk, 10, sizeof(cl_mem), &s->scalars);
-    e |= clSetKernelArg(s->walk, 11, sizeof(cl_mem), &s->hist);
-    e |= clSetKernelArg(s->walk, 12, sizeof(cl_mem), &s->flags);
-    /* The CPU path ignores the records' arguments: any buffer will do. */
-    cl_int zero = 0;
-    e |= clSetKernelArg(s->walk, 13, sizeof(cl_mem), &s->flags);
-    e |= clSetKernelArg(s->walk, 14, sizeof(cl_mem), &s->flags);
-    e |= clSetKernelArg(s->walk, 15, sizeof zero, &zero);
-    if (s->records) {
-        for (cl_uint i = 0; i < 5; i++) e |= clSetKernelArg(s->estimate, i, sizeof(cl_mem), args[i == 3 ? 4 : i == 4 ? 5 : i]);
-        e |= clSetKernelArg(s->estimate, 10, sizeof(cl_mem), &s->nee);
-        e |= clSetKernelArg(s->estimate, 11, sizeof(cl_mem), &s->flags);
-    }
-    cl_mem *pargs[] = {&s->scene, &s->media, &s->layers, &s->wi, &s->tab};
-    for (cl_uint i = 0; i < 5; i++) e |= clSetKernelArg(s->prepare, i, sizeof(cl_mem), pargs[i]);
+    e = set_kernel_args(s);
     if (e == CL_SUCCESS) {
         size_t pglobal[2] = {pad * (size_t)s->slice_group, (size_t)(st->n_slices / s->slice_group)};
         e = clEnqueueNDRangeKernel(cx->queue, s->prepare, 2, NULL, pglobal, NULL, 0, NULL, NULL);
@@ -224,13 +240,10 @@ int lsqt_session_open(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a,
     return lsqt_session_open_grouped(s, cx, a, st, 1, extra_options, local_size, verbose, err, errcap);
 }
 
-int lsqt_session_open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st,
-                              int slice_group, const char *extra_options, size_t local_size, int verbose,
-                              char *err, size_t errcap)
+/* The state's counts, and whether this session can run it: whole slice groups, one side,
+ * models the kernels have. Returns 0, or 1 with err filled. */
+static int session_shape(lsqt_session *s, const lsqt_assembly *a, const lsqt_state *st, char *err, size_t errcap)
 {
-    memset(s, 0, sizeof *s);
-    s->cx = cx;
-    s->slice_group = slice_group > 0 ? slice_group : 1;
     if (st->n_slices % s->slice_group) {
         snprintf(err, errcap, "%d slices are not groups of %d", st->n_slices, s->slice_group);
         return 1;
@@ -254,6 +267,36 @@ int lsqt_session_open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_asse
         snprintf(err, errcap, "line %d: the model %s is not implemented in the kernels yet", line, model);
         return 1;
     }
+    return 0;
+}
+
+/* The program's kernels (lsqt_estimate on the GPU path only). Returns 0, or 1 with err filled. */
+static int make_kernels(lsqt_session *s, const lsqt_state *st, int gpu, char *err, size_t errcap)
+{
+    cl_int e = CL_SUCCESS, e2 = CL_SUCCESS;
+    s->walk = clCreateKernel(s->prog, "lsqt_walk", &e);
+    s->prepare = clCreateKernel(s->prog, "lsqt_prepare", &e2);
+    cl_int e3 = CL_SUCCESS;
+    s->exits = clCreateKernel(s->prog, "lsqt_exits", &e3);
+    s->records = gpu;
+    s->rec_size = 16 * (st->use_double ? sizeof(double) : sizeof(float));
+    if (gpu && e3 == CL_SUCCESS) s->estimate = clCreateKernel(s->prog, "lsqt_estimate", &e3);
+    if (e != CL_SUCCESS || e2 != CL_SUCCESS || e3 != CL_SUCCESS) {
+        if (e == CL_SUCCESS) e = e2 != CL_SUCCESS ? e2 : e3;
+        snprintf(err, errcap, "clCreateKernel: %s (%d)", lsqt_cl_error_name(e), (int)e);
+        return 1;
+    }
+    return 0;
+}
+
+int lsqt_session_open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st,
+                              int slice_group, const char *extra_options, size_t local_size, int verbose,
+                              char *err, size_t errcap)
+{
+    memset(s, 0, sizeof *s);
+    s->cx = cx;
+    s->slice_group = slice_group > 0 ? slice_group : 1;
+    if (session_shape(s, a, st, err, errcap)) return 1;
     char opt[1024];
     const int gpu = gpu_path(cx, err, errcap);
     if (gpu < 0) return 1;
@@ -281,17 +324,7 @@ int lsqt_session_open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_asse
         free(log);
         return 1;
     }
-    cl_int e = CL_SUCCESS, e2 = CL_SUCCESS;
-    s->walk = clCreateKernel(s->prog, "lsqt_walk", &e);
-    s->prepare = clCreateKernel(s->prog, "lsqt_prepare", &e2);
-    cl_int e3 = CL_SUCCESS;
-    s->exits = clCreateKernel(s->prog, "lsqt_exits", &e3);
-    s->records = gpu;
-    s->rec_size = 16 * (st->use_double ? sizeof(double) : sizeof(float));
-    if (gpu && e3 == CL_SUCCESS) s->estimate = clCreateKernel(s->prog, "lsqt_estimate", &e3);
-    if (e != CL_SUCCESS || e2 != CL_SUCCESS || e3 != CL_SUCCESS) {
-        if (e == CL_SUCCESS) e = e2 != CL_SUCCESS ? e2 : e3;
-        snprintf(err, errcap, "clCreateKernel: %s (%d)", lsqt_cl_error_name(e), (int)e);
+    if (make_kernels(s, st, gpu, err, errcap)) {
         lsqt_session_close(s);
         return 1;
     }

@@ -305,6 +305,39 @@ static int sides_checkpoint(const sides *sd, const lsqt_sim_opts *o)
     return rc;
 }
 
+/* The options of each side's launches: the stop rules, progress and checkpoints are
+ * applied between segments (lsqt_simulate_range_sides), and only the side from above
+ * (oa) may be cut short by a signal; the side from below (ob) runs the same paths. */
+static void side_opts(const lsqt_sim_opts *o, lsqt_sim_opts *oa, lsqt_sim_opts *ob)
+{
+    *oa = *o;
+    oa->progress = 0, oa->time_limit = 0.0, oa->target_error = 0.0, oa->checkpoint = NULL, oa->verbose = 0;
+    *ob = *oa;
+    ob->stop = NULL;
+}
+
+/* The next segment's paths per slice, after one that took dt seconds. */
+static uint64_t next_segment(uint64_t seg, double dt)
+{
+    double grow = dt > 0 ? 1.0 / dt : 4.0; /* segments of about a second */
+    grow = grow > 4.0 ? 4.0 : grow < 0.5 ? 0.5 : grow;
+    seg = (uint64_t)((double)seg * grow);
+    return seg < LSQT_CHUNK ? LSQT_CHUNK : seg;
+}
+
+/* The paths [pos, end) of the side from above (a stop may cut them short: s1 says), then
+ * the same paths from below; their launches are added to stats. Returns 0, or 1 with err. */
+static int run_segment(lsqt_session *sa, lsqt_session *sb, sides *sd, uint64_t pos, uint64_t end,
+                       const lsqt_sim_opts *oa, const lsqt_sim_opts *ob, lsqt_sim_stats *s1, lsqt_sim_stats *stats,
+                       char *err, size_t errcap)
+{
+    lsqt_sim_stats s2;
+    if (lsqt_run_range(sa, &sd->up, pos, end - pos, oa, s1, err, errcap)) return 1;
+    if (lsqt_run_range(sb, &sd->dn, pos, s1->paths_added, ob, &s2, err, errcap)) return 1;
+    stats->launches += s1->launches + s2.launches;
+    return 0;
+}
+
 int lsqt_simulate_range_sides(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint64_t begin,
                               uint64_t add_paths, const lsqt_sim_opts *o, lsqt_sim_stats *stats, char *err,
                               size_t errcap)
@@ -326,10 +359,8 @@ int lsqt_simulate_range_sides(lsqt_context *cx, const lsqt_assembly *a, lsqt_sta
         goto done;
     /* Each segment runs the side from above (which a stop may cut short), then the same
      * paths from below; the stop rules are applied here, between segments. */
-    lsqt_sim_opts oa = *o;
-    oa.progress = 0, oa.time_limit = 0.0, oa.target_error = 0.0, oa.checkpoint = NULL, oa.verbose = 0;
-    lsqt_sim_opts ob = oa;
-    ob.stop = NULL;
+    lsqt_sim_opts oa, ob;
+    side_opts(o, &oa, &ob);
     const uint64_t target = add_paths > UINT64_MAX - begin ? UINT64_MAX : begin + add_paths;
     const double goal = o->target_error, t0 = lsqt_now();
     double last_ck = t0, cur_err = NAN;
@@ -350,23 +381,16 @@ int lsqt_simulate_range_sides(lsqt_context *cx, const lsqt_assembly *a, lsqt_sta
     while (pos < target) {
         uint64_t end = target - pos > seg ? pos + seg : target;
         if (end > check) end = check;
-        lsqt_sim_stats s1, s2;
+        lsqt_sim_stats s1;
         const double t = lsqt_now();
-        if (lsqt_run_range(&sa, &sd.up, pos, end - pos, &oa, &s1, err, errcap)) goto done;
-        if (lsqt_run_range(&sb, &sd.dn, pos, s1.paths_added, &ob, &s2, err, errcap)) goto done;
-        const double dt = lsqt_now() - t;
+        if (run_segment(&sa, &sb, &sd, pos, end, &oa, &ob, &s1, stats, err, errcap)) goto done;
         pos += s1.paths_added;
-        stats->launches += s1.launches + s2.launches;
-        double grow = dt > 0 ? 1.0 / dt : 4.0; /* segments of about a second */
-        grow = grow > 4.0 ? 4.0 : grow < 0.5 ? 0.5 : grow;
-        seg = (uint64_t)((double)seg * grow);
-        if (seg < LSQT_CHUNK) seg = LSQT_CHUNK;
+        seg = next_segment(seg, lsqt_now() - t);
         if (o->progress)
             fprintf(stderr, "\r%llu of %llu paths per slice, both sides   ", (unsigned long long)(pos - begin),
                     (unsigned long long)(target - begin));
         if (s1.interrupted) {
-            stats->stop_reason = LSQT_STOP_INTERRUPT;
-            stats->interrupted = 1;
+            stats->stop_reason = LSQT_STOP_INTERRUPT, stats->interrupted = 1;
             break;
         }
         if (pos == check) {
@@ -378,8 +402,7 @@ int lsqt_simulate_range_sides(lsqt_context *cx, const lsqt_assembly *a, lsqt_sta
             check = lsqt_next_check(pos, cur_err, goal);
         }
         if (o->time_limit > 0 && lsqt_now() - t0 >= o->time_limit && pos < target) {
-            stats->stop_reason = LSQT_STOP_TIME;
-            stats->interrupted = 1;
+            stats->stop_reason = LSQT_STOP_TIME, stats->interrupted = 1;
             break;
         }
         if (o->checkpoint && o->checkpoint_every > 0 && lsqt_now() - last_ck >= o->checkpoint_every && pos < target) {

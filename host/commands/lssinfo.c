@@ -1,4 +1,4 @@
-/* lssinfo FILE.lss [--json PATH]: the same as lsqt-cl info (host/info.c). */
+/* lssinfo FILE.lss [--json PATH]: the same as lsqt-cl info (host/commands/info.c). */
 #include "lsqt/info.h"
 
 int main(int argc, char **argv)

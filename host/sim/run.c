@@ -91,28 +91,63 @@ static int hold(lsqt_state *st, const uint64_t *base, int n_base, uint64_t first
     return 0;
 }
 
-int lsqt_run_range(lsqt_session *sp, lsqt_state *st, uint64_t begin, uint64_t add_paths, const lsqt_sim_opts *o,
-                   lsqt_sim_stats *stats, char *err, size_t errcap)
+/* The ranges ST holds before the run (a copy), when [begin, ...) is free of them; NULL
+ * with err filled when it is not, or begin is UINT64_MAX (gaps), or out of memory. */
+static uint64_t *base_ranges(const lsqt_state *st, uint64_t begin, int *n, char *err, size_t errcap)
 {
-    memset(stats, 0, sizeof *stats);
     if (begin == UINT64_MAX) {
         snprintf(err, errcap, "the state holds paths with gaps between them (a partial merge): it cannot be continued");
-        return 1;
+        return NULL;
     }
-    /* the ranges held before, and whether [begin, ...) is free */
     uint64_t *base = malloc(((size_t)st->n_ranges + 1) * 2 * sizeof *base);
     if (!base) {
         snprintf(err, errcap, "out of memory");
-        return 1;
+        return NULL;
     }
-    const int n_base = st->n_ranges;
+    const int n_base = *n = st->n_ranges;
     if (n_base) memcpy(base, st->ranges, (size_t)n_base * 2 * sizeof *base);
     for (int i = 0; i < n_base; i++)
         if (base[2 * i + 1] > begin) {
             snprintf(err, errcap, "paths from %llu on are already held", (unsigned long long)begin);
             free(base);
-            return 1;
+            return NULL;
         }
+    return base;
+}
+
+/* The next launch's size in chunks: each should take about 0.3 s (dt: the last one's). */
+static uint64_t next_launch_chunks(uint64_t chunks_per_launch, double dt)
+{
+    double grow = dt > 0 ? 0.3 / dt : 4.0;
+    grow = grow > 4.0 ? 4.0 : grow < 0.5 ? 0.5 : grow;
+    chunks_per_launch = (uint64_t)((double)chunks_per_launch * grow);
+    return chunks_per_launch < 1 ? 1 : chunks_per_launch;
+}
+
+/* A signal, or the time limit with paths still to do: 1 (stats say which), else 0. */
+static int stop_asked(const lsqt_sim_opts *o, lsqt_sim_stats *stats, double t0, uint64_t pos, uint64_t target)
+{
+    if (o->stop && *o->stop) {
+        stats->stop_reason = LSQT_STOP_INTERRUPT;
+        stats->interrupted = 1;
+        return 1;
+    }
+    if (o->time_limit > 0 && lsqt_now() - t0 >= o->time_limit && pos < target) {
+        stats->stop_reason = LSQT_STOP_TIME;
+        stats->interrupted = 1;
+        return 1;
+    }
+    return 0;
+}
+
+int lsqt_run_range(lsqt_session *sp, lsqt_state *st, uint64_t begin, uint64_t add_paths, const lsqt_sim_opts *o,
+                   lsqt_sim_stats *stats, char *err, size_t errcap)
+{
+    memset(stats, 0, sizeof *stats);
+    /* the ranges held before, and whether [begin, ...) is free */
+    int n_base = 0;
+    uint64_t *base = base_ranges(st, begin, &n_base, err, errcap);
+    if (!base) return 1;
 
     /* Launches cover whole chunks; their size adapts so each takes about 0.3 s, which
      * keeps the progress bar and Ctrl-C responsive without starving the device. */
@@ -148,10 +183,7 @@ int lsqt_run_range(lsqt_session *sp, lsqt_state *st, uint64_t begin, uint64_t ad
         double dt = lsqt_now() - t;
         pos = end;
         stats->launches++;
-        double grow = dt > 0 ? 0.3 / dt : 4.0;
-        grow = grow > 4.0 ? 4.0 : grow < 0.5 ? 0.5 : grow;
-        chunks_per_launch = (uint64_t)((double)chunks_per_launch * grow);
-        if (chunks_per_launch < 1) chunks_per_launch = 1;
+        chunks_per_launch = next_launch_chunks(chunks_per_launch, dt);
         if (pos == check) {
             if (lsqt_session_read(sp, st, err, errcap) || hold(st, base, n_base, first, pos, err, errcap)) goto done;
             cur_err = lsqt_max_rel_err(st);
@@ -168,16 +200,7 @@ int lsqt_run_range(lsqt_session *sp, lsqt_state *st, uint64_t begin, uint64_t ad
             last_ck = lsqt_now();
         }
         if (o->progress) progress_draw(pos - first, target - first, lsqt_now() - t0, st->n_slices, cur_err, goal);
-        if (o->stop && *o->stop) {
-            stats->stop_reason = LSQT_STOP_INTERRUPT;
-            stats->interrupted = 1;
-            break;
-        }
-        if (o->time_limit > 0 && lsqt_now() - t0 >= o->time_limit && pos < target) {
-            stats->stop_reason = LSQT_STOP_TIME;
-            stats->interrupted = 1;
-            break;
-        }
+        if (stop_asked(o, stats, t0, pos, target)) break;
     }
     if (o->progress) fprintf(stderr, "\n");
     if (o->verbose) fprintf(stderr, "%d launches in %.3g s\n", stats->launches, lsqt_now() - t0);

@@ -693,7 +693,7 @@ static void prune(parser *P)
     if (p == P->n_layers)
         return;
     const lsqt_layer *stop = &P->layers[p];
-    const char *name = lsqt_bsdf_name(stop->kind);
+    const char *name = lsqt_model_of_kind(&lsqt_layer_line, stop->kind)->name; /* a parsed kind: always there */
     medium_rec *below = &P->media[p + 1];
     int last_line = P->media[P->n_media - 1].m.line;
     int metal = stop->kind == LSQT_BSDF_MS_CONDUCTIVE;

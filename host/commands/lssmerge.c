@@ -1,4 +1,4 @@
-/* lssmerge OUT.lss IN.lss...: the same as lsqt-cl merge (host/merge.c). */
+/* lssmerge OUT.lss IN.lss...: the same as lsqt-cl merge (host/commands/merge.c). */
 #include "lsqt/merge.h"
 
 int main(int argc, char **argv)

@@ -1,5 +1,6 @@
-/* Private to host/lsqt.c and host/assembly.c: the one table that describes LSQT lines
- * and models (names, keys, defaults, valid ranges), and a small bounded string builder.
+/* Private to host/input/: the one table that describes LSQT lines and models (names,
+ * keys, defaults, valid ranges; lsqt.c holds it, assembly.c reads it), and a small
+ * bounded string builder (strbuf.c).
  * The parser reads input with the table and the canonical writer writes with it, so
  * whatever is written reads back the same. */
 #ifndef LSQT_INTERNAL_H

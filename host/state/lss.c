@@ -331,12 +331,27 @@ static int check_slices(const lsqt_state *st, char *err, size_t errcap)
     return 0;
 }
 
-int lsqt_lss_parse(const unsigned char *data, size_t len, lsqt_state *st, char *err, size_t errcap)
+/* The header's fields, and the file size it announces when its counts are in range. */
+typedef struct lss_header {
+    uint32_t version;
+    int packed;    /* version 6 on: packed tallies; version 5 stores every tally in 16 bytes */
+    size_t header; /* its size in bytes */
+    uint32_t file_layout[6];
+    uint64_t seed, hash;
+    uint32_t use_double, transmits, flags, dir_method, rx;
+    uint64_t pilot_paths;
+    uint32_t n_slices, n_wi;
+    uint64_t paths, span_end;
+    uint32_t stage, n_ranges, tl;
+    uint64_t file_bytes;
+    uint32_t grid_ni, grid_nphi;
+    int sane;    /* the counts are in range */
+    size_t want; /* the file's size (0: unknown) */
+} lss_header;
+
+/* Not an LSS at all, or cut short before its version. */
+static int check_start(const unsigned char *data, size_t len, char *err, size_t errcap)
 {
-    memset(st, 0, sizeof *st);
-    /* The checks go from the first byte on, so each message says what is wrong first: not
-     * an LSS at all, another version (whose layout this build cannot know), a file cut
-     * short, damaged bytes (CRC), and last what a valid CRC cannot vouch for. */
     if (len == 0) {
         snprintf(err, errcap, "empty file (not an LSS file)");
         return -1;
@@ -349,45 +364,62 @@ int lsqt_lss_parse(const unsigned char *data, size_t len, lsqt_state *st, char *
         snprintf(err, errcap, "truncated at byte %zu (inside the header)", len);
         return -1;
     }
-    rbuf r = {data, len, 8, 0};
-    uint32_t version = get_u32(&r);
+    return 0;
+}
+
+/* The size the header announces, when its counts are in range (else unknown: 0):
+ * version 5's follows from the counts; version 6 states it, between the sizes of
+ * all-zero tallies (one byte a slice) and of the largest (17 bytes each). */
+static void announced_size(lss_header *h)
+{
+    const uint32_t n_slices = h->n_slices, n_wi = h->n_wi, tl = h->tl, n_ranges = h->n_ranges;
+    int sane = n_slices >= 1 && n_slices <= 4096 * 8 && n_wi >= 1 && n_wi <= 65536 && tl <= (1u << 24) &&
+               n_ranges <= (1u << 20);
+    const size_t tallies = (size_t)LSQT_BATCHES * (n_wi + LSQT_T_COUNT + LSQT_HIST_BINS);
+    const size_t fixed = sane ? h->header + (size_t)tl + (size_t)n_ranges * 16 + (20 + (size_t)n_wi * 12) * n_slices + 4 : 0;
+    size_t want = sane ? fixed + tallies * 16 * n_slices : 0;
+    if (h->packed) {
+        sane = sane && h->file_bytes >= fixed + n_slices && h->file_bytes <= fixed + tallies * 17 * n_slices;
+        want = sane ? (size_t)h->file_bytes : 0;
+    }
+    h->sane = sane, h->want = want;
+}
+
+/* The version, then the header's fields (r->bad when it is cut short). */
+static int read_header(rbuf *r, size_t len, lss_header *h, char *err, size_t errcap)
+{
+    memset(h, 0, sizeof *h);
+    uint32_t version = h->version = get_u32(r);
     if (version != LSQT_LSS_VERSION && version != 5) {
         snprintf(err, errcap, "LSS version %u, this lsqt-cl reads versions 5 and %u", version, LSQT_LSS_VERSION);
         return -1;
     }
-    const int packed = version >= 6; /* version 5 stores every tally in 16 bytes */
-    const size_t header = packed ? LSS_HEADER_BYTES : LSS_HEADER_V5;
+    const int packed = h->packed = version >= 6;
+    const size_t header = h->header = packed ? LSS_HEADER_BYTES : LSS_HEADER_V5;
     if (len < header + 4) {
         snprintf(err, errcap, "truncated at byte %zu (inside the %zu-byte header)", len, header);
         return -1;
     }
-    static const char *const layout_name[] = {"chunk", "batches", "fixed-point bits", "histogram mu bins",
-                                              "histogram phi bins", "scalar tallies"};
-    const uint32_t layout[] = {LSQT_CHUNK, LSQT_BATCHES, LSQT_FIX_BITS, LSQT_HIST_NMU, LSQT_HIST_NPHI, LSQT_T_COUNT};
-    uint32_t file_layout[6];
-    for (size_t i = 0; i < 6; i++) file_layout[i] = get_u32(&r);
-    uint64_t seed = get_u64(&r), hash = get_u64(&r);
-    uint32_t use_double = get_u32(&r), transmits = get_u32(&r), flags = get_u32(&r);
-    uint32_t dir_method = get_u32(&r), rx = get_u32(&r);
-    uint64_t pilot_paths = get_u64(&r);
-    uint32_t n_slices = get_u32(&r), n_wi = get_u32(&r);
-    uint64_t paths = get_u64(&r), span_end = get_u64(&r);
-    uint32_t stage = get_u32(&r), n_ranges = get_u32(&r);
-    uint32_t tl = get_u32(&r);
-    const uint64_t file_bytes = packed ? get_u64(&r) : 0;
-    const uint32_t grid_ni = packed ? get_u32(&r) : 0, grid_nphi = packed ? get_u32(&r) : 0;
-    /* The size the header announces, when its counts are in range (else unknown: 0):
-     * version 5's follows from the counts; version 6 states it, between the sizes of
-     * all-zero tallies (one byte a slice) and of the largest (17 bytes each). */
-    int sane = n_slices >= 1 && n_slices <= 4096 * 8 && n_wi >= 1 && n_wi <= 65536 && tl <= (1u << 24) &&
-               n_ranges <= (1u << 20);
-    const size_t tallies = (size_t)LSQT_BATCHES * (n_wi + LSQT_T_COUNT + LSQT_HIST_BINS);
-    const size_t fixed = sane ? header + (size_t)tl + (size_t)n_ranges * 16 + (20 + (size_t)n_wi * 12) * n_slices + 4 : 0;
-    size_t want = sane ? fixed + tallies * 16 * n_slices : 0;
-    if (packed) {
-        sane = sane && file_bytes >= fixed + n_slices && file_bytes <= fixed + tallies * 17 * n_slices;
-        want = sane ? (size_t)file_bytes : 0;
-    }
+    for (size_t i = 0; i < 6; i++) h->file_layout[i] = get_u32(r);
+    h->seed = get_u64(r), h->hash = get_u64(r);
+    h->use_double = get_u32(r), h->transmits = get_u32(r), h->flags = get_u32(r);
+    h->dir_method = get_u32(r), h->rx = get_u32(r);
+    h->pilot_paths = get_u64(r);
+    h->n_slices = get_u32(r), h->n_wi = get_u32(r);
+    h->paths = get_u64(r), h->span_end = get_u64(r);
+    h->stage = get_u32(r), h->n_ranges = get_u32(r);
+    h->tl = get_u32(r);
+    h->file_bytes = packed ? get_u64(r) : 0;
+    h->grid_ni = packed ? get_u32(r) : 0;
+    h->grid_nphi = packed ? get_u32(r) : 0;
+    announced_size(h);
+    return 0;
+}
+
+/* Damaged bytes: the CRC of all but the last 4 bytes, which hold it. */
+static int check_crc(const unsigned char *data, size_t len, const lss_header *h, char *err, size_t errcap)
+{
+    const size_t want = h->want;
     uint32_t crc = (uint32_t)data[len - 4] | (uint32_t)data[len - 3] << 8 |
                    (uint32_t)data[len - 2] << 16 | (uint32_t)data[len - 1] << 24;
 #ifndef LSQT_LSS_FUZZING /* the fuzz target skips the CRC to reach the parser behind it */
@@ -402,97 +434,148 @@ int lsqt_lss_parse(const unsigned char *data, size_t len, lsqt_state *st, char *
         return -1;
     }
 #else
-    (void)crc;
+    (void)crc, (void)want, (void)len, (void)err, (void)errcap;
 #endif
+    return 0;
+}
+
+/* The grid's NI and NPHI fit the direction method and the direction count. */
+static int grid_ok(const lss_header *h)
+{
+    const uint32_t grid_ni = h->grid_ni, grid_nphi = h->grid_nphi, n_wi = h->n_wi;
+    return h->dir_method == LSQT_DIRS_GRID
+               ? grid_ni >= 2 && grid_ni <= 1024 && grid_nphi >= 2 && grid_nphi <= 2048 && grid_nphi % 2 == 0 &&
+                     (uint32_t)lsqt_grid_wi_count((int)grid_ni, (int)grid_nphi, (int)h->transmits) == n_wi
+           : h->dir_method == LSQT_DIRS_RGL
+               ? grid_ni >= 2 && grid_ni <= 44 && grid_nphi == 0 && (uint32_t)lsqt_rgl_wi_count((int)grid_ni) == n_wi
+               : grid_ni == 0 && grid_nphi == 0;
+}
+
+/* What a valid CRC vouches for but this build must agree with: the tally layout, the
+ * header's values in range, and the file's size. */
+static int check_header(const lss_header *h, int bad, size_t len, char *err, size_t errcap)
+{
+    static const char *const layout_name[] = {"chunk", "batches", "fixed-point bits", "histogram mu bins",
+                                              "histogram phi bins", "scalar tallies"};
+    const uint32_t layout[] = {LSQT_CHUNK, LSQT_BATCHES, LSQT_FIX_BITS, LSQT_HIST_NMU, LSQT_HIST_NPHI, LSQT_T_COUNT};
     for (size_t i = 0; i < 6; i++)
-        if (file_layout[i] != layout[i]) {
+        if (h->file_layout[i] != layout[i]) {
             snprintf(err, errcap, "LSS tally layout differs from this build's (%s %u, this build %u); cannot read it",
-                     layout_name[i], file_layout[i], layout[i]);
+                     layout_name[i], h->file_layout[i], layout[i]);
             return -1;
         }
-    const int grid_ok = dir_method == LSQT_DIRS_GRID
-                            ? grid_ni >= 2 && grid_ni <= 1024 && grid_nphi >= 2 && grid_nphi <= 2048 && grid_nphi % 2 == 0 &&
-                                  (uint32_t)lsqt_grid_wi_count((int)grid_ni, (int)grid_nphi, (int)transmits) == n_wi
-                        : dir_method == LSQT_DIRS_RGL
-                            ? grid_ni >= 2 && grid_ni <= 44 && grid_nphi == 0 && (uint32_t)lsqt_rgl_wi_count((int)grid_ni) == n_wi
-                            : grid_ni == 0 && grid_nphi == 0;
-    if (r.bad || !sane || !grid_ok || use_double > 1 || transmits > 1 || dir_method > LSQT_DIRS_RGL || rx > 8 ||
-        stage > LSQT_STAGE_PILOT || (stage == LSQT_STAGE_PILOT && (rx < 2 || n_slices % rx)) ||
-        (stage == LSQT_STAGE_RUN && pilot_paths > span_end)) {
+    const uint32_t rx = h->rx, stage = h->stage;
+    if (bad || !h->sane || !grid_ok(h) || h->use_double > 1 || h->transmits > 1 || h->dir_method > LSQT_DIRS_RGL ||
+        rx > 8 || stage > LSQT_STAGE_PILOT || (stage == LSQT_STAGE_PILOT && (rx < 2 || h->n_slices % rx)) ||
+        (stage == LSQT_STAGE_RUN && h->pilot_paths > h->span_end)) {
         snprintf(err, errcap, "corrupt LSS header (slices %u, wi %u, text %u bytes, double %u, transmits %u)",
-                 n_slices, n_wi, tl, use_double, transmits);
+                 h->n_slices, h->n_wi, h->tl, h->use_double, h->transmits);
         return -1;
     }
     /* The rest must have exactly the size the header announces. */
-    if (len != want) {
-        snprintf(err, errcap, "corrupt LSS file (%zu bytes, its header announces %zu)", len, want);
+    if (len != h->want) {
+        snprintf(err, errcap, "corrupt LSS file (%zu bytes, its header announces %zu)", len, h->want);
         return -1;
     }
-    r.n = len - 4;
+    return 0;
+}
+
+/* The assembly text and a state of the header's shape and settings. */
+static int read_state(rbuf *r, const lss_header *h, lsqt_state *st, char *err, size_t errcap)
+{
+    const uint32_t tl = h->tl, flags = h->flags;
     char *text = malloc((size_t)tl + 1);
     if (!text) {
         snprintf(err, errcap, "out of memory");
         return -1;
     }
-    memcpy(text, take(&r, tl), tl);
+    memcpy(text, take(r, tl), tl);
     text[tl] = '\0';
-    int rc = lsqt_state_init(st, text, hash, seed, (int)n_slices, (int)n_wi, (int)transmits);
+    int rc = lsqt_state_init(st, text, h->hash, h->seed, (int)h->n_slices, (int)h->n_wi, (int)h->transmits);
     free(text);
     if (rc) {
         snprintf(err, errcap, "out of memory");
         return -1;
     }
-    st->use_double = (int)use_double;
+    st->use_double = (int)h->use_double;
     st->flags = flags;
-    st->dir_method = dir_method;
-    st->rx = rx;
-    st->pilot_paths = pilot_paths;
-    st->span_end = span_end;
-    st->stage = stage;
-    st->lss_version = version;
-    st->grid_ni = grid_ni, st->grid_nphi = grid_nphi;
+    st->dir_method = h->dir_method;
+    st->rx = h->rx;
+    st->pilot_paths = h->pilot_paths;
+    st->span_end = h->span_end;
+    st->stage = h->stage;
+    st->lss_version = h->version;
+    st->grid_ni = h->grid_ni, st->grid_nphi = h->grid_nphi;
+    return 0;
+}
+
+/* The path ranges, stored normalized: sorted, disjoint, not adjacent, not empty, inside
+ * the span, and holding the header's path count. */
+static int read_ranges(rbuf *r, const lss_header *h, lsqt_state *st, char *err, size_t errcap)
+{
+    const uint32_t n_ranges = h->n_ranges;
     uint64_t *ranges = malloc(((size_t)n_ranges + 1) * 2 * sizeof *ranges);
     if (!ranges) {
-        lsqt_state_free(st);
         snprintf(err, errcap, "out of memory");
         return -1;
     }
-    for (size_t i = 0; i < 2 * (size_t)n_ranges; i++) ranges[i] = get_u64(&r);
-    /* stored normalized: sorted, disjoint, not adjacent, not empty, inside the span */
+    for (size_t i = 0; i < 2 * (size_t)n_ranges; i++) ranges[i] = get_u64(r);
     int ranges_ok = 1;
     for (size_t i = 0; i < n_ranges; i++)
         if (ranges[2 * i] >= ranges[2 * i + 1] || (i && ranges[2 * i] <= ranges[2 * i - 1]) ||
-            ranges[2 * i + 1] > span_end)
+            ranges[2 * i + 1] > h->span_end)
             ranges_ok = 0;
     if (ranges_ok && lsqt_state_set_ranges(st, ranges, (int)n_ranges)) ranges_ok = 0;
     free(ranges);
-    if (!ranges_ok || st->paths != paths) {
-        lsqt_state_free(st);
+    if (!ranges_ok || st->paths != h->paths) {
         snprintf(err, errcap, "corrupt LSS file (path ranges: %u of them, not a sorted disjoint set holding %llu paths)",
-                 n_ranges, (unsigned long long)paths);
+                 n_ranges, (unsigned long long)h->paths);
         return -1;
     }
-    const size_t nw = n_wi;
-    for (size_t s = 0; s < n_slices; s++) {
-        st->theta_o[s] = get_f64(&r);
-        st->slice_flags[s] = get_u32(&r);
-        if (st->slice_flags[s] & ~(uint32_t)LSQT_SLICE_BELOW) r.bad = 1;
-        if (get_u64(&r) != paths) r.bad = 1;
+    return 0;
+}
+
+/* Every slice's record: theta_o, flags, path count, directions, tallies. */
+static int read_slices(rbuf *r, const lss_header *h, lsqt_state *st, char *err, size_t errcap)
+{
+    const size_t nw = h->n_wi;
+    for (size_t s = 0; s < h->n_slices; s++) {
+        st->theta_o[s] = get_f64(r);
+        st->slice_flags[s] = get_u32(r);
+        if (st->slice_flags[s] & ~(uint32_t)LSQT_SLICE_BELOW) r->bad = 1;
+        if (get_u64(r) != h->paths) r->bad = 1;
         for (size_t k = 0; k < nw; k++)
-            for (size_t c = 0; c < 3; c++) st->wi[(s * nw + k) * 4 + c] = get_f32(&r);
+            for (size_t c = 0; c < 3; c++) st->wi[(s * nw + k) * 4 + c] = get_f32(r);
         const tally_run t = slice_tallies(st, s);
-        if (packed) get_tallies(&r, &t);
+        if (h->packed) get_tallies(r, &t);
         else
             for (int p = 0; p < 3; p++)
-                for (size_t i = 0; i < t.n[p]; i++) t.part[p][i] = get_u128(&r);
+                for (size_t i = 0; i < t.n[p]; i++) t.part[p][i] = get_u128(r);
     }
-    if (r.at != r.n) r.bad = 1; /* packed tallies shorter than the size announced */
-    if (r.bad) {
-        lsqt_state_free(st);
+    if (r->at != r->n) r->bad = 1; /* packed tallies shorter than the size announced */
+    if (r->bad) {
         snprintf(err, errcap, "corrupt LSS file (inconsistent slice records)");
         return -1;
     }
-    if (check_slices(st, err, errcap)) {
+    return 0;
+}
+
+int lsqt_lss_parse(const unsigned char *data, size_t len, lsqt_state *st, char *err, size_t errcap)
+{
+    memset(st, 0, sizeof *st);
+    /* The checks go from the first byte on, so each message says what is wrong first: not
+     * an LSS at all, another version (whose layout this build cannot know), a file cut
+     * short, damaged bytes (CRC), and last what a valid CRC cannot vouch for. */
+    if (check_start(data, len, err, errcap)) return -1;
+    rbuf r = {data, len, 8, 0};
+    lss_header h;
+    if (read_header(&r, len, &h, err, errcap) || check_crc(data, len, &h, err, errcap) ||
+        check_header(&h, r.bad, len, err, errcap))
+        return -1;
+    r.n = len - 4;
+    if (read_state(&r, &h, st, err, errcap)) return -1;
+    if (read_ranges(&r, &h, st, err, errcap) || read_slices(&r, &h, st, err, errcap) ||
+        check_slices(st, err, errcap)) {
         lsqt_state_free(st);
         return -1;
     }

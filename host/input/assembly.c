@@ -1,65 +1,13 @@
-/* What can be said of a parsed assembly: its canonical text (written with the same
- * model table the parser reads, so it always reads back), its hash, the kernel build
- * options for the models it uses, and whether light can pass through it. */
+/* What can be said of a parsed assembly with the model table: its models' names, its
+ * canonical text (written with the same table the parser reads, so it always reads
+ * back), its hash, and the kernel build options for the models it uses. The parser
+ * (lsqt.c) does not call this file: the table is lsqt.c's, and this file reads it. */
 #include "lsqt/assembly.h"
 #include "lsqt_internal.h"
 
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-
-void lsqt_sb_init(lsqt_sb *sb, char *buf, size_t cap)
-{
-    sb->buf = buf;
-    sb->cap = buf ? cap : 0;
-    sb->len = 0;
-    if (sb->cap)
-        buf[0] = '\0';
-}
-
-void lsqt_sb_printf(lsqt_sb *sb, const char *fmt, ...)
-{
-    char *dst = NULL;
-    size_t room = 0;
-    if (sb->len < sb->cap) {
-        dst = sb->buf + sb->len;
-        room = sb->cap - sb->len;
-    }
-    va_list ap;
-    va_start(ap, fmt);
-    int n = vsnprintf(dst, room, fmt, ap);
-    va_end(ap);
-    if (n > 0)
-        sb->len += (size_t)n;
-}
-
-void lsqt_assembly_free(lsqt_assembly *a)
-{
-    if (!a)
-        return;
-    free(a->layers);
-    free(a->media);
-    memset(a, 0, sizeof *a);
-}
-
-int lsqt_layer_transmits(const lsqt_layer *l)
-{
-#define TRANSMITS(ID, num, name, alias, prefix, sampler, mirror, transmits) \
-    if (l->kind == LSQT_BSDF_##ID)                                          \
-        return LSQT_TRANSMITS_##transmits(ID, l->v);
-    LSQT_BSDFS(TRANSMITS)
-#undef TRANSMITS
-    return 1; /* NullBsdf */
-}
-
-int lsqt_assembly_transmits(const lsqt_assembly *a)
-{
-    for (int i = 0; i < a->n_layers; i++)
-        if (!lsqt_layer_transmits(&a->layers[i]))
-            return 0;
-    return a->n_layers > 0;
-}
 
 static const char *model_name(const lsqt_line_desc *d, int kind, const char *none)
 {

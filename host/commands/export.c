@@ -111,31 +111,36 @@ static void fill_table(const grid *g, const lsqt_slice_est *est, int side, int h
             }
 }
 
-static int write_nc(const char *tmp, const char *input, const lsqt_state *st, const lsqt_slice_est *est,
-                    const grid *g, char *err, size_t errcap)
+/* The NetCDF ids of one file's dimensions and variables. */
+typedef struct nc_vars {
+    int d_o, d_p, d_i;    /* dimensions: cos_theta_o, phi_d, cos_theta_i */
+    int v_ci, v_p, v_co;  /* the axes */
+    int v_f[2][2][2];     /* per side (from above; from below), hemisphere (R; T), value or error */
+    int v_s[2][6];        /* per side: R, T, delta_T and their errors */
+} nc_vars;
+
+static const char *const scal[6] = {"R", "R_stderr", "T", "T_stderr", "delta_T", "delta_T_stderr"};
+
+/* The dimensions and the axes' variables. */
+static void define_axes(ncw *w, const grid *g, nc_vars *v)
 {
-    ncw w = {-1, NC_NOERR, NULL};
-    nc_check(&w, nc_create(tmp, NC_CLOBBER | NC_NETCDF4, &w.id), "create");
-    if (w.status != NC_NOERR) {
-        snprintf(err, errcap, "cannot create '%s': %s", tmp, nc_strerror(w.status));
-        return -1;
-    }
-    int d_o = -1, d_p = -1, d_i = -1;
-    nc_check(&w, nc_def_dim(w.id, "cos_theta_i", (size_t)g->ni, &d_i), "cos_theta_i");
-    if (w.status == NC_NOERR) nc_check(&w, nc_def_dim(w.id, "phi_d", (size_t)g->nphi, &d_p), "phi_d");
-    if (w.status == NC_NOERR) nc_check(&w, nc_def_dim(w.id, "cos_theta_o", (size_t)g->no, &d_o), "cos_theta_o");
-    const int dims3[3] = {d_i, d_p, d_o};
-    char horizon[160];
-    snprintf(horizon, sizeof horizon, "%g (the horizon, cos theta = 0, cannot be simulated)", LSQT_GRID_HORIZON_COS);
-    const int v_ci = def_var(&w, "cos_theta_i", 1, &d_i, "", "cosine of the incident zenith angle");
-    put_double_att(&w, v_ci, "simulated_at_0", LSQT_GRID_HORIZON_COS);
-    const int v_p = def_var(&w, "phi_d", 1, &d_p, "rad",
-                            "azimuth of the incident direction from the outgoing one (0: same side, backscatter)");
-    const int v_co = def_var(&w, "cos_theta_o", 1, &d_o, "", "cosine of the outgoing zenith angle");
-    put_double_att(&w, v_co, "simulated_at_0", LSQT_GRID_HORIZON_COS);
-    /* per side (from above; from below) and hemisphere (reflection; transmission) */
-    int v_f[2][2][2] = {{{-1, -1}, {-1, -1}}, {{-1, -1}, {-1, -1}}}, v_s[2][6];
-    static const char *const scal[6] = {"R", "R_stderr", "T", "T_stderr", "delta_T", "delta_T_stderr"};
+    v->d_o = -1, v->d_p = -1, v->d_i = -1;
+    nc_check(w, nc_def_dim(w->id, "cos_theta_i", (size_t)g->ni, &v->d_i), "cos_theta_i");
+    if (w->status == NC_NOERR) nc_check(w, nc_def_dim(w->id, "phi_d", (size_t)g->nphi, &v->d_p), "phi_d");
+    if (w->status == NC_NOERR) nc_check(w, nc_def_dim(w->id, "cos_theta_o", (size_t)g->no, &v->d_o), "cos_theta_o");
+    v->v_ci = def_var(w, "cos_theta_i", 1, &v->d_i, "", "cosine of the incident zenith angle");
+    put_double_att(w, v->v_ci, "simulated_at_0", LSQT_GRID_HORIZON_COS);
+    v->v_p = def_var(w, "phi_d", 1, &v->d_p, "rad",
+                     "azimuth of the incident direction from the outgoing one (0: same side, backscatter)");
+    v->v_co = def_var(w, "cos_theta_o", 1, &v->d_o, "", "cosine of the outgoing zenith angle");
+    put_double_att(w, v->v_co, "simulated_at_0", LSQT_GRID_HORIZON_COS);
+}
+
+/* The tables and the scalars, per side (from above; from below) and hemisphere
+ * (reflection; transmission). */
+static void define_tables(ncw *w, const lsqt_state *st, const grid *g, nc_vars *v)
+{
+    const int dims3[3] = {v->d_i, v->d_p, v->d_o};
     static const char *const scal_long[6] = {
         "directional-hemispherical reflectance", "standard error of R", "directional-hemispherical transmittance",
         "standard error of T", "unscattered forward transmittance (a delta, not in btdf)", "standard error of delta_T"};
@@ -148,58 +153,69 @@ static int write_nc(const char *tmp, const char *input, const lsqt_state *st, co
                 snprintf(name, sizeof name, "%s%s%s", h ? "btdf" : "brdf", e ? "_stderr" : "", suffix);
                 snprintf(long_name, sizeof long_name, "%s%s, not cosine-weighted%s", e ? "standard error of the " : "",
                          h ? "BTDF (transmission)" : "BRDF (reflection)", from);
-                v_f[side][h][e] = def_var(&w, name, 3, dims3, "sr-1", long_name);
+                v->v_f[side][h][e] = def_var(w, name, 3, dims3, "sr-1", long_name);
             }
         for (int k = 0; k < 6; k++) {
             char name[48], long_name[200];
             snprintf(name, sizeof name, "%s%s", scal[k], suffix);
             snprintf(long_name, sizeof long_name, "%s%s", scal_long[k], from);
-            v_s[side][k] = def_var(&w, name, 1, &d_o, "1", long_name);
+            v->v_s[side][k] = def_var(w, name, 1, &v->d_o, "1", long_name);
         }
     }
+}
+
+/* The run's provenance as global attributes. */
+static void put_provenance(ncw *w, const char *input, const lsqt_state *st, const grid *g)
+{
+    char horizon[160];
+    snprintf(horizon, sizeof horizon, "%g (the horizon, cos theta = 0, cannot be simulated)", LSQT_GRID_HORIZON_COS);
     char gridtext[64], paths[32], seed[32], hash[32], version[16];
     snprintf(gridtext, sizeof gridtext, "%d,%d,%d", g->no, g->ni, g->nphi);
     snprintf(paths, sizeof paths, "%llu", (unsigned long long)st->paths);
     snprintf(seed, sizeof seed, "%llu", (unsigned long long)st->seed);
     snprintf(hash, sizeof hash, "%016llx", (unsigned long long)st->hash);
     snprintf(version, sizeof version, "%u", st->lss_version);
-    put_text(&w, NC_GLOBAL, "Conventions", "CF-1.8");
-    put_text(&w, NC_GLOBAL, "title", "BSDF of a layered assembly (lsqt-cl Monte Carlo simulation)");
-    put_text(&w, NC_GLOBAL, "source", "lsqt-cl " LSQT_VERSION_STRING);
-    put_text(&w, NC_GLOBAL, "lss_file", input);
-    put_text(&w, NC_GLOBAL, "lss_version", version);
-    put_text(&w, NC_GLOBAL, "assembly", st->canonical);
-    put_text(&w, NC_GLOBAL, "assembly_hash", hash);
-    put_text(&w, NC_GLOBAL, "seed", seed);
-    put_text(&w, NC_GLOBAL, "paths_per_slice", paths);
-    put_text(&w, NC_GLOBAL, "precision", st->use_double ? "double" : "float");
-    put_text(&w, NC_GLOBAL, "grid", gridtext);
-    put_text(&w, NC_GLOBAL, "horizon_simulated_at_cos", horizon);
-    put_text(&w, NC_GLOBAL, "stderr",
+    put_text(w, NC_GLOBAL, "Conventions", "CF-1.8");
+    put_text(w, NC_GLOBAL, "title", "BSDF of a layered assembly (lsqt-cl Monte Carlo simulation)");
+    put_text(w, NC_GLOBAL, "source", "lsqt-cl " LSQT_VERSION_STRING);
+    put_text(w, NC_GLOBAL, "lss_file", input);
+    put_text(w, NC_GLOBAL, "lss_version", version);
+    put_text(w, NC_GLOBAL, "assembly", st->canonical);
+    put_text(w, NC_GLOBAL, "assembly_hash", hash);
+    put_text(w, NC_GLOBAL, "seed", seed);
+    put_text(w, NC_GLOBAL, "paths_per_slice", paths);
+    put_text(w, NC_GLOBAL, "precision", st->use_double ? "double" : "float");
+    put_text(w, NC_GLOBAL, "grid", gridtext);
+    put_text(w, NC_GLOBAL, "horizon_simulated_at_cos", horizon);
+    put_text(w, NC_GLOBAL, "stderr",
              "one standard error of the mean (batch means over 32 batches); NaN where the paths are too few");
-    if (w.status == NC_NOERR) nc_check(&w, nc_enddef(w.id), "enddef");
+}
 
+/* Every variable's values. Returns 0, or -1 (out of memory; err filled). */
+static int put_values(ncw *w, const lsqt_state *st, const lsqt_slice_est *est, const grid *g, const nc_vars *v,
+                      char *err, size_t errcap)
+{
     double *ax = malloc(sizeof(double) * (size_t)(g->ni > g->no ? (g->ni > g->nphi ? g->ni : g->nphi)
                                                                  : (g->no > g->nphi ? g->no : g->nphi)));
     double *tab = malloc(sizeof(double) * (size_t)g->ni * (size_t)g->nphi * (size_t)g->no);
     if (!ax || !tab) {
         free(ax), free(tab);
-        nc_close(w.id);
         snprintf(err, errcap, "out of memory");
         return -1;
     }
     /* the axes carry the nominal grid (Eradiate checks them against linspace) */
     for (int k = 0; k < g->ni; k++) ax[k] = (double)k / (g->ni - 1);
-    if (w.status == NC_NOERR) nc_check(&w, nc_put_var_double(w.id, v_ci, ax), "cos_theta_i values");
+    if (w->status == NC_NOERR) nc_check(w, nc_put_var_double(w->id, v->v_ci, ax), "cos_theta_i values");
     for (int k = 0; k < g->nphi; k++) ax[k] = 2.0 * LSQT_PI * k / g->nphi;
-    if (w.status == NC_NOERR) nc_check(&w, nc_put_var_double(w.id, v_p, ax), "phi_d values");
+    if (w->status == NC_NOERR) nc_check(w, nc_put_var_double(w->id, v->v_p, ax), "phi_d values");
     for (int k = 0; k < g->no; k++) ax[k] = (double)k / (g->no - 1);
-    if (w.status == NC_NOERR) nc_check(&w, nc_put_var_double(w.id, v_co, ax), "cos_theta_o values");
+    if (w->status == NC_NOERR) nc_check(w, nc_put_var_double(w->id, v->v_co, ax), "cos_theta_o values");
     for (int side = 0; side < (g->below ? 2 : 1); side++) {
         for (int h = 0; h < (st->transmits ? 2 : 1); h++)
             for (int e = 0; e < 2; e++) {
                 fill_table(g, est, side, h, e, tab);
-                if (w.status == NC_NOERR) nc_check(&w, nc_put_var_double(w.id, v_f[side][h][e], tab), "table values");
+                if (w->status == NC_NOERR)
+                    nc_check(w, nc_put_var_double(w->id, v->v_f[side][h][e], tab), "table values");
             }
         for (int k = 0; k < 6; k++) {
             for (int ko = 0; ko < g->no; ko++) {
@@ -207,17 +223,16 @@ static int write_nc(const char *tmp, const char *input, const lsqt_state *st, co
                 const lsqt_est *q = k < 2 ? &s->R : k < 4 ? &s->T : &s->delta_T;
                 ax[ko] = k % 2 ? q->err : q->mean;
             }
-            if (w.status == NC_NOERR) nc_check(&w, nc_put_var_double(w.id, v_s[side][k], ax), scal[k]);
+            if (w->status == NC_NOERR) nc_check(w, nc_put_var_double(w->id, v->v_s[side][k], ax), scal[k]);
         }
     }
     free(ax), free(tab);
-    const int closed = nc_close(w.id);
-    nc_check(&w, closed, "close");
-    if (w.status != NC_NOERR) {
-        snprintf(err, errcap, "cannot write '%s' (%s): %s", tmp, w.what, nc_strerror(w.status));
-        return -1;
-    }
-    /* Read back what was written (a writer may miss a full disk): every dimension there. */
+    return 0;
+}
+
+/* Reads back what was written (a writer may miss a full disk): every dimension there. */
+static int read_back(const char *tmp, const grid *g, char *err, size_t errcap)
+{
     int id, nd = 0;
     size_t len_o = 0;
     if (nc_open(tmp, NC_NOWRITE, &id) != NC_NOERR) {
@@ -225,7 +240,8 @@ static int write_nc(const char *tmp, const char *input, const lsqt_state *st, co
         return -1;
     }
     int dim_o = -1;
-    const int bad = nc_inq_ndims(id, &nd) != NC_NOERR || nd != 3 || nc_inq_dimid(id, "cos_theta_o", &dim_o) != NC_NOERR ||
+    const int bad = nc_inq_ndims(id, &nd) != NC_NOERR || nd != 3 ||
+                    nc_inq_dimid(id, "cos_theta_o", &dim_o) != NC_NOERR ||
                     nc_inq_dimlen(id, dim_o, &len_o) != NC_NOERR || len_o != (size_t)g->no;
     nc_close(id);
     if (bad) {
@@ -233,6 +249,33 @@ static int write_nc(const char *tmp, const char *input, const lsqt_state *st, co
         return -1;
     }
     return 0;
+}
+
+static int write_nc(const char *tmp, const char *input, const lsqt_state *st, const lsqt_slice_est *est,
+                    const grid *g, char *err, size_t errcap)
+{
+    ncw w = {-1, NC_NOERR, NULL};
+    nc_check(&w, nc_create(tmp, NC_CLOBBER | NC_NETCDF4, &w.id), "create");
+    if (w.status != NC_NOERR) {
+        snprintf(err, errcap, "cannot create '%s': %s", tmp, nc_strerror(w.status));
+        return -1;
+    }
+    nc_vars v;
+    define_axes(&w, g, &v);
+    define_tables(&w, st, g, &v);
+    put_provenance(&w, input, st, g);
+    if (w.status == NC_NOERR) nc_check(&w, nc_enddef(w.id), "enddef");
+    if (put_values(&w, st, est, g, &v, err, errcap)) {
+        nc_close(w.id);
+        return -1;
+    }
+    const int closed = nc_close(w.id);
+    nc_check(&w, closed, "close");
+    if (w.status != NC_NOERR) {
+        snprintf(err, errcap, "cannot write '%s' (%s): %s", tmp, w.what, nc_strerror(w.status));
+        return -1;
+    }
+    return read_back(tmp, g, err, errcap);
 }
 
 /* The grid of ST, or -1 with err saying why it has none. */
@@ -303,40 +346,54 @@ static int export_rgl(const char *prog, const char *input, const char *out, cons
     return rc;
 }
 
-int lsqt_export_main(const char *prog, int argc, char **argv)
+/* What the command line asks. */
+typedef struct export_args {
+    const char *input, *out;
+    int quiet, rgl; /* rgl 1: --rgl, 2: --rgl-spectral */
+} export_args;
+
+/* The flags and files. Returns -1 to go on, else the exit status (printed). */
+static int parse_args(const char *prog, int argc, char **argv, export_args *x)
 {
-    signal(SIGPIPE, SIG_IGN);
-    const char *input = NULL, *out = NULL;
-    int quiet = 0, rgl = 0; /* 1: --rgl, 2: --rgl-spectral */
+    memset(x, 0, sizeof *x);
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         if (strcmp(a, "-h") == 0 || strcmp(a, "--help") == 0) {
             usage(stdout, prog);
             return 0;
         } else if (strcmp(a, "-q") == 0 || strcmp(a, "--quiet") == 0) {
-            quiet = 1;
+            x->quiet = 1;
         } else if (strcmp(a, "--rgl") == 0 || strcmp(a, "--rgl-spectral") == 0) {
-            if (rgl) return lsqt_prog_error(prog, 2, "--rgl and --rgl-spectral: give one of them");
-            rgl = a[5] ? 2 : 1;
+            if (x->rgl) return lsqt_prog_error(prog, 2, "--rgl and --rgl-spectral: give one of them");
+            x->rgl = a[5] ? 2 : 1;
         } else if (strcmp(a, "-o") == 0 || strcmp(a, "--output") == 0) {
             if (i + 1 >= argc) return lsqt_prog_error(prog, 2, "-o needs a file name (OUT.nc)");
-            out = argv[++i];
+            x->out = argv[++i];
         } else if (strncmp(a, "--output=", 9) == 0) {
-            out = a + 9;
+            x->out = a + 9;
         } else if (a[0] == '-' && a[1]) {
             char msg[160];
             snprintf(msg, sizeof msg, "unknown option '%.64s' (see %s --help)", a, prog);
             return lsqt_prog_error(prog, 2, msg);
-        } else if (input) {
+        } else if (x->input) {
             return lsqt_prog_error(prog, 2, "more than one input LSS");
         } else {
-            input = a;
+            x->input = a;
         }
     }
-    if (!input || !out || !*out) {
+    if (!x->input || !x->out || !*x->out) {
         usage(stderr, prog);
         return 2;
     }
+    return -1;
+}
+
+/* The output's name and place: its extension, a regular file (it is read back), not the
+ * input. Returns 0 or 2 (printed). */
+static int check_output(const char *prog, const export_args *x)
+{
+    const char *input = x->input, *out = x->out;
+    const int rgl = x->rgl;
     const size_t ol = strlen(out);
     if (!rgl && (ol < 4 || strcmp(out + ol - 3, ".nc") != 0))
         return lsqt_prog_error(prog, 2, "the output's name must end in .nc (NetCDF; --rgl writes an RGL tensor file, OUT.bsdf)");
@@ -354,37 +411,50 @@ int lsqt_export_main(const char *prog, int argc, char **argv)
         snprintf(msg, sizeof msg, "the output '%s' would replace the input", out);
         return lsqt_prog_error(prog, 2, msg);
     }
+    return 0;
+}
+
+/* A grid state as NetCDF, written through a temporary with its extension. */
+static int export_nc(const char *prog, const char *input, const char *out, const lsqt_state *st, int quiet)
+{
     char msg[LSQT_PATH_CAP * 2 + 256];
-    lsqt_state st;
-    if (lsqt_lss_read(input, &st, msg, sizeof msg)) return lsqt_prog_error(prog, 2, msg);
-    if (rgl) {
-        const int rc = export_rgl(prog, input, out, &st, rgl == 2, quiet);
-        lsqt_state_free(&st);
-        return rc;
-    }
     grid g;
-    if (find_grid(&st, input, &g, msg, sizeof msg)) {
+    if (find_grid(st, input, &g, msg, sizeof msg)) {
         free(g.side[0]), free(g.side[1]);
-        lsqt_state_free(&st);
         return lsqt_prog_error(prog, 2, msg);
     }
     int rc = 0;
-    lsqt_slice_est *est = lsqt_estimates(&st);
+    lsqt_slice_est *est = lsqt_estimates(st);
     lsqt_out o;
     if (!est) rc = lsqt_prog_error(prog, 1, "out of memory");
     else if (lsqt_out_open_named(&o, out, msg, sizeof msg)) rc = lsqt_prog_error(prog, 1, msg);
-    else if (write_nc(lsqt_out_name(&o), input, &st, est, &g, msg, sizeof msg)) {
+    else if (write_nc(lsqt_out_name(&o), input, st, est, &g, msg, sizeof msg)) {
         lsqt_out_abort(&o);
         rc = lsqt_prog_error(prog, 1, msg);
     } else if (lsqt_out_commit_named(&o, msg, sizeof msg)) {
         rc = lsqt_prog_error(prog, 1, msg);
     } else if (!quiet) {
         printf("wrote %s: brdf%s over (cos_theta_i %d, phi_d %d, cos_theta_o %d)%s, %llu paths per slice\n", out,
-               st.transmits ? " and btdf" : "", g.ni, g.nphi, g.no, g.below ? " from above and from below" : "",
-               (unsigned long long)st.paths);
+               st->transmits ? " and btdf" : "", g.ni, g.nphi, g.no, g.below ? " from above and from below" : "",
+               (unsigned long long)st->paths);
     }
-    if (est) lsqt_estimates_free(est, st.n_slices);
+    if (est) lsqt_estimates_free(est, st->n_slices);
     free(g.side[0]), free(g.side[1]);
+    return rc;
+}
+
+int lsqt_export_main(const char *prog, int argc, char **argv)
+{
+    signal(SIGPIPE, SIG_IGN);
+    export_args x;
+    int rc = parse_args(prog, argc, argv, &x);
+    if (rc >= 0) return rc;
+    if ((rc = check_output(prog, &x))) return rc;
+    char msg[LSQT_PATH_CAP * 2 + 256];
+    lsqt_state st;
+    if (lsqt_lss_read(x.input, &st, msg, sizeof msg)) return lsqt_prog_error(prog, 2, msg);
+    rc = x.rgl ? export_rgl(prog, x.input, x.out, &st, x.rgl == 2, x.quiet)
+               : export_nc(prog, x.input, x.out, &st, x.quiet);
     lsqt_state_free(&st);
     return rc;
 }

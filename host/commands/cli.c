@@ -7,41 +7,8 @@
 
 #include "lsqt/util.h"
 
-int lsqt_parse_double(const char *s, double *out)
-{
-    if (!s || !*s || isspace((unsigned char)*s)) return -1;
-    for (const char *p = s; *p; p++)
-        if (!strchr("0123456789+-.eE", *p)) return -1; /* no hex, inf, nan */
-    char *end = NULL;
-    double v = strtod(s, &end);
-    if (*end != '\0' || !isfinite(v)) return -1;
-    *out = v;
-    return 0;
-}
-
-int lsqt_parse_count(const char *s, double lo, double hi, uint64_t *out)
-{
-    double v;
-    if (lsqt_parse_double(s, &v) || v != floor(v) || v < lo || v > hi) return -1;
-    *out = (uint64_t)v;
-    return 0;
-}
-
-int lsqt_parse_u64(const char *s, uint64_t *out)
-{
-    if (!s || !*s) return -1;
-    uint64_t v = 0;
-    for (const char *p = s; *p; p++) {
-        if (*p < '0' || *p > '9') return -1;
-        unsigned d = (unsigned)(*p - '0');
-        if (v > (UINT64_MAX - d) / 10) return -1; /* above 2^64 - 1 */
-        v = v * 10 + d;
-    }
-    *out = v;
-    return 0;
-}
-
-void lsqt_cli_help(FILE *f)
+/* --help, part 1: the usage lines, what a run does, and the flags that choose its directions. */
+static void help_usage_and_sampling(FILE *f)
 {
     fputs("usage: lsqt-cl [OPTIONS] FILE|-\n"
           "       lsqt-cl merge OUT.lss IN.lss... [-o RAW] [-H] [--json PATH] [--partial] [-q]\n"
@@ -85,6 +52,11 @@ void lsqt_cli_help(FILE *f)
           "                              u^2 90 deg, phi_m = 360 deg v - 180 deg from wo's, u and v\n"
           "                              on linspace(0, 1, NU)); NT 2-1024, NU 2-44\n"
           , f);
+}
+
+/* --help, part 2: the flags of the sides, the seed, the device and the outputs. */
+static void help_run_flags(FILE *f)
+{
     fputs("      --from-below            when the stack transmits, also the slices of light entering\n"
           "                              from the bottom medium (the full two-sided BSDF), written\n"
           "                              to OUT.below.raw (the stack turned upside down: negate z of\n"
@@ -101,6 +73,12 @@ void lsqt_cli_help(FILE *f)
           "      --list-devices          list OpenCL devices and exit\n"
           "      --double                compute in double precision (device needs fp64)\n"
           , f);
+}
+
+/* --help, part 3: the stop rules, shards, the other flags, and the notes on subcommands, outputs,
+ * the environment and the exit status. */
+static void help_stops_and_notes(FILE *f)
+{
     fputs("      --time-limit S          stop adding paths after S seconds\n"
           "      --checkpoint S          write the LSS every S seconds during a run (default 300,\n"
           "                              0: never; in the RRSS pilot it holds the pilot). SIGINT,\n"
@@ -143,6 +121,13 @@ void lsqt_cli_help(FILE *f)
           "CPU), =0 the CPU's; PoCL reads its own (POCL_CACHE_DIR, POCL_CPU_MAX_CU_NUM, ...).\n"
           "Exit status: 0 success, 1 failure, 2 bad input or flags, 3 no usable OpenCL device.\n",
           f);
+}
+
+void lsqt_cli_help(FILE *f)
+{
+    help_usage_and_sampling(f);
+    help_run_flags(f);
+    help_stops_and_notes(f);
 }
 
 enum flag_id {
@@ -285,58 +270,55 @@ static int apply(const struct flag *fl, const char *name, const char *v, lsqt_cl
     return 0;
 }
 
-int lsqt_cli_parse(int argc, char **argv, lsqt_cli *c, char *err, size_t errcap)
+/* The value of the flag at argv[*i] (the next argument, or after '='), applied to c;
+ * *i moves past what it read. wi_name: -wi or --wi-count, as given. Returns 0 or 2. */
+static int read_flag(int argc, char **argv, int *i, lsqt_cli *c, char wi_name[16], char *err, size_t errcap)
 {
-    memset(c, 0, sizeof *c);
-    c->paths = 10000;
-    c->wo_count = 12;
-    c->wi_count = 80;
-    c->rx = 4;
-    c->rp = 0.8;
-    c->checkpoint = 300;
-    char wi_name[16] = ""; /* -wi or --wi-count, as given */
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        if (a[0] != '-' || strcmp(a, "-") == 0) {
-            if (c->input) {
-                snprintf(err, errcap, "more than one input file: '%.200s' and '%.200s'", c->input, a);
-                return 2;
-            }
-            c->input = a;
-            continue;
-        }
-        /* "-wi=300" and "--wi-count=300" carry their value after '='. */
-        char name[64];
-        const char *eq = strchr(a, '=');
-        size_t nl = eq ? (size_t)(eq - a) : strlen(a);
-        if (nl >= sizeof name) nl = sizeof name - 1;
-        memcpy(name, a, nl);
-        name[nl] = '\0';
-        const struct flag *fl = NULL;
-        for (size_t k = 0; k < sizeof flags / sizeof *flags && !fl; k++)
-            if ((flags[k].short_name && strcmp(name, flags[k].short_name) == 0) ||
-                strcmp(name, flags[k].long_name) == 0)
-                fl = &flags[k];
-        if (!fl) {
-            snprintf(err, errcap, "unknown option '%.64s' (see --help)", a);
+    const char *a = argv[*i];
+    if (a[0] != '-' || strcmp(a, "-") == 0) {
+        if (c->input) {
+            snprintf(err, errcap, "more than one input file: '%.200s' and '%.200s'", c->input, a);
             return 2;
         }
-        const char *v = NULL;
-        if (fl->takes_value) {
-            if (eq) v = eq + 1;
-            else if (i + 1 < argc) v = argv[++i];
-            else {
-                snprintf(err, errcap, "%s needs a value (see --help)", name);
-                return 2;
-            }
-        } else if (eq) {
-            snprintf(err, errcap, "%s takes no value", name);
-            return 2;
-        }
-        if (fl->id == F_WI) snprintf(wi_name, sizeof wi_name, "%s", fl->short_name && strcmp(name, fl->short_name) == 0 ? "-wi" : "--wi-count");
-        int rc = apply(fl, name, v ? v : "", c, err, errcap);
-        if (rc) return rc;
+        c->input = a;
+        return 0;
     }
+    /* "-wi=300" and "--wi-count=300" carry their value after '='. */
+    char name[64];
+    const char *eq = strchr(a, '=');
+    size_t nl = eq ? (size_t)(eq - a) : strlen(a);
+    if (nl >= sizeof name) nl = sizeof name - 1;
+    memcpy(name, a, nl);
+    name[nl] = '\0';
+    const struct flag *fl = NULL;
+    for (size_t k = 0; k < sizeof flags / sizeof *flags && !fl; k++)
+        if ((flags[k].short_name && strcmp(name, flags[k].short_name) == 0) ||
+            strcmp(name, flags[k].long_name) == 0)
+            fl = &flags[k];
+    if (!fl) {
+        snprintf(err, errcap, "unknown option '%.64s' (see --help)", a);
+        return 2;
+    }
+    const char *v = NULL;
+    if (fl->takes_value) {
+        if (eq) v = eq + 1;
+        else if (*i + 1 < argc) v = argv[++*i];
+        else {
+            snprintf(err, errcap, "%s needs a value (see --help)", name);
+            return 2;
+        }
+    } else if (eq) {
+        snprintf(err, errcap, "%s takes no value", name);
+        return 2;
+    }
+    if (fl->id == F_WI)
+        snprintf(wi_name, 16, "%s", fl->short_name && strcmp(name, fl->short_name) == 0 ? "-wi" : "--wi-count");
+    return apply(fl, name, v ? v : "", c, err, errcap);
+}
+
+/* Flags that choose one thing two ways: an error, not a silent pick. Returns 0 or 2. */
+static int check_choices(const lsqt_cli *c, const char *wi_name, char *err, size_t errcap)
+{
     if (wi_name[0] && c->wi_file) {
         snprintf(err, errcap, "%s and --wi-file both set the incident directions: give one of them", wi_name);
         return 2;
@@ -381,4 +363,21 @@ int lsqt_cli_parse(int argc, char **argv, lsqt_cli *c, char *err, size_t errcap)
         return 2;
     }
     return 0;
+}
+
+int lsqt_cli_parse(int argc, char **argv, lsqt_cli *c, char *err, size_t errcap)
+{
+    memset(c, 0, sizeof *c);
+    c->paths = 10000;
+    c->wo_count = 12;
+    c->wi_count = 80;
+    c->rx = 4;
+    c->rp = 0.8;
+    c->checkpoint = 300;
+    char wi_name[16] = ""; /* -wi or --wi-count, as given */
+    for (int i = 1; i < argc; i++) {
+        int rc = read_flag(argc, argv, &i, c, wi_name, err, errcap);
+        if (rc) return rc;
+    }
+    return check_choices(c, wi_name, err, errcap);
 }

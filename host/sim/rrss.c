@@ -147,15 +147,12 @@ static int enter_count(double d, double q, int lo, int hi)
     return lo;
 }
 
-int lsqt_rrss_select(const float *dirs, const double *f, int m, int n, int sphere, unsigned char *keep)
+/* The target density q of every candidate: (1 - FLOOR) f / Z + FLOOR / |D|, Z the integral
+ * of f over D by importance sampling with the candidates' density pe; pe itself when Z is
+ * not positive (returns 1: the density fallback), else returns 0. */
+static int target_density(const float *dirs, const double *f, int m, int sphere, double *q, double *pe)
 {
     const double domain = sphere ? 2 * LSQT_PI : LSQT_PI; /* the directions have y >= 0 */
-    double *q = calloc((size_t)m, sizeof *q), *pe = calloc((size_t)m, sizeof *pe);
-    if (!q || !pe) {
-        free(q), free(pe);
-        return -1;
-    }
-    /* Z = integral of f over D, by importance sampling with the candidates' density */
     candidate_density(dirs, m, pe);
     double z = 0.0;
     for (int i = 0; i < m; i++) z += (isfinite(f[i]) && f[i] > 0 ? f[i] : 0.0) / pe[i] / m;
@@ -164,6 +161,78 @@ int lsqt_rrss_select(const float *dirs, const double *f, int m, int n, int spher
         double fi = isfinite(f[i]) && f[i] > 0 ? f[i] : 0.0;
         q[i] = fallback ? pe[i] : (1 - FLOOR) * fi / z + FLOOR / domain;
     }
+    return fallback;
+}
+
+/* The incremental choice's state: per candidate its ordered neighbours (lst: the kept kn
+ * in list, or its own kmax once its disc grows past them), how many lie in its disc
+ * (t_in, with their q summed in qs_in), the enabled count at which the next one enters,
+ * and whether the disc reaches past kmax (full: then it is scanned in full). */
+typedef struct rrss_sel {
+    const float *dirs;
+    const double *q, *xyz;
+    int m, n, kn, kmax;
+    double *dots;
+    nbr *row, *list, **lst;
+    int *t_in, *next;
+    double *qs_in;
+    unsigned char *full;
+} rrss_sel;
+
+/* Candidate i's ordered neighbours that lie in its disc at `enabled` candidates, added.
+ * Returns 0, or -1 (out of memory). */
+static int grow_disc(rrss_sel *S, int i, int enabled)
+{
+    const double *q = S->q;
+    const int m = S->m, n = S->n, kn = S->kn, kmax = S->kmax;
+    nbr **lst = S->lst;
+    int *t_in = S->t_in, *next = S->next;
+    unsigned char *full = S->full;
+    while (!full[i] && next[i] >= enabled) { /* the next ordered neighbour enters */
+        S->qs_in[i] += q[lst[i][t_in[i]].j], t_in[i]++;
+        if (t_in[i] == kn && kn < kmax) { /* past the kept ones: the first kmax, in order */
+            nbr *ext = malloc((size_t)kmax * sizeof *ext);
+            if (!ext) return -1;
+            nearest(S->xyz, m, i, kmax, S->dots, S->row, ext); /* its first kn are the kept ones */
+            lst[i] = ext;
+        }
+        if (t_in[i] == kmax) {
+            full[i] = kmax < m - 1; /* the disc reaches past the ordered ones */
+            next[i] = n;
+        } else {
+            next[i] = enter_count(lst[i][t_in[i]].dot, q[i], n + 1, enabled);
+        }
+    }
+    return 0;
+}
+
+/* Candidate i's redundancy at `enabled` candidates: the enabled share of its disc's
+ * neighbours times their count, over their density relative to its own. */
+static double redundancy(const rrss_sel *S, int i, int enabled, const unsigned char *keep)
+{
+    const double *q = S->q;
+    double e = 0, a = S->t_in[i], qs = S->qs_in[i];
+    if (S->full[i]) { /* all of them, in index order */
+        const double c = disc_cos(q[i], enabled);
+        e = a = qs = 0;
+        for (int j = 0; j < S->m; j++)
+            if (j != i && dot3f(S->dirs + 4 * i, S->dirs + 4 * j) >= c) a += 1, qs += q[j], e += keep[j];
+    } else {
+        for (int t = 0; t < S->t_in[i]; t++) e += keep[S->lst[i][t].j];
+    }
+    /* the neighbours are the other candidates: one with none is not redundant */
+    return a > 0 ? e * a * q[i] / qs : 0.0;
+}
+
+int lsqt_rrss_select(const float *dirs, const double *f, int m, int n, int sphere, unsigned char *keep)
+{
+    double *q = calloc((size_t)m, sizeof *q), *pe = calloc((size_t)m, sizeof *pe);
+    if (!q || !pe) {
+        free(q), free(pe);
+        return -1;
+    }
+    /* Z = integral of f over D, by importance sampling with the candidates' density */
+    const int fallback = target_density(dirs, f, m, sphere, q, pe);
     /* Each candidate's nearest others, by decreasing dot product (the first NBR_KEEP; the
      * rare disc that reaches past them is ordered again, up to NBR_MAX, and one past
      * those is scanned in full). */
@@ -197,41 +266,18 @@ int lsqt_rrss_select(const float *dirs, const double *f, int m, int n, int spher
         lst[i] = list + (size_t)i * kn;
         next[i] = kn > 0 ? enter_count(lst[i][0].dot, q[i], n + 1, m) : n;
     }
+    rrss_sel S = {dirs, q, xyz, m, n, kn, kmax, dots, row, list, lst, t_in, next, qs_in, full};
     int status = fallback;
     for (int enabled = m; enabled > n; enabled--) {
         int worst = -1;
         double worst_r = -1.0;
         for (int i = 0; i < m; i++) {
             if (!keep[i]) continue;
-            while (!full[i] && next[i] >= enabled) { /* the next ordered neighbour enters */
-                qs_in[i] += q[lst[i][t_in[i]].j], t_in[i]++;
-                if (t_in[i] == kn && kn < kmax) { /* past the kept ones: the first kmax, in order */
-                    nbr *ext = malloc((size_t)kmax * sizeof *ext);
-                    if (!ext) {
-                        status = -1;
-                        goto out;
-                    }
-                    nearest(xyz, m, i, kmax, dots, row, ext); /* its first kn are the kept ones */
-                    lst[i] = ext;
-                }
-                if (t_in[i] == kmax) {
-                    full[i] = kmax < m - 1; /* the disc reaches past the ordered ones */
-                    next[i] = n;
-                } else {
-                    next[i] = enter_count(lst[i][t_in[i]].dot, q[i], n + 1, enabled);
-                }
+            if (grow_disc(&S, i, enabled)) {
+                status = -1;
+                goto out;
             }
-            double e = 0, a = t_in[i], qs = qs_in[i];
-            if (full[i]) { /* all of them, in index order */
-                const double c = disc_cos(q[i], enabled);
-                e = a = qs = 0;
-                for (int j = 0; j < m; j++)
-                    if (j != i && dot3f(dirs + 4 * i, dirs + 4 * j) >= c) a += 1, qs += q[j], e += keep[j];
-            } else {
-                for (int t = 0; t < t_in[i]; t++) e += keep[lst[i][t].j];
-            }
-            /* the neighbours are the other candidates: one with none is not redundant */
-            double red = a > 0 ? e * a * q[i] / qs : 0.0;
+            const double red = redundancy(&S, i, enabled, keep);
             if (red > worst_r) worst_r = red, worst = i;
         }
         keep[worst] = 0;

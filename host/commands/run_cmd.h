@@ -1,0 +1,77 @@
+/* Private to lsqt-cl's run command (host/commands/): main.c dispatches to run_command.c,
+ * which calls the others in the order of a run: signals.c (the stop signals), run_state.c
+ * (a fresh state, or the LSS continued and its checks), run_outputs.c (the files a run
+ * writes, their locks, the writing). No file here calls run_command.c or main.c. */
+#ifndef LSQT_RUN_CMD_H
+#define LSQT_RUN_CMD_H
+
+#include <signal.h>
+#include <stdio.h>
+
+#include "lsqt/assembly.h"
+#include "lsqt/cli.h"
+#include "lsqt/state.h"
+#include "lsqt/tally.h"
+#include "lsqt/report.h"
+#include "lsqt/util.h"
+
+/* "lsqt-cl: error: " FMT (with a and b) on stderr; returns code. */
+static inline int fail(int code, const char *fmt, const char *a, const char *b)
+{
+    fprintf(stderr, "lsqt-cl: error: ");
+    fprintf(stderr, fmt, a, b);
+    fprintf(stderr, "\n");
+    return code;
+}
+
+/* signals.c */
+extern volatile sig_atomic_t g_stop;  /* the signal that asked to stop, 0 if none */
+extern volatile sig_atomic_t g_armed; /* the input is read: Ctrl-C now means "finish" */
+/* Before any other thread exists, so that every thread inherits the blocked signals. */
+void sigint_setup(void);
+const char *signal_name(int sig);
+
+/* run_command.c: everything lsqt-cl does with an input once its flags are read; returns
+ * the exit status. */
+int run_command(const lsqt_cli *c);
+
+/* run_outputs.c */
+/* The files a run writes. RAW is one file, or with -H two (R and T; no T when nothing is
+ * transmitted); a two-sided state adds the same for the side from below (below.h). */
+enum { OUT_RAW, OUT_RAW_T, OUT_RAW_B, OUT_RAW_BT, OUT_LSS, OUT_JSON, OUT_COUNT };
+typedef struct outputs {
+    const char *path[OUT_COUNT]; /* NULL: not written */
+    const char *base;            /* the LSS continued (a shard writes its own, path[OUT_LSS]) */
+    char raw[LSQT_PATH_CAP + 16], raw_t[LSQT_PATH_CAP + 16], lss[LSQT_PATH_CAP + 16], shard[LSQT_PATH_CAP + 40];
+    char raw_b[LSQT_PATH_CAP + 32], raw_bt[LSQT_PATH_CAP + 32];
+} outputs;
+
+/* Decides every output name and checks them against each other and the input (below: the
+ * state has slices from below). Returns 0 or 2 (err filled). */
+int run_plan_outputs(const lsqt_cli *c, int from_stdin, int transmits, int below, outputs *o, char *err,
+                     size_t errcap);
+/* Locks the LSS the run writes (exclusive) and, for a shard, the state it reads (shared),
+ * before that is read. Returns 0, or 1 (printed) when another run holds one. */
+int run_lock_states(const outputs *o, int quiet);
+/* --from-below: the sides follow the state (a continued LSS decides); a two-sided state
+ * adds the RAW files of the side from below. Returns 0, or an exit status (printed; st
+ * freed). */
+int run_plan_sides(const lsqt_cli *c, int from_stdin, const lsqt_assembly *a, lsqt_state *st, int continued,
+                   outputs *out, char *err, size_t errcap);
+/* Writes every output; a failed one does not stop the others. The LSS is lss_st (an
+ * interrupted RRSS pilot's own state), the rest from st. Returns 0 or 1. */
+int run_write_outputs(const outputs *o, const lsqt_cli *c, const lsqt_state *st, const lsqt_state *lss_st,
+                      const lsqt_slice_est *est, const lsqt_run_info *ri, FILE *info);
+
+/* run_state.c */
+/* A fresh state: slices, incident directions and zero tallies (wi_file: the --wi-file
+ * directions, n_wi_file of them, or NULL). Returns 0 or -1 (out of memory). */
+int run_new_state(lsqt_state *st, const lsqt_cli *c, const lsqt_assembly *a, const char *canonical,
+                  const float *wi_file, int n_wi_file);
+/* The state of this run: the LSS at lss_path continued (checked against the assembly and
+ * the flags), or a fresh one. Returns 0, or an exit status (printed; nothing to free);
+ * *continued: the LSS was read. */
+int run_open_state(lsqt_state *st, const lsqt_cli *c, const lsqt_assembly *a, const char *lss_path,
+                   const float *wi_dirs, int n_wi_dirs, int n_mirrored, int *continued);
+
+#endif

@@ -1,0 +1,261 @@
+/* lsqt-cl's run of one input: LSQT text -> assembly -> state -> the device's stages ->
+ * LSS, RAW, summary. Each step is a function, in the order of a run. */
+#include "run_cmd.h"
+
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "lsqt/device.h"
+#include "lsqt/directions.h"
+#include "lsqt/lss.h"
+#include "lsqt/simulate.h"
+#include "lsqt/stages.h"
+
+/* --checkpoint: the LSS, written atomically every so often during the run. */
+typedef struct checkpoint_ctx {
+    const char *lss;
+    int quiet;
+} checkpoint_ctx;
+
+static int write_checkpoint(const lsqt_state *st, void *arg)
+{
+    const checkpoint_ctx *k = arg;
+    char err[LSQT_PATH_CAP + 256];
+    if (lsqt_lss_write(k->lss, st, err, sizeof err)) {
+        fprintf(stderr, "lsqt-cl: warning: checkpoint not written: %s\n", err);
+        return 1;
+    }
+    return 0;
+}
+
+/* Input -> assembly: parsed, its notes printed, a model this version cannot simulate
+ * refused. Returns 0, or an exit status (printed; nothing to free). */
+static int read_assembly(const lsqt_cli *c, int from_stdin, lsqt_assembly *a)
+{
+    char err[LSQT_PATH_CAP + 1024];
+    size_t len = 0;
+    char *text = lsqt_read_text(c->input, LSQT_INPUT_MAX, &len, err, sizeof err);
+    if (!text) return fail(2, "%s%s", err, "");
+    lsqt_diag diag;
+    memset(&diag, 0, sizeof diag);
+    int prc = lsqt_parse(text, len, from_stdin ? "<stdin>" : c->input, a, &diag);
+    free(text);
+    if (!c->quiet)
+        for (int i = 0; i < diag.n_notes; i++) fprintf(stderr, "%s\n", diag.notes[i]);
+    if (prc) {
+        fprintf(stderr, "%s\n", diag.error);
+        return 2;
+    }
+    g_armed = 1;
+    int line = 0;
+    const char *model = lsqt_unsupported_model(a, &line);
+    if (model) {
+        fprintf(stderr, "%s:%d: error: %s is parsed but not simulated by this version of lsqt-cl yet\n",
+                from_stdin ? "<stdin>" : c->input, line, model);
+        lsqt_assembly_free(a);
+        return 1;
+    }
+    return 0;
+}
+
+/* The direction flags against the stack. Returns 0, or 2 (printed). */
+static int check_directions(const lsqt_cli *c, const lsqt_assembly *a)
+{
+    char err[LSQT_PATH_CAP + 1024];
+    /* Over the sphere the equal-area lattice puts its middle direction of an odd count on
+     * the horizon, where a BSDF value (tally / |cos|) is 0 / 0. */
+    if (!c->wi_file && c->wi_spread && lsqt_assembly_transmits(a) && c->wi_count % 2) {
+        snprintf(err, sizeof err, "-wi %d: this stack transmits, so the directions cover the sphere", c->wi_count);
+        return fail(2, "%s%s", err, " and their count must be even");
+    }
+    if (c->grid_no) {
+        const int tr = lsqt_assembly_transmits(a), n = lsqt_grid_wi_count(c->grid_ni, c->grid_nphi, tr);
+        if (n > LSQT_WI_FILE_MAX) {
+            snprintf(err, sizeof err, "--grid %d,%d,%d: %d incident directions per slice (NI x (NPHI/2 + 1)%s), "
+                     "more than the %d a slice can have", c->grid_no, c->grid_ni, c->grid_nphi, n,
+                     tr ? " x 2: this stack transmits" : "", LSQT_WI_FILE_MAX);
+            return fail(2, "%s%s", err, "");
+        }
+    }
+    return 0;
+}
+
+/* --wi-file is read (and checked) even when an LSS is continued: bad input is an error
+ * whether or not it would be used. Below the horizon is allowed only where light is
+ * transmitted; elsewhere the value would be 0 by construction, so it is a mistake.
+ * Returns 0, or an exit status (printed). */
+static int read_wi_file(const lsqt_cli *c, const lsqt_assembly *a, float **wi_dirs, int *n_wi_dirs, int *n_mirrored)
+{
+    char err[LSQT_PATH_CAP + 1024];
+    if (!c->wi_file) return 0;
+    int wrc = lsqt_wi_file_read(c->wi_file, lsqt_assembly_transmits(a), wi_dirs, n_wi_dirs, n_mirrored, err,
+                                sizeof err);
+    if (wrc == 2) {
+        fprintf(stderr, "%s\n", err);
+        return 2;
+    }
+    return wrc ? fail(wrc < 0 ? 1 : 2, "--wi-file: %s%s", err, "") : 0;
+}
+
+/* The run plan of the stages (stages.h): what the flags ask of the paths. */
+static lsqt_run_plan run_plan(const lsqt_cli *c)
+{
+    lsqt_run_plan p;
+    memset(&p, 0, sizeof p);
+    p.paths = c->paths, p.paths_given = c->paths_given, p.target_error = c->target_error;
+    p.rp = c->rp, p.rx = c->rx;
+    p.shard_k = c->shard_k, p.shard_n = c->shard_n, p.refine = c->refine, p.restart = c->restart;
+    p.quiet = c->quiet;
+    return p;
+}
+
+/* A signal stopped the run: exit 1, saying what was written. */
+static int interrupted(const lsqt_sim_stats *stats, int rc)
+{
+    if (stats->interrupted && g_stop) {
+        fprintf(stderr, "lsqt-cl: interrupted (%s): %s the paths done so far\n", signal_name(g_stop),
+                rc ? "tried to write" : "wrote");
+        rc = 1;
+    }
+    return rc;
+}
+
+/* A pilot shard holds candidate blocks, not a BSDF yet: its LSS is all there is. */
+static int report_pilot_shard(const lsqt_cli *c, const outputs *out, const lsqt_state *st, const lsqt_stages *sg,
+                              FILE *info)
+{
+    char err[LSQT_PATH_CAP + 1024];
+    int rc = 0;
+    const lsqt_sim_stats stats = sg->stats;
+    const char *ls = out->path[OUT_LSS];
+    if (lsqt_lss_write(ls, st, err, sizeof err)) rc = fail(1, "%s%s", err, "");
+    else if (!c->quiet)
+        fprintf(info, "shard %d/%d of the RRSS pilot: paths [%llu, %llu) of [0, %llu) in %.3g s; wrote %s\n"
+                      "(merge all %d pilot shards, then run the shards with --refine)\n",
+                c->shard_k, c->shard_n, (unsigned long long)sg->part_lo, (unsigned long long)sg->part_hi,
+                (unsigned long long)sg->pilot, stats.seconds, ls, c->shard_n);
+    if (!c->quiet && c->output) fprintf(stderr, "note: a pilot shard writes no RAW (-o is not used)\n");
+    return interrupted(&stats, rc);
+}
+
+/* What the summary and the JSON say of this run: the device, its speed, its work (less
+ * what the state held before), and what stopped it. */
+static lsqt_run_info run_info(const lsqt_cli *c, const lsqt_state *st, const lsqt_stages *sg, const char *devname)
+{
+    const lsqt_sim_stats stats = sg->stats;
+    const lsqt_work before = sg->before;
+    lsqt_run_info ri = {devname, stats.seconds,
+                        stats.seconds > 0 ? (double)stats.paths_added * st->n_slices / stats.seconds : 0.0,
+                        (unsigned long long)stats.paths_added, NULL, lsqt_work_totals(st)};
+    ri.work.paths -= before.paths, ri.work.layer_events -= before.layer_events;
+    ri.work.medium_events -= before.medium_events, ri.work.nee_evaluations -= before.nee_evaluations;
+    static const char *const why[] = {"the path count (-p)", "the target error (--target-error)",
+                                      "the time limit (--time-limit)", "an interrupt"};
+    if (c->target_error > 0 || c->time_limit > 0) ri.stopped_by = why[stats.stop_reason];
+    return ri;
+}
+
+/* The outputs of a run, the summary, and the notes on what it leaves to do. */
+static int report_run(const lsqt_cli *c, const outputs *out, const lsqt_state *st, const lsqt_stages *sg,
+                      const lsqt_context *cx, FILE *info)
+{
+    int rc;
+    lsqt_slice_est *est = lsqt_estimates(st);
+    char devname[600];
+    snprintf(devname, sizeof devname, "%s [%s]", cx->dev.name, cx->dev.platform_name);
+    const lsqt_run_info ri = run_info(c, st, sg, devname);
+    if (!est) rc = fail(1, "out of memory%s%s", "", "");
+    else rc = run_write_outputs(out, c, st, sg->have_ps ? &sg->ps : st, est, &ri, info);
+    if (est && !c->quiet) lsqt_report_summary(info, st, est, &ri);
+    if (sg->have_ps && !c->quiet && out->path[OUT_LSS] && fflush(info) == 0)
+        fprintf(stderr,
+                "note: the run stopped in its RRSS pilot: '%s' holds %llu of the pilot's %llu paths per slice, "
+                "and the RAW's directions are a provisional choice from them. Continuing without -p finishes "
+                "the pilot and then this run (%llu paths per slice in all); continuing with -p N chooses the "
+                "directions from the pilot as it is and adds N paths per slice.\n",
+                out->path[OUT_LSS], (unsigned long long)sg->ps.paths, (unsigned long long)sg->ps.pilot_paths,
+                (unsigned long long)sg->ps.span_end);
+    if (!c->quiet && c->shard_n)
+        fprintf(info, "shard %d/%d: paths [%llu, %llu) of this run's [%llu, %llu)%s\n", c->shard_k, c->shard_n,
+                (unsigned long long)sg->part_lo, (unsigned long long)sg->part_hi, (unsigned long long)sg->run_lo,
+                (unsigned long long)sg->run_hi, sg->part_lo == sg->part_hi ? " (nothing to do: an empty part)" : "");
+    lsqt_estimates_free(est, st->n_slices);
+    return interrupted(&sg->stats, rc);
+}
+
+/* Every output location is checked before any work, so a long run never ends in an
+ * unwritable path; then the device. Returns 0, or an exit status (printed). */
+static int open_device(const lsqt_cli *c, const lsqt_state *st, const outputs *out, lsqt_context *cx)
+{
+    char err[LSQT_PATH_CAP + 1024];
+    int rc = 0;
+    for (int i = 0; i < OUT_COUNT && !rc; i++)
+        if (out->path[i] && lsqt_out_check(out->path[i], err, sizeof err))
+            rc = fail(1, "%s (nothing simulated)", err, "");
+    memset(cx, 0, sizeof *cx);
+    if (!rc) {
+        rc = lsqt_context_create(cx, c->device, err, sizeof err);
+        if (!rc) rc = lsqt_device_check(&cx->dev, st->use_double, err, sizeof err);
+        if (rc) fail(rc, "%s%s", err, "");
+    }
+    if (rc) lsqt_context_release(cx);
+    else if (c->verbose) fprintf(stderr, "device: %s [%s]\n", cx->dev.name, cx->dev.platform_name);
+    return rc;
+}
+
+/* The device's work on the state (stages.h), then the outputs. Returns the exit status. */
+static int simulate(const lsqt_cli *c, const lsqt_assembly *a, lsqt_state *st, const outputs *out)
+{
+    lsqt_context cx;
+    int rc = open_device(c, st, out, &cx);
+    if (rc) return rc;
+    /* With an output on stdout, everything else we print goes to stderr. */
+    int to_stdout = 0;
+    for (int i = 0; i < OUT_COUNT; i++) to_stdout |= out->path[i] && strcmp(out->path[i], "-") == 0;
+    FILE *info = to_stdout ? stderr : stdout;
+    checkpoint_ctx ck = {out->path[OUT_LSS], c->quiet}; /* a shard checkpoints its own file */
+    const int can_checkpoint = ck.lss && strcmp(ck.lss, "-") != 0 && c->checkpoint > 0;
+    lsqt_sim_opts so = {isatty(STDERR_FILENO) && !c->quiet, c->time_limit, 0, &g_stop, NULL, c->verbose,
+                        c->target_error, can_checkpoint ? c->checkpoint : 0.0,
+                        can_checkpoint ? write_checkpoint : NULL, &ck};
+    const lsqt_run_plan plan = run_plan(c);
+    lsqt_stages sg;
+    char err[LSQT_PATH_CAP + 1024];
+    rc = lsqt_run_stages(&cx, a, st, &plan, out->base, out->path[OUT_LSS], &so, &sg, err, sizeof err);
+    if (rc) fail(rc, "%s%s", err, "");
+    else if (sg.pilot_shard) rc = report_pilot_shard(c, out, st, &sg, info);
+    else rc = report_run(c, out, st, &sg, &cx, info);
+    if (sg.have_ps) lsqt_state_free(&sg.ps);
+    lsqt_context_release(&cx);
+    return rc;
+}
+
+int run_command(const lsqt_cli *c)
+{
+    char err[LSQT_PATH_CAP + 1024];
+    const int from_stdin = strcmp(c->input, "-") == 0;
+    lsqt_assembly a;
+    int rc = read_assembly(c, from_stdin, &a);
+    if (rc) return rc;
+    float *wi_dirs = NULL;
+    int n_wi_dirs = 0, n_mirrored = 0;
+    rc = check_directions(c, &a);
+    if (!rc) rc = read_wi_file(c, &a, &wi_dirs, &n_wi_dirs, &n_mirrored);
+    outputs out;
+    if (!rc && (rc = run_plan_outputs(c, from_stdin, lsqt_assembly_transmits(&a), 0, &out, err, sizeof err)))
+        fail(rc, "%s%s", err, "");
+    if (!rc) rc = run_lock_states(&out, c->quiet) ? 1 : 0;
+    lsqt_state st;
+    int continued = 0;
+    /* out.base: the state continued (a shard writes its own, out.path[OUT_LSS]) */
+    if (!rc) rc = run_open_state(&st, c, &a, out.base, wi_dirs, n_wi_dirs, n_mirrored, &continued);
+    free(wi_dirs);
+    if (!rc) rc = run_plan_sides(c, from_stdin, &a, &st, continued, &out, err, sizeof err);
+    if (!rc) {
+        rc = simulate(c, &a, &st, &out);
+        lsqt_state_free(&st);
+    }
+    lsqt_assembly_free(&a);
+    return rc;
+}

@@ -1,0 +1,91 @@
+/* realpath() is an XSI interface. */
+#define _GNU_SOURCE
+
+/* What a path is, where its links lead, and whether two paths name one file. */
+#include "util_internal.h"
+
+#include <errno.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+/* The kind of file a stat's mode names, in words. */
+const char *lsqt_file_kind(mode_t m)
+{
+    if (S_ISREG(m)) return "regular file";
+    if (S_ISDIR(m)) return "directory";
+    if (S_ISCHR(m)) return "character device";
+    if (S_ISBLK(m)) return "block device";
+    if (S_ISFIFO(m)) return "FIFO";
+    if (S_ISSOCK(m)) return "socket";
+    return "special file";
+}
+
+/* PATH with its symlinks followed link by link; a dangling link names the file to make. */
+int lsqt_resolve_links(const char *path, char *out, size_t cap, char *err, size_t errcap)
+{
+    char cur[LSQT_PATH_CAP], link[LSQT_PATH_CAP], next[LSQT_PATH_CAP];
+    snprintf(cur, sizeof cur, "%s", path);
+    for (int hops = 0; hops < 40; hops++) {
+        struct stat sb;
+        if (lstat(cur, &sb) != 0 || !S_ISLNK(sb.st_mode)) {
+            if ((size_t)snprintf(out, cap, "%s", cur) >= cap) break;
+            return 0;
+        }
+        ssize_t n = readlink(cur, link, sizeof link - 1);
+        if (n < 0) {
+            snprintf(err, errcap, "cannot write '%s': cannot read the link '%s': %s", path, cur, strerror(errno));
+            return -1;
+        }
+        link[n] = '\0';
+        const char *slash = strrchr(cur, '/');
+        size_t w = link[0] == '/' || !slash
+                       ? (size_t)snprintf(next, sizeof next, "%s", link)
+                       : (size_t)snprintf(next, sizeof next, "%.*s/%s", (int)(slash - cur), cur, link);
+        if (w >= sizeof next) break;
+        memcpy(cur, next, w + 1);
+        if (hops == 39) {
+            snprintf(err, errcap, "cannot write '%s': too many levels of symbolic links", path);
+            return -1;
+        }
+    }
+    snprintf(err, errcap, "cannot write '%.200s...': path too long", path);
+    return -1;
+}
+
+int lsqt_path_type(const char *path, const char **what)
+{
+    struct stat sb;
+    *what = "nothing";
+    if (stat(path, &sb) != 0) return LSQT_PATH_MISSING;
+    *what = lsqt_file_kind(sb.st_mode);
+    return S_ISREG(sb.st_mode) ? LSQT_PATH_REGULAR : S_ISDIR(sb.st_mode) ? LSQT_PATH_DIRECTORY : LSQT_PATH_SPECIAL;
+}
+
+/* The folder of PATH made absolute (realpath) with PATH's last name after it. */
+static int absolute_name(const char *path, char *out, size_t cap)
+{
+    char dir[LSQT_PATH_CAP], *real;
+    const char *slash = strrchr(path, '/');
+    snprintf(dir, sizeof dir, "%.*s", slash ? (int)(slash - path) + 1 : 1, slash ? path : ".");
+    if (!(real = realpath(dir, NULL))) return -1;
+    int w = snprintf(out, cap, "%s/%s", real, slash ? slash + 1 : path);
+    free(real);
+    return w > 0 && (size_t)w < cap ? 0 : -1;
+}
+
+int lsqt_same_file(const char *a, const char *b)
+{
+    if (strcmp(a, "-") == 0 || strcmp(b, "-") == 0) return strcmp(a, b) == 0;
+    char ta[LSQT_PATH_CAP], tb[LSQT_PATH_CAP], e[64];
+    if (lsqt_resolve_links(a, ta, sizeof ta, e, sizeof e) || lsqt_resolve_links(b, tb, sizeof tb, e, sizeof e))
+        return strcmp(a, b) == 0;
+    struct stat sa, sb;
+    int ha = stat(ta, &sa) == 0, hb = stat(tb, &sb) == 0;
+    if (ha && hb) return S_ISREG(sa.st_mode) && sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+    if (ha || hb) return 0;
+    char fa[2 * LSQT_PATH_CAP], fb[2 * LSQT_PATH_CAP];
+    if (absolute_name(ta, fa, sizeof fa) || absolute_name(tb, fb, sizeof fb)) return strcmp(ta, tb) == 0;
+    return strcmp(fa, fb) == 0;
+}
