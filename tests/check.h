@@ -10,6 +10,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 static int check_failures = 0;
 static int check_count = 0;
@@ -51,6 +52,14 @@ static inline void check_failed_now(void)
           "%.8g vs %.8g: z = %.3f (sigma %.3g, allowed %g)", (double)(est),       \
           (double)(expected), ((double)(est) - (double)(expected)) / (double)(sigma), \
           (double)(sigma), (double)(k))
+
+/* Seconds on a monotonic clock, for the tests' timing lines. */
+static inline double check_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
 
 static int check_finish(const char *name)
 {

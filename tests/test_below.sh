@@ -5,14 +5,10 @@
 # continues both sides to the bytes of one run, the LSS decides the sides when continued,
 # and the combinations that cannot work are refused with a message (exit 2).
 # usage: test_below.sh LSQT_CL EXAMPLES_DIR
-set -u
 # shellcheck source=cli_lib.sh
 source "$(dirname "${BASH_SOURCE[0]}")/cli_lib.sh"
-BIN=$1
-EX=$2
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
-cd "$T"
+cli_args BIN EX -- "$@"
+cli_workdir
 
 cp "$EX/slab.lsqt" S.lsqt
 printf 'Medium\nLayer z=0 LambertianBsdf fR=0.3 fT=0.5\nMedium\n' > L.lsqt

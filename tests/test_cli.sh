@@ -2,14 +2,10 @@
 # Command-line behaviour of lsqt-cl: help, flag and input errors (exit 2, nothing
 # written), outputs and their names, continuation, determinism, stdin, missing device.
 # usage: test_cli.sh LSQT_CL EXAMPLES_DIR
-set -u
 # shellcheck source=cli_lib.sh
 source "$(dirname "${BASH_SOURCE[0]}")/cli_lib.sh"
-BIN=$1
-EX=$2
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
-cd "$T"
+cli_args BIN EX -- "$@"
+cli_workdir
 
 cp "$EX/tutorial/Lambertian.lsqt" L.lsqt
 

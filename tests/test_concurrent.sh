@@ -6,14 +6,12 @@
 # other indexes run beside each other, and a plain run or a merge waits for them. The lock
 # file goes with its last holder.
 # usage: test_concurrent.sh LSQT_CL
-set -u
 # shellcheck source=cli_lib.sh
 source "$(dirname "${BASH_SOURCE[0]}")/cli_lib.sh"
-BIN=$1
-T=$(mktemp -d)
+cli_args BIN -- "$@"
 P=
-trap '[ -n "$P" ] && kill -9 $P 2>/dev/null; rm -rf "$T"' EXIT
-cd "$T"
+cli_at_exit() { [ -n "$P" ] && kill -9 $P 2>/dev/null; }
+cli_workdir
 printf 'Medium\nLayer z=1 NullBsdf\nMedium mus=0.9 mua=0.1 HenyeyGreensteinPhase g=0.8\nLayer z=0 NullBsdf\nMedium\n' > s.lsqt
 paths() { "$BIN" info "$1" --json - 2>/dev/null | python3 -c 'import json,sys; print(json.load(sys.stdin)["paths"])'; }
 # wait_for FILE: up to 60 s for FILE to appear (the first run has taken its lock).

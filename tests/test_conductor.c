@@ -12,12 +12,7 @@
 
 static cl_program build(int dbl)
 {
-    char opt[128], err[1024], *log = NULL;
-    snprintf(opt, sizeof opt, "-cl-std=CL1.2 -DLSQT_HAS_BSDF_MS_CONDUCTIVE=1%s", dbl ? " -DLSQT_DOUBLE=1" : "");
-    cl_program prog = lsqt_program_build(&fixture_cx, opt, &log, err, sizeof err);
-    CHECK(prog != NULL, "%s\n%s", err, log ? log : "");
-    free(log);
-    return prog;
+    return fixture_build("-cl-std=CL1.2 -DLSQT_HAS_BSDF_MS_CONDUCTIVE=1%s", dbl ? " -DLSQT_DOUBLE=1" : "");
 }
 
 /* The kernel's f at direction pairs through harness_eval, in float or double. */
@@ -25,45 +20,8 @@ static void kernel_f(cl_program prog, int dbl, double a, double eta, double k, c
                      const double (*wi)[3], int n, double *out)
 {
     if (!prog) return;
-    lsqt_dev_layer lf;
-    lsqt_dev_layer_d ld;
-    lsqt_dev_medium mf;
-    lsqt_dev_medium_d md;
-    memset(&lf, 0, sizeof lf), memset(&ld, 0, sizeof ld), memset(&mf, 0, sizeof mf), memset(&md, 0, sizeof md);
-    lf.kind = ld.kind = LSQT_BSDF_MS_CONDUCTIVE;
-    lf.p[0] = (float)a, lf.p[1] = (float)eta, lf.p[2] = (float)k;
-    ld.p[0] = a, ld.p[1] = eta, ld.p[2] = k;
-    cl_int e = CL_SUCCESS;
-    cl_kernel kn = clCreateKernel(prog, "harness_eval", &e);
-    float *dirs = calloc((size_t)n * 4, sizeof *dirs), *res = calloc((size_t)n * 2, sizeof *res);
-    cl_mem bl = clCreateBuffer(fixture_cx.ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, dbl ? sizeof ld : sizeof lf,
-                               dbl ? (void *)&ld : (void *)&lf, &e);
-    cl_mem bm = clCreateBuffer(fixture_cx.ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, dbl ? sizeof md : sizeof mf,
-                               dbl ? (void *)&md : (void *)&mf, &e);
-    cl_mem bd = clCreateBuffer(fixture_cx.ctx, CL_MEM_READ_ONLY, (size_t)n * 16, NULL, &e);
-    cl_mem br = clCreateBuffer(fixture_cx.ctx, CL_MEM_WRITE_ONLY, (size_t)n * 8, NULL, &e);
-    for (int i = 0; i < n && e == CL_SUCCESS; i++) {
-        /* one wo per launch (the harness takes wo as scalars) */
-        for (int c = 0; c < 3; c++) dirs[4 * i + c] = (float)wi[i][c];
-        float wof[3] = {(float)wo[i][0], (float)wo[i][1], (float)wo[i][2]};
-        cl_int zero = 0;
-        e |= clEnqueueWriteBuffer(fixture_cx.queue, bd, CL_TRUE, 0, 16, dirs + 4 * i, 0, NULL, NULL);
-        e |= clSetKernelArg(kn, 0, sizeof bl, &bl);
-        e |= clSetKernelArg(kn, 1, sizeof bm, &bm);
-        e |= clSetKernelArg(kn, 2, sizeof zero, &zero);
-        for (int c = 0; c < 3; c++) e |= clSetKernelArg(kn, (cl_uint)(3 + c), sizeof(float), &wof[c]);
-        e |= clSetKernelArg(kn, 6, sizeof bd, &bd);
-        e |= clSetKernelArg(kn, 7, sizeof br, &br);
-        size_t one = 1;
-        if (e == CL_SUCCESS) e = clEnqueueNDRangeKernel(fixture_cx.queue, kn, 1, NULL, &one, NULL, 0, NULL, NULL);
-        if (e == CL_SUCCESS) e = clEnqueueReadBuffer(fixture_cx.queue, br, CL_TRUE, 0, 8, res + 2 * i, 0, NULL, NULL);
-        out[i] = res[2 * i];
-    }
-    CHECK(e == CL_SUCCESS, "harness_eval: %d", (int)e);
-    clReleaseMemObject(bl), clReleaseMemObject(bm), clReleaseMemObject(bd), clReleaseMemObject(br);
-    clReleaseKernel(kn);
-    free(dirs);
-    free(res);
+    const lsqt_dev_layer_d L = {.kind = LSQT_BSDF_MS_CONDUCTIVE, .p = {a, eta, k}};
+    fixture_eval_pairs(prog, dbl, &L, 0.0, n, wo, wi, out, NULL);
 }
 
 static void unit_dir(double theta, double phi, double v[3])

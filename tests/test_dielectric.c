@@ -23,12 +23,7 @@
 
 static cl_program build(int dbl)
 {
-    char opt[128], err[1024], *log = NULL;
-    snprintf(opt, sizeof opt, "-cl-std=CL1.2 -DLSQT_HAS_BSDF_MS_DIELECTRIC=1%s", dbl ? " -DLSQT_DOUBLE=1" : "");
-    cl_program prog = lsqt_program_build(&fixture_cx, opt, &log, err, sizeof err);
-    CHECK(prog != NULL, "%s\n%s", err, log ? log : "");
-    free(log);
-    return prog;
+    return fixture_build("-cl-std=CL1.2 -DLSQT_HAS_BSDF_MS_DIELECTRIC=1%s", dbl ? " -DLSQT_DOUBLE=1" : "");
 }
 
 typedef struct {
@@ -36,59 +31,13 @@ typedef struct {
 } dcase;
 
 /* The kernel's f (cosine of wi included) and pdf at n pairs through harness_eval, in float
- * or double: one launch per pair (the harness takes wo as scalars), each at its offset in
- * one buffer of wi and one of results. Returns 0 on success. */
+ * or double (fixture_eval_pairs). Returns 0 on success. */
 static int kernel_eval(cl_program prog, int dbl, const dcase *c, int n, const double (*wo)[3],
                        const double (*wi)[3], double *f, double *pdf)
 {
     if (!prog) return -1;
-    lsqt_dev_layer lf;
-    lsqt_dev_layer_d ld;
-    lsqt_dev_medium mf;
-    lsqt_dev_medium_d md;
-    memset(&lf, 0, sizeof lf), memset(&ld, 0, sizeof ld), memset(&mf, 0, sizeof mf), memset(&md, 0, sizeof md);
-    lf.kind = ld.kind = LSQT_BSDF_MS_DIELECTRIC;
-    lf.iter_count = ld.iter_count = 1;
-    lf.multiple_scattering = ld.multiple_scattering = 0;
-    lf.p[0] = (float)c->a, lf.p[1] = (float)c->eta, lf.p[2] = (float)c->kr, lf.p[3] = (float)c->kt;
-    ld.p[0] = c->a, ld.p[1] = c->eta, ld.p[2] = c->kr, ld.p[3] = c->kt;
-    md.eta = mf.eta = 1;
-    cl_int e = CL_SUCCESS;
-    cl_kernel kn = clCreateKernel(prog, "harness_eval", &e);
-    if (e != CL_SUCCESS) {
-        CHECK(0, "clCreateKernel(harness_eval): %d", (int)e);
-        return -1;
-    }
-    float *dirs = calloc((size_t)n * 4, sizeof *dirs), *res = calloc((size_t)n * 2, sizeof *res);
-    for (int i = 0; i < n; i++)
-        for (int k = 0; k < 3; k++) dirs[4 * i + k] = (float)wi[i][k];
-    cl_mem bl = clCreateBuffer(fixture_cx.ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, dbl ? sizeof ld : sizeof lf,
-                               dbl ? (void *)&ld : (void *)&lf, &e);
-    cl_mem bm = clCreateBuffer(fixture_cx.ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, dbl ? sizeof md : sizeof mf,
-                               dbl ? (void *)&md : (void *)&mf, &e);
-    cl_mem bd = clCreateBuffer(fixture_cx.ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, (size_t)n * 16, dirs, &e);
-    cl_mem br = clCreateBuffer(fixture_cx.ctx, CL_MEM_WRITE_ONLY, (size_t)n * 8, NULL, &e);
-    cl_int zero = 0;
-    e |= clSetKernelArg(kn, 0, sizeof bl, &bl);
-    e |= clSetKernelArg(kn, 1, sizeof bm, &bm);
-    e |= clSetKernelArg(kn, 2, sizeof zero, &zero);
-    e |= clSetKernelArg(kn, 6, sizeof bd, &bd);
-    e |= clSetKernelArg(kn, 7, sizeof br, &br);
-    for (int i = 0; i < n && e == CL_SUCCESS; i++) {
-        /* arguments are captured at enqueue, so the launches can queue up */
-        float wof[3] = {(float)wo[i][0], (float)wo[i][1], (float)wo[i][2]};
-        for (int k = 0; k < 3; k++) e |= clSetKernelArg(kn, (cl_uint)(3 + k), sizeof(float), &wof[k]);
-        size_t off = (size_t)i, one = 1;
-        if (e == CL_SUCCESS) e = clEnqueueNDRangeKernel(fixture_cx.queue, kn, 1, &off, &one, NULL, 0, NULL, NULL);
-    }
-    if (e == CL_SUCCESS) e = clEnqueueReadBuffer(fixture_cx.queue, br, CL_TRUE, 0, (size_t)n * 8, res, 0, NULL, NULL);
-    CHECK(e == CL_SUCCESS, "harness_eval: %d", (int)e);
-    for (int i = 0; i < n; i++) f[i] = res[2 * i], pdf[i] = res[2 * i + 1];
-    clReleaseMemObject(bl), clReleaseMemObject(bm), clReleaseMemObject(bd), clReleaseMemObject(br);
-    clReleaseKernel(kn);
-    free(dirs);
-    free(res);
-    return e == CL_SUCCESS ? 0 : -1;
+    const lsqt_dev_layer_d L = {.kind = LSQT_BSDF_MS_DIELECTRIC, .iter_count = 1, .p = {c->a, c->eta, c->kr, c->kt}};
+    return fixture_eval_pairs(prog, dbl, &L, 1.0, n, wo, wi, f, pdf);
 }
 
 /* A tiny LCG: the pairs are the same on every run. */

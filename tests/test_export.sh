@@ -9,14 +9,10 @@
 # errors (exit 2) that write nothing. Skipped (77) only where no Python has xarray and
 # netCDF4 (tools/setup.sh installs Debian's).
 # usage: test_export.sh LSQT_CL EXAMPLES_DIR
-set -u
 # shellcheck source=cli_lib.sh
 source "$(dirname "${BASH_SOURCE[0]}")/cli_lib.sh"
-BIN=$1
-EX=$2
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
-cd "$T"
+cli_args BIN EX -- "$@"
+cli_workdir
 
 PY=
 for p in /usr/bin/python3 python3; do

@@ -100,10 +100,7 @@ int main(void)
         xe[N + i] = -ldexpf(1.0f + (float)i / 64, -30 + i / 2); /* down to -2^-30 */
     }
     fixture_open();
-    char err[512], *build_log = NULL;
-    cl_program prog = lsqt_program_build(&fixture_cx, "-cl-std=CL1.2", &build_log, err, sizeof err);
-    CHECK(prog != NULL, "%s\n%s", err, build_log ? build_log : "");
-    free(build_log);
+    cl_program prog = fixture_build("-cl-std=CL1.2");
     if (!prog) return check_finish("test_fast_math");
     cl_int e = CL_SUCCESS;
     cl_kernel k = clCreateKernel(prog, "harness_fast_math", &e);

@@ -13,14 +13,10 @@
 # (Between vector widths the bytes may differ: PoCL's double exp2 at 16 and 4 lanes
 # differs in a last bit at some arguments, which can move a path's sum by one unit.)
 # usage: test_gpu_path.sh LSQT_CL EXAMPLES_DIR
-set -u
 # shellcheck source=cli_lib.sh
 source "$(dirname "${BASH_SOURCE[0]}")/cli_lib.sh"
-BIN=$1
-EX=$2
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
-cd "$T"
+cli_args BIN EX -- "$@"
+cli_workdir
 printf 'Medium\nLayer z=20 MicrosurfaceDielectricBsdf alpha=1e-4 use_multiple_scattering=false\nMedium eta=1.37 mus=10 mua=0.01 HenyeyGreensteinPhase g=0.9\nLayer z=0 MicrosurfaceDielectricBsdf alpha=1e-4 use_multiple_scattering=false\nMedium\n' > mcx.lsqt
 printf 'Medium\nLayer z=1 LambertianBsdf fR=0.3 fT=0.5\nMedium\nLayer z=0 LambertianBsdf fR=0.2 fT=0.6\nMedium\n' > two.lsqt
 

@@ -9,13 +9,10 @@
 # that choose the directions too, bad values and grids of more than 1024 directions are
 # errors (exit 2).
 # usage: test_grid.sh LSQT_CL
-set -u
 # shellcheck source=cli_lib.sh
 source "$(dirname "${BASH_SOURCE[0]}")/cli_lib.sh"
-BIN=$1
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
-cd "$T"
+cli_args BIN -- "$@"
+cli_workdir
 
 printf 'Medium\nLayer z=0 LambertianBsdf fR=0.5\nMedium\n' > L.lsqt
 printf 'Medium\nLayer z=0 LambertianBsdf fR=0.3 fT=0.5\nMedium\n' > t.lsqt

@@ -4,15 +4,10 @@
 # needed; bad flags and every kind of bad file exit 2 with a message naming the file and
 # the problem, and a FIFO is never opened.
 # usage: test_info.sh LSQT_CL LSSINFO EXAMPLES_DIR
-set -u
 # shellcheck source=cli_lib.sh
 source "$(dirname "${BASH_SOURCE[0]}")/cli_lib.sh"
-BIN=$1
-INFO=$2
-EX=$3
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
-cd "$T" || exit 1
+cli_args BIN INFO EX -- "$@"
+cli_workdir
 
 # Two runs: a Lambertian layer that reflects and transmits (R near 0.3, T near 0.5, R + T
 # = 0.8, exact point estimates), and the slab with a seed that is not the default one

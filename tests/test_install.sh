@@ -17,8 +17,7 @@ source "$(dirname "${BASH_SOURCE[0]}")/cli_lib.sh"
 CMAKE=$1
 BUILD=$2
 REPO=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd -P)
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
+cli_tmpdir
 P=$T/prefix
 W=$T/work
 mkdir -p "$W" "$T/decoy" "$T/links" "$T/slurm"

@@ -2,15 +2,11 @@
 # lssplot (tools/lssplot): non-empty PNG and SVG plots whose plotted values (its CSV) are
 # exactly lsqt-cl info's; a truncated or foreign file is refused with exit 2.
 # usage: test_lssplot.sh LSQT_CL EXAMPLES_DIR
-set -u
 # shellcheck source=cli_lib.sh
 source "$(dirname "${BASH_SOURCE[0]}")/cli_lib.sh"
-BIN=$1
-EX=$2
+cli_args BIN EX -- "$@"
 PLOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../tools" && pwd)/lssplot"
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
-cd "$T" || exit 1
+cli_workdir
 cp "$EX/slab.lsqt" S.lsqt
 # in-plane directions on both sides, one off the plane, two below the surface
 printf '10 0\n30 0\n60 0\n10 180\n30 180\n60 180\n40 90\n120 0\n150 180\n' >ip.txt

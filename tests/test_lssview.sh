@@ -14,20 +14,10 @@
 # defaults (IN.lss.png, 512x512 PNG), --image-dim and --image-mul; and truncated, damaged,
 # other-version and missing LSS files, bad flags: exit 2 with a message.
 # usage: test_lssview.sh LSQT_CL LSSVIEW IMAGE_DUMP EXAMPLES_DIR
-set -u
 # shellcheck source=cli_lib.sh
 source "$(dirname "${BASH_SOURCE[0]}")/cli_lib.sh"
-BIN=$1
-VIEW=$2
-DUMP=$3
-EX=$4
-T=$(mktemp -d)
-cleanup() {
-  mountpoint -q "$T/small" 2>/dev/null && umount "$T/small"
-  rm -rf "$T"
-}
-trap cleanup EXIT
-cd "$T"
+cli_args BIN VIEW DUMP EX -- "$@"
+cli_workdir
 
 # check.py MODE IMAGE ARGS...: reads IMAGE through image_dump; the sphere geometry of
 # lssview.cpp (radius 0.45 of the width, orthographic, view +z). THMAX: θo of the last
@@ -325,8 +315,7 @@ expect 1 "cannot write 'adir': it is a directory" -- "$VIEW" L.lss -o adir
 expect 2 "OpenImageIO has no writer for its extension" -- "$VIEW" L.lss -o x.nosuchformat
 # A full file system (a small tmpfs, as root): exit 1 naming the image, the old one kept,
 # no new or half-written file, no temporaries.
-mkdir -p small
-if mount -t tmpfs -o size=2m tmpfs small 2>/dev/null; then
+if cli_tmpfs small 2m; then
   expect 0 "wrote small/old.exr" -- "$VIEW" L.lss -o small/old.exr
   cp small/old.exr keep.exr
   dd if=/dev/zero of=small/filler bs=4k 2>/dev/null

@@ -228,12 +228,7 @@ static void test_model(const model_case *m)
 int main(void)
 {
     fixture_open();
-    char err[1024], *log = NULL;
-    prog = lsqt_program_build(&fixture_cx, "-cl-std=CL1.2 -DLSQT_HAS_BSDF_LAMBERTIAN=1 -DLSQT_HAS_PHASE_HG=1 "
-                              "-DLSQT_HAS_BSDF_MS_CONDUCTIVE=1", &log,
-                              err, sizeof err);
-    CHECK(prog != NULL, "%s\n%s", err, log ? log : "");
-    free(log);
+    prog = fixture_build("-cl-std=CL1.2 -DLSQT_HAS_BSDF_LAMBERTIAN=1 -DLSQT_HAS_PHASE_HG=1 -DLSQT_HAS_BSDF_MS_CONDUCTIVE=1");
     if (!prog) return check_finish("test_models");
     const double hg_g[] = {0.0, 0.3, -0.6, 0.85};
     for (int i = 0; i < 4; i++) {

@@ -18,18 +18,14 @@
 # oclgrind's --uninitialized plugin is not used: on these kernels it crashes oclgrind
 # 21.10 itself (a segmentation fault in the simulator, before the first kernel runs).
 # usage: test_oclgrind.sh LSQT_CL EXAMPLES_DIR. Exit 77 (skipped) without oclgrind.
-set -u
 # shellcheck source=cli_lib.sh
 source "$(dirname "${BASH_SOURCE[0]}")/cli_lib.sh"
-BIN=$1
-EX=$2
+cli_args BIN EX -- "$@"
 if ! command -v oclgrind >/dev/null; then
   echo "test_oclgrind: SKIPPED: oclgrind is not installed (bash tools/setup.sh installs it)"
   exit 77
 fi
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
-cd "$T"
+cli_workdir
 cp "$EX/slab.lsqt" slab.lsqt
 cp "$EX/tutorial/Rough.lsqt" Rough.lsqt
 cp "$EX/tutorial/Substr.lsqt" Substr.lsqt

@@ -4,18 +4,10 @@
 # paths found before any work, a write that fails at the end, and an LSS that is not a
 # regular file. Device nodes are made here with mknod, never the system's.
 # usage: test_outputs.sh LSQT_CL EXAMPLES_DIR
-set -u
 # shellcheck source=cli_lib.sh
 source "$(dirname "${BASH_SOURCE[0]}")/cli_lib.sh"
-BIN=$1
-EX=$2
-T=$(mktemp -d)
-cleanup() {
-  mountpoint -q "$T/small" 2>/dev/null && umount "$T/small"
-  rm -rf "$T"
-}
-trap cleanup EXIT
-cd "$T"
+cli_args BIN EX -- "$@"
+cli_workdir
 no_temporaries() { ! find "$T" -name '*.tmp.*' | grep -q . && ok || bad "temporaries left: $(find "$T" -name '*.tmp.*')"; }
 
 cp "$EX/tutorial/Lambertian.lsqt" L.lsqt
@@ -110,8 +102,7 @@ cmp -s L.lsqt "$EX/tutorial/Lambertian.lsqt" && ok || bad "the input was changed
 
 # A full file system (a small tmpfs, as root): the write fails with ENOSPC, exit 1, the
 # previous files stay whole and no temporary is left.
-mkdir -p small
-if mount -t tmpfs -o size=8m tmpfs small 2>/dev/null; then
+if cli_tmpfs small 8m; then
   expect 0 "" -- "$BIN" -q -R "${RUN[@]}" -o small/old.raw --lss small/old.lss L.lsqt
   cp small/old.raw keep.raw
   cp small/old.lss keep.lss

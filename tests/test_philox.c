@@ -99,10 +99,7 @@ int main(void)
     CHECK(expect[0] == 0x5f6fb709u && rounds[0] == 7, "first vector parsed as %08x", expect[0]);
 
     fixture_open();
-    char *log = NULL;
-    cl_program prog = lsqt_program_build(&fixture_cx, "-cl-std=CL1.2", &log, err, sizeof err);
-    CHECK(prog != NULL, "%s\n%s", err, log ? log : "");
-    free(log);
+    cl_program prog = fixture_build("-cl-std=CL1.2");
     if (!prog) return check_finish("test_philox");
     cl_int e = CL_SUCCESS;
     cl_kernel k = clCreateKernel(prog, "harness_philox", &e);
@@ -128,9 +125,7 @@ int main(void)
         CHECK(memcmp(ref, expect + 4 * i, sizeof ref) == 0, "the test's own Philox misses vector %d", i);
     }
     check_stream(prog, "one block at a time");
-    cl_program wide = lsqt_program_build(&fixture_cx, "-cl-std=CL1.2 -DLSQT_RNG_WIDE=1", &log, err, sizeof err);
-    CHECK(wide != NULL, "%s\n%s", err, log ? log : "");
-    free(log);
+    cl_program wide = fixture_build("-cl-std=CL1.2 -DLSQT_RNG_WIDE=1");
     if (wide) check_stream(wide, "four blocks at a time"), clReleaseProgram(wide);
     clReleaseMemObject(bc);
     clReleaseMemObject(bk);

@@ -152,11 +152,7 @@ static void test_hg2(cl_mem buf, float *host)
 int main(void)
 {
     fixture_open();
-    char err[1024], *log = NULL;
-    prog = lsqt_program_build(&fixture_cx, "-cl-std=CL1.2 -DLSQT_HAS_BSDF_LAMBERTIAN=1 -DLSQT_HAS_PHASE_HG=1 "
-                              "-DLSQT_HAS_PHASE_HG2=1", &log, err, sizeof err);
-    CHECK(prog != NULL, "%s\n%s", err, log ? log : "");
-    free(log);
+    prog = fixture_build("-cl-std=CL1.2 -DLSQT_HAS_BSDF_LAMBERTIAN=1 -DLSQT_HAS_PHASE_HG=1 -DLSQT_HAS_PHASE_HG2=1");
     if (!prog) return check_finish("test_power_branches");
     CHECK(fabs(hg_cdf(0.9, 1.0) - 1) < 1e-12 && fabs(hg_cdf(-0.8, -1.0)) < 1e-12, "HG distribution function");
     cl_int e = CL_SUCCESS;

@@ -19,14 +19,10 @@
 # BUILD/validate-venv when one has it, else it is installed into the first (pip install
 # mitsuba numpy); the test is skipped (77) only where that cannot be done.
 # usage: test_rgl.sh LSQT_CL EXAMPLES_DIR BUILD_DIR
-set -u
 # shellcheck source=cli_lib.sh
 source "$(dirname "${BASH_SOURCE[0]}")/cli_lib.sh"
-BIN=$1
-EX=$2
-BUILD=$3
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
+cli_args BIN EX BUILD -- "$@"
+cli_tmpdir
 
 VENV=${LSQT_CLIENT_VENV:-$BUILD/client-venv}
 PY=

@@ -5,15 +5,11 @@
 # is and a continued partial state completes the run; RRSS progressive runs: the pilot
 # is a share of the first run's -p only, so `-p 10000; -p 20000` = `-p 10000` three times.
 # usage: test_shards.sh LSQT_CL EXAMPLES_DIR
-set -u
 # shellcheck source=cli_lib.sh
 source "$(dirname "${BASH_SOURCE[0]}")/cli_lib.sh"
-BIN=$1
-EX=$2
+cli_args BIN EX -- "$@"
 SH="$(cd "$(dirname "${BASH_SOURCE[0]}")/../tools/slurm" && pwd)/local-shards.sh"
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
-cd "$T" || exit 1
+cli_workdir
 export LSQT_CL=$BIN
 
 # same A B: both files exist and are byte-identical

@@ -5,16 +5,13 @@
 # continuing it gives the bytes of an uninterrupted run. --checkpoint S writes the LSS
 # every S seconds, so even a SIGKILL loses at most S seconds of work.
 # usage: test_signals.sh LSQT_CL EXAMPLES_DIR
-set -u
 # shellcheck source=cli_lib.sh
 source "$(dirname "${BASH_SOURCE[0]}")/cli_lib.sh"
-BIN=$1
-EX=$2
-T=$(mktemp -d)
+cli_args BIN EX -- "$@"
 watchdogs=()
 # (a watchdog's sleep is its child: kill it too, or it lingers for its 120 s)
-trap 'for w in "${watchdogs[@]}"; do pkill -P "$w" 2>/dev/null; kill "$w" 2>/dev/null; done; rm -rf "$T"' EXIT
-cd "$T"
+cli_at_exit() { for w in "${watchdogs[@]}"; do pkill -P "$w" 2>/dev/null; kill "$w" 2>/dev/null; done; }
+cli_workdir
 cp "$EX/slab.lsqt" S.lsqt
 F=(-wo 4 -wi 16 --wi-spread)
 

@@ -5,14 +5,10 @@
 # batch on (16384 paths); an error that cannot be estimated (one batch: 256 paths or
 # fewer) is "n/a".
 # usage: test_stop_rules.sh LSQT_CL EXAMPLES_DIR
-set -u
 # shellcheck source=cli_lib.sh
 source "$(dirname "${BASH_SOURCE[0]}")/cli_lib.sh"
-BIN=$1
-EX=$2
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
-cd "$T"
+cli_args BIN EX -- "$@"
+cli_workdir
 cp "$EX/slab.lsqt" S.lsqt
 # The even spread: with RRSS the pilot is a share of -p (10000 without it), so a target
 # run equals a -p run only on given directions.

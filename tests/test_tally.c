@@ -29,12 +29,7 @@ static lsqt_u128 ref_units(float v)
 
 static cl_program build(const char *extra)
 {
-    char opt[256], err[1024], *log = NULL;
-    snprintf(opt, sizeof opt, "-cl-std=CL1.2 %s", extra);
-    cl_program p = lsqt_program_build(&fixture_cx, opt, &log, err, sizeof err);
-    CHECK(p != NULL, "%s\n%s", err, log ? log : "");
-    free(log);
-    return p;
+    return fixture_build("-cl-std=CL1.2 %s", extra);
 }
 
 /* Adds v[0..n) on the device; returns the flags, fills the two tallies. */

@@ -4,18 +4,14 @@
 # workers). Debian 12's PoCL 3.1 reads POCL_MAX_PTHREAD_COUNT, not POCL_CPU_MAX_CU_NUM, so
 # setting only the latter left -t 1 on every core. Needs 2 CPUs and /proc (skips, 77).
 # usage: test_threads.sh LSQT_CL EXAMPLES_DIR
-set -u
 # shellcheck source=cli_lib.sh
 source "$(dirname "${BASH_SOURCE[0]}")/cli_lib.sh"
-BIN=$1
-EX=$2
+cli_args BIN EX -- "$@"
 if [ "$(nproc)" -lt 2 ] || [ ! -d /proc/self/task ]; then
   echo "test_threads: SKIPPED: needs 2 CPUs and /proc"
   exit 77
 fi
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
-cd "$T"
+cli_workdir
 cp "$EX/slab.lsqt" slab.lsqt
 "$BIN" -q -R slab.lsqt -p 1000 -o /dev/null --lss warm.lss # fills the kernel cache
 

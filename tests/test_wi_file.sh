@@ -6,14 +6,10 @@
 # of the -wi spread's own directions reproduces that run, every bad line is an error with
 # its line number (exit 2, nothing written), and a continued LSS keeps its directions.
 # usage: test_wi_file.sh LSQT_CL EXAMPLES_DIR
-set -u
 # shellcheck source=cli_lib.sh
 source "$(dirname "${BASH_SOURCE[0]}")/cli_lib.sh"
-BIN=$1
-EX=$2
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
-cd "$T"
+cli_args BIN EX -- "$@"
+cli_workdir
 
 printf 'Medium\nLayer z=0 LambertianBsdf fR=0.5\nMedium\n' > L.lsqt
 printf 'Medium\nLayer z=0 LambertianBsdf fR=0.3 fT=0.5\nMedium\n' > t.lsqt

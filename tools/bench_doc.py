@@ -14,6 +14,13 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 DOC = os.path.join(ROOT, "docs", "performance.md")
 
 
+def split_args(argv):
+    """The command line of a benchmark script (bench_targets.py, bench_study.py): its own
+    arguments, and lsqt-cl's after a `--` ([] without one)."""
+    cut = argv.index("--") if "--" in argv else len(argv)
+    return argv[:cut], argv[cut + 1:]
+
+
 def _out(cmd, **kw):
     """stdout of CMD, or '' when it cannot run or fails."""
     try:

@@ -33,6 +33,8 @@ import sys
 import tempfile
 import time
 
+import bench_doc  # tools/, beside this script
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 FIXTURES = os.path.join(ROOT, "tests", "data", "validation_fixtures.json")
 SUBSTR = os.path.join(ROOT, "examples", "tutorial", "Substr.lsqt")
@@ -221,9 +223,7 @@ def plots(rows, out_dir):
 
 
 def main():
-    args = sys.argv[1:]
-    extra = args[args.index("--") + 1:] if "--" in args else []
-    args = args[:args.index("--")] if "--" in args else args
+    args, extra = bench_doc.split_args(sys.argv[1:])
     quick, doc = "--quick" in args, "--doc" in args
     seeds = int(args[args.index("--seeds") + 1]) if "--seeds" in args else (2 if quick else 8)
     out_dir = args[args.index("--out") + 1] if "--out" in args else os.path.join(ROOT, "build", "study")

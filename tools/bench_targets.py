@@ -28,6 +28,8 @@ import sys
 import tempfile
 import time
 
+import bench_doc  # tools/, beside this script
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 SUBSTR = os.path.join("examples", "tutorial", "Substr.lsqt")
@@ -84,9 +86,7 @@ def without_p(flags):
 
 
 def main():
-    args = sys.argv[1:]
-    extra = args[args.index("--") + 1:] if "--" in args else []
-    args = args[:args.index("--")] if "--" in args else args
+    args, extra = bench_doc.split_args(sys.argv[1:])
     out_csv = None
     if "--csv" in args:
         i = args.index("--csv")
@@ -101,8 +101,6 @@ def main():
     binary = args[0] if args else os.path.join(ROOT, "build", "lsqt-cl")
     if not (os.path.isfile(binary) and os.access(binary, os.X_OK)):
         sys.exit(f"bench_targets.py: {binary} is missing or not executable: build lsqt-cl first (bash tools/build.sh)")
-    if doc:
-        import bench_doc  # tools/, beside this script
     started = time.localtime()
     rows, failed = [], []
     print(f"{'workload':8s} {'wall_s':>7s} {'cpu_s':>7s} {'paths/s':>9s} {'events/s':>9s} {'ev/cpu_s':>9s} "
