@@ -59,7 +59,7 @@ static uint64_t seed_offset; /* argv[2]: other seeds, to check that the toleranc
 /* ---------------------------------------------------------------- helpers */
 
 /* The direction the device uses: the state's float one, normalised again in double for a
- * double kernel (host/session.c), as the RAW divides by the float |z|. */
+ * double kernel (host/sim/session.c), as the RAW divides by the float |z|. */
 static inline void wi_of(const lsqt_state *st, int s, int k, double v[3])
 {
     const float *p = st->wi + ((size_t)s * (size_t)st->n_wi + (size_t)k) * 4;

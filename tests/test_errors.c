@@ -1,5 +1,5 @@
 /* The error bars are right, not just present (docs/design.md section 5.4: every estimate with its standard
- * error). Two independent checks of the batch-means standard errors of host/tally.c:
+ * error). Two independent checks of the batch-means standard errors of host/state/tally.c:
  *  1. analog fractions with a known distribution: in a lossless slab every path leaves
  *     with weight exactly 1, so R, T and the unscattered delta_T are binomial fractions
  *     and their standard error is sqrt(p (1 - p) / N);

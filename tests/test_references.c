@@ -40,7 +40,7 @@ static double batch_f(const lsqt_state *st, int s, int b, int k)
 }
 
 /* Ratio estimate sum(y) / sum(x) over the batches, with its batch-means standard error
- * (linearised: var = B/(B-1) sum (y_b - r x_b)^2 / (sum x)^2), as host/tally.c does. */
+ * (linearised: var = B/(B-1) sum (y_b - r x_b)^2 / (sum x)^2), as host/state/tally.c does. */
 static lsqt_est batch_ratio(const double *y, const double *x)
 {
     double sy = 0.0, sx = 0.0, ss = 0.0;
