@@ -15,41 +15,17 @@
 /* A walk longer than this is cut (absorbed): in the furnace tests no walk comes close. */
 #define LSQT_MS_MAX_ORDER 1024
 
-#ifdef LSQT_NEE_RECORDS
-/* The GPU code path's next-event vertices (-DLSQT_NEE_RECORDS): the walk writes each
- * vertex's direction-independent state as a record, in the path's order, and
- * lsqt_estimate evaluates the records towards every direction, a work-group sharing the
- * directions (walk.cl). q[3] = (weight, side, NEE_* kind, layer or medium index); the rest
- * depends on the kind (nee_rec_block). */
-typedef struct {
-    real4 q[4];
-} nee_rec;
-#define NEE_LAYER 0     /* a layer's BSDF: q[0].xyz = wo */
-#define NEE_MEDIUM 1    /* a medium's phase: q[0].xyz = wo, q[1] = (phase_vtx m, tau up), q[2].x = tau down */
-#define NEE_MS_VERTEX 2 /* a microsurface walk's vertex (ms_vtx in q[0..2]) */
-#define NEE_MS_SINGLE 3 /* the analytic single scattering */
-#define NEE_MS_FIRST 4  /* a Lambertian microsurface's first vertex */
-
-/* Where a path's records go: rec[0 ...] (rec 0: only counted). */
-typedef struct {
-    __global nee_rec *rec;
-    uint n;
-} nee_out;
-#endif
-
-/* Where a vertex's terms go: per-direction sums, the slice's directions and this
- * layer's table (transmittance T, 0 where light may not leave that way; Lambda;
- * lgamma(1 + Lambda)), each LSQT_NWI_PAD long. On the GPU path the terms are records
- * instead (out, for layer `layer`). */
+/* Where a vertex's terms go: the slice's directions and this layer's table
+ * (transmittance T, 0 where light may not leave that way; Lambda; lgamma(1 + Lambda)),
+ * each LSQT_NWI_PAD long; on the CPU path the per-direction sums (sum), on the GPU path
+ * the path's records instead (out, for layer `layer`; nee_records.cl). */
 typedef struct {
     __local real *sum;
     __global const real *wi;
     __global const real *tab;
     ulong *count; /* vertices evaluated (work counter), or 0 */
-#ifdef LSQT_NEE_RECORDS
     nee_out *out;
     int layer;
-#endif
 } ms_sink;
 
 /* Directions are in `real`: --double is double end to end (the host normalises them). */
@@ -102,14 +78,7 @@ LSQT_INLINE dirv load_dirv(__global const real *wi, int k)
 LSQT_INLINE void ms_record(const ms_sink *k, int kind, const ms_vtx *x, real side, real w)
 {
     if (k->count) (*k->count)++;
-    if (k->out->rec) {
-        __global nee_rec *r = k->out->rec + k->out->n;
-        r->q[0] = (real4)(x->v, x->inv_area);
-        r->q[1] = (real4)(x->m, x->lam_v);
-        r->q[2] = (real4)(x->lg_v, x->log_c, x->log_cbar, x->e);
-        r->q[3] = (real4)(w, side, (real)kind, (real)k->layer);
-    }
-    k->out->n++;
+    nee_write(k->out, kind, k->layer, w, side, x);
 }
 
 /* A record's terms for the block of directions at b (the layer's table tab). */

@@ -39,7 +39,7 @@ typedef struct {
     __global const real *wi;           /* this slice's directions: x[pad], y[pad], z[pad] */
     __global const real *tab;          /* this slice's direction tables (lsqt_prepare) */
     __local real *sum;                 /* the current path's point estimates (CPU path) */
-    __local ulong *nee;                /* this work-item's point-estimate sums, low words */
+    __local ulong *nee;                /* this work-item's point-estimate sums, low words (CPU path) */
     ulong *work;                       /* this work-item's work counters (LSQT_T_LAYER_EVENTS ...) */
     volatile __local acc_word *acc;    /* the work-group's scalar tallies, LSQT_ACC_WORDS each */
     __global ulong *nee_g;             /* the tallies of the chunk's batch (nee_word) */
@@ -48,10 +48,8 @@ typedef struct {
     volatile __global uint *flags;
     int nee_on;                        /* 0: no point estimates (the RRSS candidate walks) */
     __global real *exit_dir;           /* non-0: the path only writes its exit direction here */
-#ifdef LSQT_NEE_RECORDS
     nee_out *out;                      /* the path's next-event records (GPU path) */
-    int count_only;                    /* 1: count the records, tally nothing */
-#endif
+    int count_only;                    /* 1: count the records, tally nothing (GPU path) */
 } walk_ctx;
 
 /* Direction k's tally of the walk's batch (state slice v + k / LSQT_GROUP_PAD), or 0 for
@@ -188,8 +186,49 @@ LSQT_INLINE ulongv nee_flush_block(realv v, ulongv lo, __global ulong *nee, uint
     return sum;
 }
 
+/* A vertex's next-event estimates, one set of functions per code path with the same
+ * names, which the path loop below calls alike: the CPU path adds the terms (above) to the
+ * path's sums at once, the GPU path writes the vertex's record (nee_records.cl) for
+ * lsqt_estimate (below), which adds the same terms. nee_layer_terms: a layer's, towards
+ * wo with weight w (tab: the layer's table); nee_medium_terms: a medium's, at optical
+ * depths tu above and td below the vertex; nee_ms_sink: where a microsurface's walks add
+ * theirs (ms_vertex_walks); nee_counting: 1 in the GPU path's counting walk, which
+ * tallies nothing but the records. */
 #ifndef LSQT_NEE_RECORDS
-/* The CPU path: the path's sums to the work-item's low words (then cleared). */
+LSQT_INLINE void nee_layer_terms(const walk_ctx *c, __global const lsqt_dev_layer *l, int li, real3 wo, real w,
+                                 __global const real *tab)
+{
+    (void)li;
+    for (int k = 0; k < LSQT_NWI_PAD; k += LSQT_VW)
+        VBLOCK(realv, c->sum, k) += nee_layer_block(l, wo, w, c->wi, tab, k);
+}
+
+LSQT_INLINE void nee_medium_terms(const walk_ctx *c, __global const lsqt_dev_medium *m, int mi, real3 wo, real w,
+                                  const phase_vtx *pv, real tu, real td)
+{
+    /* The pointers in locals: on a CPU, PoCL's local, private and global memory are one
+     * address space, so the compiler cannot tell the sums' stores from the context's
+     * fields and would load them again at every block. */
+    __global const real *dirs = c->wi, *a_up = c->tab, *a_down = c->tab + LSQT_NWI_PAD;
+    __local real *sum = c->sum;
+    (void)mi;
+    for (int k = 0; k < LSQT_NWI_PAD; k += LSQT_VW)
+        VBLOCK(realv, sum, k) += nee_medium_block(m, pv, wo, w, tu, td, dirs, a_up, a_down, k);
+}
+
+LSQT_INLINE ms_sink nee_ms_sink(const walk_ctx *c, __global const real *tab, int li)
+{
+    ms_sink k = {c->sum, c->wi, tab, c->work + WORK_NEE, 0, li};
+    return k;
+}
+
+LSQT_INLINE int nee_counting(const walk_ctx *c)
+{
+    (void)c;
+    return 0;
+}
+
+/* At the path's end: its sums to the work-item's low words (then cleared). */
 LSQT_INLINE void nee_flush(const walk_ctx *c)
 {
     for (int k = 0; k < LSQT_NWI_PAD; k += LSQT_VW) {
@@ -199,18 +238,37 @@ LSQT_INLINE void nee_flush(const walk_ctx *c)
     }
 }
 #else
-/* The GPU path: a vertex's record (kind NEE_LAYER or NEE_MEDIUM; q1, q2x as nee_rec says). */
-LSQT_INLINE void nee_put(const walk_ctx *c, int kind, int index, real3 wo, real w, real4 q1, real q2x)
+/* A layer's or a medium's record: wo, and a medium's phase normal m and optical depths
+ * tu, td (0 for a layer) where a microsurface vertex keeps m, lam_v and lg_v. */
+LSQT_INLINE void nee_put(const walk_ctx *c, int kind, int index, real3 wo, real w, real3 m, real tu, real td)
 {
-    if (c->out->rec) {
-        __global nee_rec *r = c->out->rec + c->out->n;
-        r->q[0] = (real4)(wo, R(0.0));
-        r->q[1] = q1;
-        r->q[2] = (real4)(q2x, R(0.0), R(0.0), R(0.0));
-        r->q[3] = (real4)(w, R(0.0), (real)kind, (real)index);
-    }
-    c->out->n++;
+    ms_vtx x;
+    x.v = wo, x.m = m, x.inv_area = R(0.0), x.lam_v = tu, x.lg_v = td;
+    x.log_c = x.log_cbar = x.e = R(0.0);
+    nee_write(c->out, kind, index, w, R(0.0), &x);
 }
+
+LSQT_INLINE void nee_layer_terms(const walk_ctx *c, __global const lsqt_dev_layer *l, int li, real3 wo, real w,
+                                 __global const real *tab)
+{
+    (void)l, (void)tab;
+    nee_put(c, NEE_LAYER, li, wo, w, (real3)(R(0.0)), R(0.0), R(0.0));
+}
+
+LSQT_INLINE void nee_medium_terms(const walk_ctx *c, __global const lsqt_dev_medium *m, int mi, real3 wo, real w,
+                                  const phase_vtx *pv, real tu, real td)
+{
+    (void)m;
+    nee_put(c, NEE_MEDIUM, mi, wo, w, pv->m, tu, td);
+}
+
+LSQT_INLINE ms_sink nee_ms_sink(const walk_ctx *c, __global const real *tab, int li)
+{
+    ms_sink k = {0, c->wi, tab, c->work + WORK_NEE, c->out, li};
+    return k;
+}
+
+LSQT_INLINE int nee_counting(const walk_ctx *c) { return c->count_only; }
 #endif
 
 LSQT_INLINE int layer_is_micro(__global const lsqt_dev_layer *l)
@@ -234,22 +292,14 @@ LSQT_INLINE real layer_vertex(const walk_ctx *c, int li, real3 d, real w, rng_t 
     c->work[WORK_LAYER]++;
 #if defined(LSQT_HAS_BSDF_MS_LAMBERTIAN) || defined(LSQT_HAS_BSDF_MS_DIELECTRIC) || defined(LSQT_HAS_BSDF_MS_CONDUCTIVE)
     if (layer_is_micro(l)) {
-#ifdef LSQT_NEE_RECORDS
-        ms_sink k = {0, c->wi, tab, c->work + WORK_NEE, c->out, li};
-#else
-        ms_sink k = {c->sum, c->wi, tab, c->work + WORK_NEE};
-#endif
+        ms_sink k = nee_ms_sink(c, tab, li);
         return ms_vertex_walks(l, d, rng, w, visible, &k, wi);
     }
 #endif
-    if (visible) c->work[WORK_NEE]++;
-#ifdef LSQT_NEE_RECORDS
-    if (visible) nee_put(c, NEE_LAYER, li, -d, w, (real4)(R(0.0)), R(0.0));
-#else
-    if (visible)
-        for (int k = 0; k < LSQT_NWI_PAD; k += LSQT_VW)
-            VBLOCK(realv, c->sum, k) += nee_layer_block(l, -d, w, c->wi, tab, k);
-#endif
+    if (visible) {
+        c->work[WORK_NEE]++;
+        nee_layer_terms(c, l, li, -d, w, tab);
+    }
     return bsdf_sample(l, -d, rng, wi);
 }
 
@@ -267,17 +317,7 @@ LSQT_NOINLINE_CPU void nee_medium(const walk_ctx *c, int mi, real h, real3 d, re
      * (2^-huge is 0; 1e30 times a 0 of the tables is still 0, never NaN). */
     const real tu = up && tau_up < LSQT_NEE_TAU_MAX ? tau_up : R(1e30);
     const real td = down && tau_down < LSQT_NEE_TAU_MAX ? tau_down : R(1e30);
-#ifdef LSQT_NEE_RECORDS
-    nee_put(c, NEE_MEDIUM, mi, -d, w, (real4)(pv->m, tu), td);
-#else
-    /* The pointers in locals: on a CPU, PoCL's local, private and global memory are one
-     * address space, so the compiler cannot tell the sums' stores from the context's
-     * fields and would load them again at every block. */
-    __global const real *dirs = c->wi, *a_up = c->tab, *a_down = c->tab + LSQT_NWI_PAD;
-    __local real *sum = c->sum;
-    for (int k = 0; k < LSQT_NWI_PAD; k += LSQT_VW)
-        VBLOCK(realv, sum, k) += nee_medium_block(m, pv, -d, w, tu, td, dirs, a_up, a_down, k);
-#endif
+    nee_medium_terms(c, m, mi, -d, w, pv, tu, td);
 }
 
 /* The phi bin of (x, |y|), phi = atan2(|y|, x) in [0, pi], without atan2 (a tenth of a
@@ -365,9 +405,7 @@ LSQT_INLINE void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulon
                     return;
                 }
                 acc_add(c, up ? LSQT_T_R : LSQT_T_T, w);
-#ifdef LSQT_NEE_RECORDS
-                if (c->count_only) return;
-#endif
+                if (nee_counting(c)) return;
                 if (scattered) {
                     /* every block of a grouped session holds the same paths' exits */
                     fix1 q = to_fixed(w, c->flags);
@@ -436,17 +474,38 @@ __kernel void lsqt_exits(__constant lsqt_dev_scene *scene, __global const lsqt_d
     run_path(&c, wo, &rng, 0);
 }
 
-/* One work-group per (chunk of LSQT_CHUNK paths, simulated slice): global size
- * (n_chunks * local size, n_slices / slice_group). It runs the paths of its chunk that
- * fall in [path_begin, path_end), sums in local memory and adds once per chunk to the
- * batch. In a grouped session (the RRSS pilot) one walk serves every block of the slice:
- * block b's directions are [b LSQT_GROUP_PAD, + LSQT_GROUP_NWI), and its tallies are
- * state slice slice * slice_group + b, whose R, T, work and histogram are the walk's.
- * On the GPU path (LSQT_NEE_RECORDS) the walk makes no estimates: path p's next-event
- * records go to rec from rec_off[slice * (path_end - path_begin) + p - path_begin] on,
- * and lsqt_estimate evaluates them; with count_only it only writes each path's record
- * count there (the host turns the counts into offsets) and tallies nothing. The CPU path
- * ignores rec, rec_off and count_only. */
+/* A work-group's share of a launch: one work-group per (chunk of LSQT_CHUNK paths,
+ * simulated slice), global size (n_chunks * local size, n_slices / slice_group). Its
+ * work-item lid of lsz, the simulated slice, the paths [begin, end) of chunk chunk_first
+ * + the group's index that fall in [path_begin, path_end), and the chunk's batch. */
+typedef struct {
+    int lid, lsz;
+    uint slice;
+    ulong begin, end;
+    int batch;
+} chunk_span;
+
+LSQT_INLINE chunk_span chunk_of(ulong chunk_first, ulong path_begin, ulong path_end)
+{
+    chunk_span s;
+    const ulong chunk = chunk_first + get_group_id(0);
+    s.lid = (int)get_local_id(0), s.lsz = (int)get_local_size(0);
+    s.slice = (uint)get_global_id(1);
+    s.begin = max(chunk * LSQT_CHUNK, path_begin);
+    s.end = min((chunk + 1) * LSQT_CHUNK, path_end);
+    s.batch = (int)(chunk % LSQT_BATCHES);
+    return s;
+}
+
+/* The paths: a work-group runs those of its chunk (chunk_span) and adds its tallies once
+ * per chunk to the batch's. In a grouped session (the RRSS pilot) one walk serves every
+ * block of the slice: block b's directions are [b LSQT_GROUP_PAD, + LSQT_GROUP_NWI), and
+ * its tallies are state slice slice * slice_group + b, whose R, T, work and histogram are
+ * the walk's. The CPU path sums the next-event estimates in local memory and ignores rec,
+ * rec_off and count_only. The GPU path (LSQT_NEE_RECORDS) makes none: path p's records
+ * go to rec from rec_off[slice * (path_end - path_begin) + p - path_begin] on, and
+ * lsqt_estimate evaluates them; with count_only it only writes each path's record count
+ * there (the host turns the counts into offsets) and tallies nothing. */
 __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
                         __global const lsqt_dev_medium *media,
                         __global const lsqt_dev_layer *layers,
@@ -454,36 +513,37 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
                         __global const real *wi_dirs, __global const real *tab,
                         ulong path_begin, ulong path_end, ulong chunk_first,
                         __global ulong *nee, __global ulong *scalars, __global ulong *hist,
-                        volatile __global uint *flags, __global real4 *rec, __global ulong *rec_off, int count_only)
+                        volatile __global uint *flags, __global lsqt_nee_rec *rec, __global ulong *rec_off,
+                        int count_only)
 {
     __local acc_word acc[LSQT_ACC_WORDS * LSQT_T_COUNT];
-    const int lid = (int)get_local_id(0), lsz = (int)get_local_size(0);
-    const uint slice = (uint)get_global_id(1);
-    const ulong chunk = chunk_first + get_group_id(0);
-    const ulong begin = max(chunk * LSQT_CHUNK, path_begin);
-    const ulong end = min((chunk + 1) * LSQT_CHUNK, path_end);
-    const int batch = (int)(chunk % LSQT_BATCHES);
+    const chunk_span s = chunk_of(chunk_first, path_begin, path_end);
 
-    for (int k = lid; k < LSQT_ACC_WORDS * LSQT_T_COUNT; k += lsz) acc[k] = 0;
+    for (int k = s.lid; k < LSQT_ACC_WORDS * LSQT_T_COUNT; k += s.lsz) acc[k] = 0;
     barrier(CLK_LOCAL_MEM_FENCE);
 
     ulong work[WORK_N] = {0, 0, 0};
-    const uint g = (uint)max(scene->slice_group, 1), v = slice * g; /* v: the first state slice */
+    const uint g = (uint)max(scene->slice_group, 1), v = s.slice * g; /* v: the first state slice */
     walk_ctx c;
-    c.scene = scene, c.media = media, c.layers = layers, c.wi = wi_dirs + 3 * LSQT_NWI_PAD * slice;
-    c.tab = tab + (size_t)slice * LSQT_SLICE_TAB(scene->n_layers);
-    c.work = work, c.acc = acc, c.nee_g = nee, c.v = v, c.batch = batch, c.flags = flags;
+    c.scene = scene, c.media = media, c.layers = layers, c.wi = wi_dirs + 3 * LSQT_NWI_PAD * s.slice;
+    c.tab = tab + (size_t)s.slice * LSQT_SLICE_TAB(scene->n_layers);
+    c.work = work, c.acc = acc, c.nee_g = nee, c.v = v, c.batch = s.batch, c.flags = flags;
     c.nee_on = 1, c.exit_dir = 0;
+    c.sum = 0, c.nee = 0, c.out = 0, c.count_only = 0;
     real3 wo = make_real3(wo_dirs[4 * v], wo_dirs[4 * v + 1], wo_dirs[4 * v + 2]);
-    __global ulong *hist_b = hist + 2 * ((ulong)v * LSQT_BATCHES + (ulong)batch) * LSQT_HIST_BINS;
+    __global ulong *hist_b = hist + 2 * ((ulong)v * LSQT_BATCHES + (ulong)s.batch) * LSQT_HIST_BINS;
+    /* The chunk's paths, one body per code path. The CPU path's local memory can only be
+     * declared in the kernel; the GPU path's loop stays here too (in a function of its
+     * own, clang-15 inlines the walk in another order, and lsqt_walk and lsqt_exits take
+     * a VGPR more on gfx90a). */
 #ifdef LSQT_NEE_RECORDS
     nee_out out;
-    c.sum = 0, c.nee = 0, c.out = &out, c.count_only = count_only;
-    for (ulong p = begin + (ulong)lid; p < end; p += (ulong)lsz) {
-        const ulong at = (ulong)slice * (path_end - path_begin) + (p - path_begin);
-        out.rec = count_only ? 0 : (__global nee_rec *)rec + rec_off[at];
+    c.out = &out, c.count_only = count_only;
+    for (ulong p = s.begin + (ulong)s.lid; p < s.end; p += (ulong)s.lsz) {
+        const ulong at = (ulong)s.slice * (path_end - path_begin) + (p - path_begin);
+        out.rec = count_only ? 0 : rec + rec_off[at];
         out.n = 0;
-        rng_t rng = rng_init(scene->seed_lo, scene->seed_hi, slice, p, RNG_PURPOSE_WALK | scene->rng_side);
+        rng_t rng = rng_init(scene->seed_lo, scene->seed_hi, s.slice, p, RNG_PURPOSE_WALK | scene->rng_side);
         run_path(&c, wo, &rng, hist_b);
         if (count_only) rec_off[at] = out.n;
     }
@@ -491,6 +551,7 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
     if (count_only) return;
 #else
     (void)rec, (void)rec_off, (void)count_only;
+    const int lid = s.lid, lsz = s.lsz;
     __local acc_word acc_t[LSQT_ACC_WORDS * LSQT_ACC_TILE];
     /* The directions' sums of each of the group's LSQT_ITEMS work-items (declared as
      * vectors, for aligned blocks: VBLOCK). */
@@ -500,8 +561,8 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
     __local real *path_sum = (__local real *)(sum_v + lid * (LSQT_NWI_PAD / LSQT_VW));
     for (int k = 0; k < LSQT_NWI_PAD; k++) nee_priv[k] = 0, path_sum[k] = R(0.0);
     c.sum = path_sum, c.nee = nee_priv;
-    for (ulong p = begin + (ulong)lid; p < end; p += (ulong)lsz) {
-        rng_t rng = rng_init(scene->seed_lo, scene->seed_hi, slice, p, RNG_PURPOSE_WALK | scene->rng_side);
+    for (ulong p = s.begin + (ulong)lid; p < s.end; p += (ulong)lsz) {
+        rng_t rng = rng_init(scene->seed_lo, scene->seed_hi, s.slice, p, RNG_PURPOSE_WALK | scene->rng_side);
         run_path(&c, wo, &rng, hist_b);
         nee_flush(&c);
     }
@@ -515,7 +576,7 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
         barrier(CLK_LOCAL_MEM_FENCE);
         for (int k = lid; k < tn; k += lsz) {
             fix1 a = acc_read(acc_t + LSQT_ACC_WORDS * k);
-            __global ulong *p = nee_word(nee, v, batch, t0 + k);
+            __global ulong *p = nee_word(nee, v, s.batch, t0 + k);
             if (p) global_add128(p, a.lo, a.hi, flags);
         }
         barrier(CLK_LOCAL_MEM_FENCE);
@@ -524,10 +585,10 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
     for (int k = 0; k < WORK_N; k++)
         if (work[k]) local_add128(acc + LSQT_ACC_WORDS * (LSQT_T_LAYER_EVENTS + k), work[k], 0, flags);
     barrier(CLK_LOCAL_MEM_FENCE);
-    for (int k = lid; k < LSQT_T_COUNT; k += lsz) {
+    for (int k = s.lid; k < LSQT_T_COUNT; k += s.lsz) {
         fix1 a = acc_read(acc + LSQT_ACC_WORDS * k);
         for (uint b = 0; b < g; b++) {
-            const ulong base = (ulong)(v + b) * LSQT_BATCHES + (ulong)batch;
+            const ulong base = (ulong)(v + b) * LSQT_BATCHES + (ulong)s.batch;
             global_add128(scalars + 2 * (base * LSQT_T_COUNT + k), a.lo, a.hi, flags);
         }
     }
@@ -536,21 +597,21 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
 #ifdef LSQT_NEE_RECORDS
 /* A record's terms for the block of directions at b (dirs, st: the slice's directions
  * and tables). */
-LSQT_INLINE realv nee_rec_block(__global const nee_rec *r, __global const lsqt_dev_medium *media,
+LSQT_INLINE realv nee_rec_block(__global const lsqt_nee_rec *r, __global const lsqt_dev_medium *media,
                                   __global const lsqt_dev_layer *layers, __global const real *dirs,
                                   __global const real *st, int b)
 {
-    const real4 q0 = r->q[0], q1 = r->q[1], q2 = r->q[2], q3 = r->q[3];
-    const int kind = (int)q3.z, i = (int)q3.w;
-    if (kind == NEE_LAYER) return nee_layer_block(&layers[i], q0.xyz, q3.x, dirs, st + LSQT_LAYER_TAB(i), b);
+    const lsqt_nee_rec q = *r;
+    const int kind = (int)LSQT_NEE_KIND(q), i = (int)LSQT_NEE_INDEX(q);
+    const real w = LSQT_NEE_W(q);
+    if (kind == NEE_LAYER) return nee_layer_block(&layers[i], LSQT_NEE_V(q), w, dirs, st + LSQT_LAYER_TAB(i), b);
     if (kind == NEE_MEDIUM) {
-        phase_vtx pv = {q1.xyz};
-        return nee_medium_block(&media[i], &pv, q0.xyz, q3.x, q1.w, q2.x, dirs, st, st + LSQT_NWI_PAD, b);
+        phase_vtx pv = {LSQT_NEE_M(q)};
+        return nee_medium_block(&media[i], &pv, LSQT_NEE_V(q), w, LSQT_NEE_TAU_UP(q), LSQT_NEE_TAU_DOWN(q), dirs, st,
+                                st + LSQT_NWI_PAD, b);
     }
-    ms_vtx x;
-    x.v = q0.xyz, x.inv_area = q0.w, x.m = q1.xyz, x.lam_v = q1.w;
-    x.lg_v = q2.x, x.log_c = q2.y, x.log_cbar = q2.z, x.e = q2.w;
-    return ms_nee_block(&layers[i], kind, &x, q3.y, q3.x, dirs, st + LSQT_LAYER_TAB(i), b);
+    ms_vtx x = nee_ms_vtx(&q);
+    return ms_nee_block(&layers[i], kind, &x, LSQT_NEE_SIDE(q), w, dirs, st + LSQT_LAYER_TAB(i), b);
 }
 
 /* The GPU path's next-event estimates: one work-group per (chunk, simulated slice), as
@@ -563,32 +624,26 @@ LSQT_INLINE realv nee_rec_block(__global const nee_rec *r, __global const lsqt_d
 __kernel void lsqt_estimate(__constant lsqt_dev_scene *scene, __global const lsqt_dev_medium *media,
                             __global const lsqt_dev_layer *layers, __global const real *wi_dirs,
                             __global const real *tab, ulong path_begin, ulong path_end, ulong chunk_first,
-                            __global const real4 *rec_raw, __global const ulong *rec_off, __global ulong *nee,
+                            __global const lsqt_nee_rec *rec, __global const ulong *rec_off, __global ulong *nee,
                             volatile __global uint *flags)
 {
-    const int lid = (int)get_local_id(0), lsz = (int)get_local_size(0);
-    const uint slice = (uint)get_global_id(1);
-    const ulong chunk = chunk_first + get_group_id(0);
-    const ulong begin = max(chunk * LSQT_CHUNK, path_begin);
-    const ulong end = min((chunk + 1) * LSQT_CHUNK, path_end);
-    const int batch = (int)(chunk % LSQT_BATCHES);
-    const uint v = slice * (uint)max(scene->slice_group, 1);
-    __global const real *dirs = wi_dirs + 3 * LSQT_NWI_PAD * slice;
-    __global const real *st = tab + (size_t)slice * LSQT_SLICE_TAB(scene->n_layers);
-    __global const nee_rec *rec = (__global const nee_rec *)rec_raw;
-    const ulong first = (ulong)slice * (path_end - path_begin) - path_begin;
-    for (int b = lid * LSQT_VW; b < LSQT_NWI_PAD; b += lsz * LSQT_VW) {
+    const chunk_span s = chunk_of(chunk_first, path_begin, path_end);
+    const uint v = s.slice * (uint)max(scene->slice_group, 1);
+    __global const real *dirs = wi_dirs + 3 * LSQT_NWI_PAD * s.slice;
+    __global const real *st = tab + (size_t)s.slice * LSQT_SLICE_TAB(scene->n_layers);
+    const ulong first = (ulong)s.slice * (path_end - path_begin) - path_begin;
+    for (int b = s.lid * LSQT_VW; b < LSQT_NWI_PAD; b += s.lsz * LSQT_VW) {
         ulongv lo = (ulongv)(0);
-        for (ulong p = begin; p < end; p++) {
+        for (ulong p = s.begin; p < s.end; p++) {
             realv sum = (realv)(R(0.0));
             const ulong r1 = rec_off[first + p + 1];
             for (ulong r = rec_off[first + p]; r < r1; r++) sum += nee_rec_block(rec + r, media, layers, dirs, st, b);
-            lo = nee_flush_block(sum, lo, nee, v, batch, b, flags);
+            lo = nee_flush_block(sum, lo, nee, v, s.batch, b, flags);
         }
         ulong ls[LSQT_VW];
         vstorev(lo, 0, ls);
         for (int i = 0; i < LSQT_VW; i++) {
-            __global ulong *p = ls[i] ? nee_word(nee, v, batch, b + i) : 0;
+            __global ulong *p = ls[i] ? nee_word(nee, v, s.batch, b + i) : 0;
             if (p) global_add128(p, ls[i], 0, flags);
         }
     }

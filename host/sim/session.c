@@ -279,7 +279,7 @@ static int make_kernels(lsqt_session *s, const lsqt_state *st, int gpu, char *er
     cl_int e3 = CL_SUCCESS;
     s->exits = clCreateKernel(s->prog, "lsqt_exits", &e3);
     s->records = gpu;
-    s->rec_size = 16 * (st->use_double ? sizeof(double) : sizeof(float));
+    s->rec_size = st->use_double ? sizeof(lsqt_nee_rec_d) : sizeof(lsqt_nee_rec); /* device_layout.h */
     if (gpu && e3 == CL_SUCCESS) s->estimate = clCreateKernel(s->prog, "lsqt_estimate", &e3);
     if (e != CL_SUCCESS || e2 != CL_SUCCESS || e3 != CL_SUCCESS) {
         if (e == CL_SUCCESS) e = e2 != CL_SUCCESS ? e2 : e3;

@@ -1,8 +1,9 @@
-/* Layouts shared by the host and the OpenCL kernels: the device tables of one assembly
- * and the tally buffers. This file is compiled both as C11 and as OpenCL C 1.2 (it is
- * prepended to the kernel sources), so it holds only 4-byte scalar fields, or 8-byte ones
- * in whole pairs of 4-byte fields: the layout is then the same on every device and host
- * without packing pragmas. */
+/* Layouts shared by the host and the OpenCL kernels: the device tables of one assembly,
+ * the tally buffers and the GPU code path's next-event records. This file is compiled
+ * both as C11 and as OpenCL C 1.2 (it is prepended to the kernel sources), so it holds
+ * only 4-byte scalar fields, or 8-byte ones in whole pairs of 4-byte fields (the records:
+ * whole vectors of 4): the layout is then the same on every device and host without
+ * packing pragmas. */
 #ifndef LSQT_DEVICE_LAYOUT_H
 #define LSQT_DEVICE_LAYOUT_H
 
@@ -118,6 +119,47 @@ typedef struct lsqt_dev_scene {
                                  of light entering from below, so its paths are not those of
                                  the slices from above */
 } lsqt_dev_scene;
+
+/* The GPU code path's next-event record (kernels/walk.cl, -DLSQT_NEE_RECORDS): what a
+ * path's vertex leaves for lsqt_estimate, its state that does not depend on the incident
+ * direction, in LSQT_NEE_REC_VECS vectors of 4 reals (float, or double with --double),
+ * which the kernels move whole. Every kind keeps a microsurface vertex's fields (ms_vtx);
+ * a layer's record uses v only, a medium's also m (its phase_vtx's normal) and the
+ * optical depths above and below the vertex in lam_v and lg_v. The kernels write
+ * (kernels/nee_records.cl: nee_write) and read (walk.cl: nee_rec_block) records through
+ * the field macros below; the host sizes their buffer with lsqt_nee_rec. */
+#define LSQT_NEE_REC_VECS 4
+#define LSQT_NEE_RECORD(T4, SUFFIX)              \
+    typedef struct lsqt_nee_rec##SUFFIX {        \
+        T4 q[LSQT_NEE_REC_VECS];                 \
+    } lsqt_nee_rec##SUFFIX;
+#ifdef __OPENCL_C_VERSION__
+#ifdef LSQT_DOUBLE
+LSQT_NEE_RECORD(double4, )
+#else
+LSQT_NEE_RECORD(float4, )
+#endif
+/* Where each field is (r an lsqt_nee_rec): */
+#define LSQT_NEE_V(r) (r).q[0].xyz        /* wo: the direction light leaves the vertex by */
+#define LSQT_NEE_INV_AREA(r) (r).q[0].w   /* the rest as ms_vtx names them */
+#define LSQT_NEE_M(r) (r).q[1].xyz
+#define LSQT_NEE_LAM_V(r) (r).q[1].w
+#define LSQT_NEE_TAU_UP(r) (r).q[1].w     /* a medium's: the optical depth above, in lam_v */
+#define LSQT_NEE_LG_V(r) (r).q[2].x
+#define LSQT_NEE_TAU_DOWN(r) (r).q[2].x   /* a medium's: the optical depth below, in lg_v */
+#define LSQT_NEE_LOG_C(r) (r).q[2].y
+#define LSQT_NEE_LOG_CBAR(r) (r).q[2].z
+#define LSQT_NEE_E(r) (r).q[2].w
+#define LSQT_NEE_W(r) (r).q[3].x          /* the weight */
+#define LSQT_NEE_SIDE(r) (r).q[3].y       /* a microsurface's side (+-1), else 0 */
+#define LSQT_NEE_KIND(r) (r).q[3].z       /* NEE_LAYER ... (nee_records.cl) */
+#define LSQT_NEE_INDEX(r) (r).q[3].w      /* the layer's or the medium's index */
+#else
+typedef float lsqt_nee_float4[4];
+typedef double lsqt_nee_double4[4];
+LSQT_NEE_RECORD(lsqt_nee_float4, )
+LSQT_NEE_RECORD(lsqt_nee_double4, _d)
+#endif
 
 /* The RNG purpose bit of the paths from below (kernels/philox.cl: counter word 2 holds
  * purpose << 16). */
