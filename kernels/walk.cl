@@ -192,8 +192,10 @@ LSQT_INLINE ulongv nee_flush_block(realv v, ulongv lo, __global ulong *nee, uint
  * lsqt_estimate (below), which adds the same terms. nee_layer_terms: a layer's, towards
  * wo with weight w (tab: the layer's table); nee_medium_terms: a medium's, at optical
  * depths tu above and td below the vertex; nee_ms_sink: where a microsurface's walks add
- * theirs (ms_vertex_walks); nee_counting: 1 in the GPU path's counting walk, which
- * tallies nothing but the records. */
+ * theirs (ms_vertex_walks; filled through a pointer: a struct returned by value, once
+ * inlined, leaves an llvm.experimental.noalias.scope.decl that oclgrind cannot run);
+ * nee_counting: 1 in the GPU path's counting walk, which tallies nothing but the
+ * records. */
 #ifndef LSQT_NEE_RECORDS
 LSQT_INLINE void nee_layer_terms(const walk_ctx *c, __global const lsqt_dev_layer *l, int li, real3 wo, real w,
                                  __global const real *tab)
@@ -216,10 +218,9 @@ LSQT_INLINE void nee_medium_terms(const walk_ctx *c, __global const lsqt_dev_med
         VBLOCK(realv, sum, k) += nee_medium_block(m, pv, wo, w, tu, td, dirs, a_up, a_down, k);
 }
 
-LSQT_INLINE ms_sink nee_ms_sink(const walk_ctx *c, __global const real *tab, int li)
+LSQT_INLINE void nee_ms_sink(const walk_ctx *c, __global const real *tab, int li, ms_sink *k)
 {
-    ms_sink k = {c->sum, c->wi, tab, c->work + WORK_NEE, 0, li};
-    return k;
+    k->sum = c->sum, k->wi = c->wi, k->tab = tab, k->count = c->work + WORK_NEE, k->out = 0, k->layer = li;
 }
 
 LSQT_INLINE int nee_counting(const walk_ctx *c)
@@ -262,10 +263,9 @@ LSQT_INLINE void nee_medium_terms(const walk_ctx *c, __global const lsqt_dev_med
     nee_put(c, NEE_MEDIUM, mi, wo, w, pv->m, tu, td);
 }
 
-LSQT_INLINE ms_sink nee_ms_sink(const walk_ctx *c, __global const real *tab, int li)
+LSQT_INLINE void nee_ms_sink(const walk_ctx *c, __global const real *tab, int li, ms_sink *k)
 {
-    ms_sink k = {0, c->wi, tab, c->work + WORK_NEE, c->out, li};
-    return k;
+    k->sum = 0, k->wi = c->wi, k->tab = tab, k->count = c->work + WORK_NEE, k->out = c->out, k->layer = li;
 }
 
 LSQT_INLINE int nee_counting(const walk_ctx *c) { return c->count_only; }
@@ -292,7 +292,8 @@ LSQT_INLINE real layer_vertex(const walk_ctx *c, int li, real3 d, real w, rng_t 
     c->work[WORK_LAYER]++;
 #if defined(LSQT_HAS_BSDF_MS_LAMBERTIAN) || defined(LSQT_HAS_BSDF_MS_DIELECTRIC) || defined(LSQT_HAS_BSDF_MS_CONDUCTIVE)
     if (layer_is_micro(l)) {
-        ms_sink k = nee_ms_sink(c, tab, li);
+        ms_sink k;
+        nee_ms_sink(c, tab, li, &k);
         return ms_vertex_walks(l, d, rng, w, visible, &k, wi);
     }
 #endif
@@ -529,7 +530,7 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
     c.tab = tab + (size_t)s.slice * LSQT_SLICE_TAB(scene->n_layers);
     c.work = work, c.acc = acc, c.nee_g = nee, c.v = v, c.batch = s.batch, c.flags = flags;
     c.nee_on = 1, c.exit_dir = 0;
-    c.sum = 0, c.nee = 0, c.out = 0, c.count_only = 0;
+    c.sum = 0, c.nee = 0;
     real3 wo = make_real3(wo_dirs[4 * v], wo_dirs[4 * v + 1], wo_dirs[4 * v + 2]);
     __global ulong *hist_b = hist + 2 * ((ulong)v * LSQT_BATCHES + (ulong)s.batch) * LSQT_HIST_BINS;
     /* The chunk's paths, one body per code path. The CPU path's local memory can only be
@@ -560,7 +561,7 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
     __local ulong *nee_priv = (__local ulong *)(nee_v + lid * (LSQT_NWI_PAD / LSQT_VW));
     __local real *path_sum = (__local real *)(sum_v + lid * (LSQT_NWI_PAD / LSQT_VW));
     for (int k = 0; k < LSQT_NWI_PAD; k++) nee_priv[k] = 0, path_sum[k] = R(0.0);
-    c.sum = path_sum, c.nee = nee_priv;
+    c.sum = path_sum, c.nee = nee_priv, c.out = 0, c.count_only = 0;
     for (ulong p = s.begin + (ulong)lid; p < s.end; p += (ulong)lsz) {
         rng_t rng = rng_init(scene->seed_lo, scene->seed_hi, s.slice, p, RNG_PURPOSE_WALK | scene->rng_side);
         run_path(&c, wo, &rng, hist_b);
