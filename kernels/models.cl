@@ -4,22 +4,27 @@
  * 0 for the rest, whose branches are dead code, so a scene pays for nothing it does not
  * contain (on a GPU, not even registers). */
 
-/* LSQT_ON(M): 1 when LSQT_HAS_M is defined as 1, else 0 (usable inside a macro, where
- * #ifdef is not). */
-#define LSQT_ON_ARG_1_ 0,
-#define LSQT_ON_SECOND_(a, b, ...) b
-#define LSQT_ON_3_(junk) LSQT_ON_SECOND_(junk 1, 0, ~)
-#define LSQT_ON_2_(v) LSQT_ON_3_(LSQT_ON_ARG_##v##_)
-#define LSQT_ON_1_(v) LSQT_ON_2_(v)
-#define LSQT_ON(M) LSQT_ON_1_(LSQT_HAS_##M)
+/* LSQT_ON(M): 1 when LSQT_HAS_M is defined as 1, else 0, usable inside a macro (where
+ * #ifdef is not) and without variadic macros (OpenCL C 1.2 has none: NVIDIA's compiler
+ * refuses them). LSQT_HAS_M defined as 1 pastes to LSQT_ON_1, which is 1; undefined, it
+ * pastes to the enum constant LSQT_ON_LSQT_HAS_M, which the list declares 0 for every
+ * model. Either way an integer constant: the branches of models not built are dead code. */
+#define LSQT_ON_1 1
+#define LSQT_ON_CAT_(a, b) a##b
+#define LSQT_ON_CAT(a, b) LSQT_ON_CAT_(a, b)
+#define LSQT_ON(M) LSQT_ON_CAT(LSQT_ON_, LSQT_HAS_##M)
+#define LSQT_ON_PHASE_(ID, num, name, alias, p, sampler, mirror) LSQT_ON_LSQT_HAS_PHASE_##ID = 0,
+#define LSQT_ON_BSDF_(ID, num, name, alias, p, sampler, mirror, transmits) LSQT_ON_LSQT_HAS_BSDF_##ID = 0,
+enum { LSQT_PHASES(LSQT_ON_PHASE_) LSQT_BSDFS(LSQT_ON_BSDF_) LSQT_ON_NONE_ = 0 };
 
-/* The list's SAMPLER column, as text kept or dropped. */
-#define LSQT_IF_CLOSED_CLOSED(...) __VA_ARGS__
-#define LSQT_IF_CLOSED_WALK(...)
-#define LSQT_IF_WALK_CLOSED(...)
-#define LSQT_IF_WALK_WALK(...) __VA_ARGS__
-#define LSQT_IF_VERTEX_EXACT(...)
-#define LSQT_IF_VERTEX_VERTEX(...) __VA_ARGS__
+/* The list's SAMPLER column, as text kept or dropped (one argument: the statement's commas
+ * are all inside parentheses). */
+#define LSQT_IF_CLOSED_CLOSED(s) s
+#define LSQT_IF_CLOSED_WALK(s)
+#define LSQT_IF_WALK_CLOSED(s)
+#define LSQT_IF_WALK_WALK(s) s
+#define LSQT_IF_VERTEX_EXACT(s)
+#define LSQT_IF_VERTEX_VERTEX(s) s
 
 /* Evaluation takes LSQT_VW directions at once (next-event estimation's inner loop); the
  * single-direction form used by the test harness is lane 0 of the same code. For the
@@ -28,7 +33,7 @@
  * loop runs itself. */
 LSQT_INLINE realv bsdf_evalv(__global const lsqt_dev_layer *l, real3 wo, dirv wi)
 {
-#define X(ID, num, name, alias, p, ...) \
+#define X(ID, num, name, alias, p, sampler, mirror, transmits) \
     if (LSQT_ON(BSDF_##ID) && l->kind == LSQT_BSDF_##ID) return p##_evalv(l, wo, wi);
     LSQT_BSDFS(X)
 #undef X
@@ -40,7 +45,7 @@ LSQT_INLINE realv bsdf_evalv(__global const lsqt_dev_layer *l, real3 wo, dirv wi
  * branches' registers would count). */
 LSQT_INLINE realv bsdf_evalv_closed(__global const lsqt_dev_layer *l, real3 wo, dirv wi)
 {
-#define X(ID, num, name, alias, p, sampler, ...) \
+#define X(ID, num, name, alias, p, sampler, mirror, transmits) \
     LSQT_IF_CLOSED_##sampler(if (LSQT_ON(BSDF_##ID) && l->kind == LSQT_BSDF_##ID) return p##_evalv(l, wo, wi);)
     LSQT_BSDFS(X)
 #undef X
@@ -56,12 +61,12 @@ LSQT_INLINE real bsdf_eval(__global const lsqt_dev_layer *l, real3 wo, real3 wi)
  * microsurfaces sample by their walk; the others take three draws (u0 picks a lobe). */
 LSQT_INLINE real bsdf_sample(__global const lsqt_dev_layer *l, real3 wo, rng_t *rng, real3 *wi)
 {
-#define X(ID, num, name, alias, p, sampler, ...) \
+#define X(ID, num, name, alias, p, sampler, mirror, transmits) \
     LSQT_IF_WALK_##sampler(if (LSQT_ON(BSDF_##ID) && l->kind == LSQT_BSDF_##ID) return ms_sample(l, wo, rng, wi);)
     LSQT_BSDFS(X)
 #undef X
     real u0 = rng_uniform(rng), u1 = rng_uniform(rng), u2 = rng_uniform(rng);
-#define X(ID, num, name, alias, p, sampler, ...)                                     \
+#define X(ID, num, name, alias, p, sampler, mirror, transmits)                                     \
     LSQT_IF_CLOSED_##sampler(if (LSQT_ON(BSDF_##ID) && l->kind == LSQT_BSDF_##ID) \
                                  return p##_sample(l, wo, u0, u1, u2, wi);)
     LSQT_BSDFS(X)
@@ -71,7 +76,7 @@ LSQT_INLINE real bsdf_sample(__global const lsqt_dev_layer *l, real3 wo, rng_t *
 
 LSQT_INLINE real bsdf_pdf(__global const lsqt_dev_layer *l, real3 wo, real3 wi)
 {
-#define X(ID, num, name, alias, p, ...) \
+#define X(ID, num, name, alias, p, sampler, mirror, transmits) \
     if (LSQT_ON(BSDF_##ID) && l->kind == LSQT_BSDF_##ID) return p##_pdf(l, wo, wi);
     LSQT_BSDFS(X)
 #undef X
@@ -85,7 +90,7 @@ LSQT_INLINE real bsdf_pdf(__global const lsqt_dev_layer *l, real3 wo, real3 wi)
 LSQT_INLINE phase_vtx phase_vertex(__global const lsqt_dev_medium *m, real3 wo, rng_t *rng)
 {
     phase_vtx v = {make_real3(R(0.0), R(0.0), R(1.0))};
-#define X(ID, num, name, alias, p, sampler, ...) \
+#define X(ID, num, name, alias, p, sampler, mirror) \
     LSQT_IF_VERTEX_##sampler(if (LSQT_ON(PHASE_##ID) && m->phase_kind == LSQT_PHASE_##ID) p##_phase_vertex(m, wo, rng, &v);)
     LSQT_PHASES(X)
 #undef X
@@ -95,7 +100,7 @@ LSQT_INLINE phase_vtx phase_vertex(__global const lsqt_dev_medium *m, real3 wo, 
 
 LSQT_INLINE realv phase_evalv(__global const lsqt_dev_medium *m, const phase_vtx *v, real3 wo, dirv wi)
 {
-#define X(ID, num, name, alias, p, ...) \
+#define X(ID, num, name, alias, p, sampler, mirror) \
     if (LSQT_ON(PHASE_##ID) && m->phase_kind == LSQT_PHASE_##ID) return p##_phase_evalv(m, v, wo, wi);
     LSQT_PHASES(X)
 #undef X
@@ -112,7 +117,7 @@ LSQT_INLINE real phase_eval(__global const lsqt_dev_medium *m, const phase_vtx *
  * samplers; the VERTEX ones say (0 for diffuse SGGX, whose density has no closed form). */
 LSQT_INLINE real phase_pdf(__global const lsqt_dev_medium *m, real3 wo, real3 wi)
 {
-#define X(ID, num, name, alias, p, sampler, ...) \
+#define X(ID, num, name, alias, p, sampler, mirror) \
     LSQT_IF_VERTEX_##sampler(if (LSQT_ON(PHASE_##ID) && m->phase_kind == LSQT_PHASE_##ID) return p##_phase_pdf(m, wo, wi);)
     LSQT_PHASES(X)
 #undef X
@@ -127,7 +132,7 @@ LSQT_INLINE real phase_sample(__global const lsqt_dev_medium *m, const phase_vtx
      * it is HG sample for sample: test_phases); with the free flight's, a scattering
      * event takes one Philox block of four draws less a quarter. */
     real u1 = rng_uniform(rng), u2 = rng_uniform(rng);
-#define X(ID, num, name, alias, p, ...) \
+#define X(ID, num, name, alias, p, sampler, mirror) \
     if (LSQT_ON(PHASE_##ID) && m->phase_kind == LSQT_PHASE_##ID) return p##_phase_sample(m, v, wo, u1, u2, rng, wi);
     LSQT_PHASES(X)
 #undef X

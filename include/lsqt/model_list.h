@@ -38,12 +38,16 @@
     X(MS_CONDUCTIVE, 4, "MicrosurfaceConductiveBrdf", "MicrosurfaceConductive", conductor, WALK, 0, NEVER) \
     X(OREN_NAYAR, 5, "OrenNayarDiffuseBrdf", "OrenNayarDiffuse", oren_nayar, CLOSED, 0, NEVER)
 
-#define LSQT_X_PHASE_KIND_(ID, NUM, ...) LSQT_PHASE_##ID = NUM,
-#define LSQT_X_BSDF_KIND_(ID, NUM, ...) LSQT_BSDF_##ID = NUM,
+#define LSQT_X_PHASE_KIND_(ID, NUM, NAME, ALIAS, P, SAMPLER, MIRROR) LSQT_PHASE_##ID = NUM,
+#define LSQT_X_BSDF_KIND_(ID, NUM, NAME, ALIAS, P, SAMPLER, MIRROR, TRANSMITS) LSQT_BSDF_##ID = NUM,
 enum lsqt_phase_kind { LSQT_PHASE_NONE = 0, LSQT_PHASES(LSQT_X_PHASE_KIND_) };
 enum lsqt_bsdf_kind { LSQT_BSDF_NULL = 0, LSQT_BSDFS(LSQT_X_BSDF_KIND_) };
 #undef LSQT_X_PHASE_KIND_
 #undef LSQT_X_BSDF_KIND_
+
+/* Keys, packing and slots are the host's (the kernels read the packed tables); hidden from
+ * OpenCL C, which has no variadic macros (LSQT_WORDS). */
+#if !defined(__OPENCL_VERSION__) && !defined(__OPENCL_C_VERSION__)
 
 /* ---- Keys: K(ID, FIELD, "name", TYPE, default, lo, lo_open, hi, hi_open, words) --------------
  * TYPE is NUM (a finite double), INT or CHOICE (one of the NULL-terminated words, stored as
@@ -130,13 +134,17 @@ enum lsqt_bsdf_kind { LSQT_BSDF_NULL = 0, LSQT_BSDFS(LSQT_X_BSDF_KIND_) };
 
 /* The slots of each model's keys in v[]: LSQT_<ID>_<key>, and LSQT_<ID>_N_KEYS (host
  * only: the kernels read the packed tables). */
-#ifndef __OPENCL_VERSION__
-#define LSQT_X_KEY_SLOT_(ID, F, ...) LSQT_##ID##_##F,
-#define LSQT_X_SLOTS_(ID, ...) enum { LSQT_KEYS_##ID(LSQT_X_KEY_SLOT_, ID) LSQT_##ID##_N_KEYS };
-LSQT_PHASES(LSQT_X_SLOTS_)
-LSQT_BSDFS(LSQT_X_SLOTS_)
+#define LSQT_X_KEY_SLOT_(ID, F, NAME, TYPE, DEF, LO, LO_OPEN, HI, HI_OPEN, WORDS) LSQT_##ID##_##F,
+#define LSQT_X_SLOTS_(ID) enum { LSQT_KEYS_##ID(LSQT_X_KEY_SLOT_, ID) LSQT_##ID##_N_KEYS };
+#define LSQT_X_PHASE_SLOTS_(ID, NUM, NAME, ALIAS, P, SAMPLER, MIRROR) LSQT_X_SLOTS_(ID)
+#define LSQT_X_BSDF_SLOTS_(ID, NUM, NAME, ALIAS, P, SAMPLER, MIRROR, TRANSMITS) LSQT_X_SLOTS_(ID)
+LSQT_PHASES(LSQT_X_PHASE_SLOTS_)
+LSQT_BSDFS(LSQT_X_BSDF_SLOTS_)
+#undef LSQT_X_PHASE_SLOTS_
+#undef LSQT_X_BSDF_SLOTS_
 #undef LSQT_X_SLOTS_
 #undef LSQT_X_KEY_SLOT_
-#endif
+
+#endif /* not OpenCL C */
 
 #endif
