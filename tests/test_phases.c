@@ -492,6 +492,23 @@ static double sggx_spec_ref(const model_t *m, const double o[3], const double i[
 
 static double sphere_phase(double a) { return 2 / (3 * PI * PI) * (sin(a) + (PI - a) * cos(a)); }
 
+/* Two models that must be the same, bit for bit: adds to *neq the values and densities at
+ * the n directions f that differ, to *nsame the sample coordinates (20000 samples, one seed
+ * for both) that differ. */
+static void count_differences(const model_t *a, const model_t *b, const float *f, int n, cl_uint seed, int *neq,
+                              int *nsame)
+{
+    static float fp[2 * NLIM], fq[2 * NLIM];
+    k_eval(a, a->wo, f, (size_t)n, fp);
+    k_eval(b, b->wo, f, (size_t)n, fq);
+    for (int k = 0; k < 2 * n; k++) *neq += fp[k] != fq[k];
+    enum { NSAMP = 20000 };
+    static float sa[4 * NSAMP], sb[4 * NSAMP];
+    k_sample(a, seed, NSAMP, sa);
+    k_sample(b, seed, NSAMP, sb);
+    for (int k = 0; k < 4 * NSAMP; k++) *nsame += sa[k] != sb[k];
+}
+
 static void limits(void)
 {
     static float f[4 * NLIM], fp[2 * NLIM], fq[2 * NLIM];
@@ -505,14 +522,7 @@ static void limits(void)
     for (int i = 0; i < 5; i++) {
         model_t a = phase_model("HG", LSQT_PHASE_HG, g0s[i], 0, 0, wos[i % 3]);
         model_t b = phase_model("HG2 b=0", LSQT_PHASE_HG2, g0s[i], g1s[i], 0, wos[i % 3]);
-        k_eval(&a, a.wo, f, NLIM, fp);
-        k_eval(&b, b.wo, f, NLIM, fq);
-        for (int k = 0; k < 2 * NLIM; k++) neq += fp[k] != fq[k];
-        enum { NSAMP = 20000 };
-        static float sa[4 * NSAMP], sb[4 * NSAMP];
-        k_sample(&a, 99u + (cl_uint)i, NSAMP, sa);
-        k_sample(&b, 99u + (cl_uint)i, NSAMP, sb);
-        for (int k = 0; k < 4 * NSAMP; k++) nsame += sa[k] != sb[k];
+        count_differences(&a, &b, f, NLIM, 99u + (cl_uint)i, &neq, &nsame);
     }
     CHECK(neq == 0, "HG2 with b = 0: %d values differ from HG(g0)", neq);
     CHECK(nsame == 0, "HG2 with b = 0: %d sample coordinates differ from HG(g0)'s", nsame);
@@ -1077,7 +1087,7 @@ static void draine(void)
         gof(&gc, 100 + i); /* seeds of their own, whichever sections run */
     }
 
-    static float f[4 * NLIM], fp[2 * NLIM], fq[2 * NLIM];
+    static float f[4 * NLIM], fp[2 * NLIM];
     static double d[NLIM][3];
     rand_dirs(11, NLIM, f, d);
     double worst = 0;
@@ -1098,14 +1108,7 @@ static void draine(void)
     for (int i = 0; i < 4; i++) {
         const double g = i == 3 ? -0.999 : gs[i] + 0.1;
         model_t a = phase_model("HG", LSQT_PHASE_HG, g, 0, 0, wos[i]), b = draine_model(g, 0, wos[i]);
-        k_eval(&a, a.wo, f, NLIM, fp);
-        k_eval(&b, b.wo, f, NLIM, fq);
-        for (int k = 0; k < 2 * NLIM; k++) neq += fp[k] != fq[k];
-        enum { NSAMP = 20000 };
-        static float sa[4 * NSAMP], sb[4 * NSAMP];
-        k_sample(&a, 199u + (cl_uint)i, NSAMP, sa);
-        k_sample(&b, 199u + (cl_uint)i, NSAMP, sb);
-        for (int k = 0; k < 4 * NSAMP; k++) nsame += sa[k] != sb[k];
+        count_differences(&a, &b, f, NLIM, 199u + (cl_uint)i, &neq, &nsame);
     }
     CHECK(neq == 0, "Draine with alpha = 0: %d values differ from HG(g)", neq);
     CHECK(nsame == 0, "Draine with alpha = 0: %d sample coordinates differ from HG(g)'s", nsame);
