@@ -44,10 +44,28 @@ LSQT_INLINE real conductor_scatter(__global const lsqt_dev_layer *l, const ms_vt
     return vm > R(0.0) ? fresnel_conductorv(l->p[1], l->p[2], (realv)(vm)).s0 : R(0.0);
 }
 
-/* Single scattering: the phase function times the chance the reflected light escapes,
- * averaged over the first hit's height: (1 + Lambda(v)) / (1 + Lambda(v) + Lambda(u)). */
-LSQT_INLINE realv conductor_singlev(__global const lsqt_dev_layer *l, const ms_vtx *x, dirv u, realv lam_u)
+/* The walk's step (microsurface.cl): no draw, never crosses. */
+LSQT_INLINE real conductor_walk_scatter(__global const lsqt_dev_layer *l, const ms_vtx *x, rng_t *rng, real3 *r,
+                                        int *cross)
 {
+    (void)rng;
+    *cross = 0;
+    return conductor_scatter(l, x, r);
+}
+
+/* The facets do not refract. */
+LSQT_INLINE real conductor_index(__global const lsqt_dev_layer *l, real side)
+{
+    (void)l, (void)side;
+    return R(1.0);
+}
+
+/* Single scattering (the first record of the walk's estimate): the phase function times
+ * the chance the reflected light escapes, averaged over the first hit's height:
+ * (1 + Lambda(v)) / (1 + Lambda(v) + Lambda(u)). */
+LSQT_INLINE realv conductor_firstv(__global const lsqt_dev_layer *l, const ms_vtx *x, dirv u, realv lam_u, realv lg_u)
+{
+    (void)lg_u;
     return conductor_phasev(l, x, u) * ((R(1.0) + x->lam_v) / (R(1.0) + x->lam_v + lam_u));
 }
 
@@ -55,7 +73,7 @@ LSQT_INLINE realv conductor_evalv(__global const lsqt_dev_layer *l, real3 wo, di
 {
     if (!(wo.z > R(0.0))) return (realv)(R(0.0));
     ms_vtx x = ms_vertex_single(l->p[0], wo, R(1.0));
-    return conductor_singlev(l, &x, wi, ggx_lambdav(l->p[0], wi.z));
+    return conductor_firstv(l, &x, wi, ggx_lambdav(l->p[0], wi.z), (realv)(R(0.0)));
 }
 
 /* Density of conductor_sample's directions (reflections of visible normals, also those
@@ -74,8 +92,9 @@ LSQT_INLINE real conductor_pdf(__global const lsqt_dev_layer *l, real3 wo, real3
 
 /* Single scattering: reflects wo about a visible normal; the weight f/pdf is
  * F (1 + Lo) / (1 + Lo + Li), 0 when the reflection points below the surface. */
-LSQT_INLINE real conductor_sample(__global const lsqt_dev_layer *l, real3 wo, real u1, real u2, real3 *wi)
+LSQT_INLINE real conductor_sample(__global const lsqt_dev_layer *l, real3 wo, real u0, real u1, real u2, real3 *wi)
 {
+    (void)u0;
     const real alpha = l->p[0];
     if (!(wo.z > R(0.0))) return R(0.0);
     ms_vtx x = ms_vertex(alpha, wo, R(1.0), R(1.0), u1, u2);

@@ -65,7 +65,16 @@ LSQT_INLINE real dielectric_scatter(__global const lsqt_dev_layer *l, const ms_v
     return tot;
 }
 
-LSQT_INLINE realv dielectric_singlev(__global const lsqt_dev_layer *l, const ms_vtx *x, dirv u, realv lam_u, realv lg_u)
+/* The walk's step (microsurface.cl): one draw picks reflection or refraction. */
+LSQT_INLINE real dielectric_walk_scatter(__global const lsqt_dev_layer *l, const ms_vtx *x, rng_t *rng, real3 *r,
+                                         int *cross)
+{
+    return dielectric_scatter(l, x, rng_uniform(rng), r, cross);
+}
+
+/* Single scattering (the first record of the walk's estimate): the phase function times
+ * the escape averaged over the first hit's height. */
+LSQT_INLINE realv dielectric_firstv(__global const lsqt_dev_layer *l, const ms_vtx *x, dirv u, realv lam_u, realv lg_u)
 {
     return dielectric_phasev(l, x, u) * ms_single_escapev(x, u.z > R(0.0), lam_u, lg_u);
 }
@@ -83,7 +92,7 @@ LSQT_INLINE realv dielectric_evalv(__global const lsqt_dev_layer *l, real3 wo, d
     ms_vtx x = ms_vertex_single(alpha, make_real3(wo.x, wo.y, s * wo.z), dielectric_index(l, s));
     wi.z *= s;
     realv lam = ggx_lambdav(alpha, wi.z);
-    return dielectric_singlev(l, &x, wi, lam, lgamma(R(1.0) + lam));
+    return dielectric_firstv(l, &x, wi, lam, lgamma(R(1.0) + lam));
 }
 
 /* Density of dielectric_sample's directions: both branches (a reflection may point into

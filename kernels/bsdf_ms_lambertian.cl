@@ -27,6 +27,30 @@ LSQT_INLINE real mslambert_scatter(__global const lsqt_dev_layer *l, const ms_vt
     return tot;
 }
 
+/* The walk's step (microsurface.cl): three draws (the branch, then the cosine lobe). */
+LSQT_INLINE real mslambert_walk_scatter(__global const lsqt_dev_layer *l, const ms_vtx *x, rng_t *rng, real3 *r,
+                                        int *cross)
+{
+    real u0 = rng_uniform(rng), u1 = rng_uniform(rng);
+    return mslambert_scatter(l, x, u0, u1, rng_uniform(rng), r, cross);
+}
+
+/* The facets do not refract (a transmitted ray keeps its index). */
+LSQT_INLINE real mslambert_index(__global const lsqt_dev_layer *l, real side)
+{
+    (void)l, (void)side;
+    return R(1.0);
+}
+
+/* The first record of the walk's estimate: the walk's first vertex, whose height is
+ * independent of its facet, so the chance of escaping is replaced by its mean over the
+ * first hit's height, ms_single_escapev (the same expectation, less noise, most at
+ * grazing u). */
+LSQT_INLINE realv mslambert_firstv(__global const lsqt_dev_layer *l, const ms_vtx *x, dirv u, realv lam_u, realv lg_u)
+{
+    return mslambert_phasev(l, x, u) * ms_single_escapev(x, u.z > R(0.0), lam_u, lg_u);
+}
+
 /* No closed-form single scattering: next-event estimation and the density come from the
  * walk alone (models.cl evaluates these as 0, as for every order of the walk's own). */
 LSQT_INLINE realv mslambert_evalv(__global const lsqt_dev_layer *l, real3 wo, dirv wi)

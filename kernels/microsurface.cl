@@ -59,19 +59,17 @@ LSQT_INLINE dirv load_dirv(__global const real *wi, int k)
         VBLOCK(realv, k->sum, b) += v;                                           \
     }
 
-/* Each kind's terms, one text for both code paths: a walk vertex's is the facet's phase
- * function times G1 = C1^Lambda(u) to this side, (1 - C1)^Lambda(u) to the other; the
- * analytic single scattering's; a Lambertian walk's first vertex's, whose height is
- * independent of its facet, so the chance of escaping is replaced by its mean over the
- * first hit's height, ms_single_escapev (the same expectation, less noise, most at
- * grazing u). */
+/* A walk model's terms (its file's functions, model_list.h), one text for both code
+ * paths: a walk vertex's is the facet's phase function times G1 = C1^Lambda(u) to this
+ * side, (1 - C1)^Lambda(u) to the other; the first record's is the model's own (its
+ * closed-form single scattering, or its walk's first vertex). */
 #define MS_G1 exp(lam * select((realv)(x->log_cbar), (realv)(x->log_c), u.z > R(0.0)))
-#define MS_VERTEX_CONDUCTIVE (conductor_phasev(l, x, u) * MS_G1)
-#define MS_VERTEX_DIELECTRIC (dielectric_phasev(l, x, u) * MS_G1)
-#define MS_VERTEX_LAMBERTIAN (mslambert_phasev(l, x, u) * MS_G1)
-#define MS_SINGLE_CONDUCTIVE (conductor_singlev(l, x, u, lam))
-#define MS_SINGLE_DIELECTRIC (dielectric_singlev(l, x, u, lam, lg))
-#define MS_FIRST_LAMBERTIAN (mslambert_phasev(l, x, u) * ms_single_escapev(x, u.z > R(0.0), lam, lg))
+#define MS_VERTEX_TERMS(p) (p##_phasev(l, x, u) * MS_G1)
+#define MS_FIRST_TERMS(p) (p##_firstv(l, x, u, lam, lg))
+
+/* STMT(p) for the walk model of layer l (the others' branches are dead code). */
+#define MS_DISPATCH_(ID, num, name, alias, p, sampler, mirror, transmits) \
+    LSQT_IF_WALK_##sampler(if (LSQT_ON(BSDF_##ID) && l->kind == LSQT_BSDF_##ID) MS_STMT(p))
 
 #ifdef LSQT_NEE_RECORDS
 /* The GPU path: the vertex becomes a record (and counts as evaluated). */
@@ -81,6 +79,18 @@ LSQT_INLINE void ms_record(const ms_sink *k, int kind, const ms_vtx *x, real sid
     nee_write(k->out, kind, k->layer, w, side, x);
 }
 
+LSQT_INLINE void ms_nee_vertex(__global const lsqt_dev_layer *l, const ms_vtx *x, real side, real w, const ms_sink *k)
+{
+    (void)l;
+    ms_record(k, NEE_MS_VERTEX, x, side, w);
+}
+
+LSQT_INLINE void ms_nee_first(__global const lsqt_dev_layer *l, const ms_vtx *x, real side, real w, const ms_sink *k)
+{
+    (void)l;
+    ms_record(k, NEE_MS_FIRST, x, side, w);
+}
+
 /* A record's terms for the block of directions at b (the layer's table tab). */
 LSQT_INLINE realv ms_nee_block(__global const lsqt_dev_layer *l, int kind, const ms_vtx *x, real side, real w,
                                  __global const real *wi, __global const real *tab, int b)
@@ -88,110 +98,51 @@ LSQT_INLINE realv ms_nee_block(__global const lsqt_dev_layer *l, int kind, const
     realv t = vloadv(0, tab + b), v = (realv)(R(0.0));
     if (!anyv(t > R(0.0))) return v;
     if (kind == NEE_MS_VERTEX) {
-        switch (l->kind) {
-#ifdef LSQT_HAS_BSDF_MS_CONDUCTIVE
-        case LSQT_BSDF_MS_CONDUCTIVE: MS_NEE_BLOCK(MS_VERTEX_CONDUCTIVE) break;
-#endif
-#ifdef LSQT_HAS_BSDF_MS_DIELECTRIC
-        case LSQT_BSDF_MS_DIELECTRIC: MS_NEE_BLOCK(MS_VERTEX_DIELECTRIC) break;
-#endif
-#ifdef LSQT_HAS_BSDF_MS_LAMBERTIAN
-        case LSQT_BSDF_MS_LAMBERTIAN: MS_NEE_BLOCK(MS_VERTEX_LAMBERTIAN) break;
-#endif
-        default: break;
-        }
-    } else if (kind == NEE_MS_SINGLE) {
-        switch (l->kind) {
-#ifdef LSQT_HAS_BSDF_MS_CONDUCTIVE
-        case LSQT_BSDF_MS_CONDUCTIVE: MS_NEE_BLOCK(MS_SINGLE_CONDUCTIVE) break;
-#endif
-#ifdef LSQT_HAS_BSDF_MS_DIELECTRIC
-        case LSQT_BSDF_MS_DIELECTRIC: MS_NEE_BLOCK(MS_SINGLE_DIELECTRIC) break;
-#endif
-        default: break;
-        }
+#define MS_STMT(p) MS_NEE_BLOCK(MS_VERTEX_TERMS(p))
+        LSQT_BSDFS(MS_DISPATCH_)
+#undef MS_STMT
     } else {
-#ifdef LSQT_HAS_BSDF_MS_LAMBERTIAN
-        MS_NEE_BLOCK(MS_FIRST_LAMBERTIAN)
-#endif
+#define MS_STMT(p) MS_NEE_BLOCK(MS_FIRST_TERMS(p))
+        LSQT_BSDFS(MS_DISPATCH_)
+#undef MS_STMT
     }
     return v;
 }
-#endif
-
+#else
+/* The CPU path: the vertex's terms go straight into the per-direction sums. */
 LSQT_INLINE void ms_nee_vertex(__global const lsqt_dev_layer *l, const ms_vtx *x, real side, real w, const ms_sink *k)
 {
-#ifdef LSQT_NEE_RECORDS
-    (void)l;
-    ms_record(k, NEE_MS_VERTEX, x, side, w);
-#else
-    switch (l->kind) {
-#ifdef LSQT_HAS_BSDF_MS_CONDUCTIVE
-    case LSQT_BSDF_MS_CONDUCTIVE: MS_NEE_LOOP(MS_VERTEX_CONDUCTIVE) break;
-#endif
-#ifdef LSQT_HAS_BSDF_MS_DIELECTRIC
-    case LSQT_BSDF_MS_DIELECTRIC: MS_NEE_LOOP(MS_VERTEX_DIELECTRIC) break;
-#endif
-#ifdef LSQT_HAS_BSDF_MS_LAMBERTIAN
-    case LSQT_BSDF_MS_LAMBERTIAN: MS_NEE_LOOP(MS_VERTEX_LAMBERTIAN) break;
-#endif
-    default: break;
-    }
-#endif
-}
-
-LSQT_INLINE void ms_nee_single(__global const lsqt_dev_layer *l, const ms_vtx *x, real side, real w, const ms_sink *k)
-{
-#ifdef LSQT_NEE_RECORDS
-    (void)l;
-    ms_record(k, NEE_MS_SINGLE, x, side, w);
-#else
-    switch (l->kind) {
-#ifdef LSQT_HAS_BSDF_MS_CONDUCTIVE
-    case LSQT_BSDF_MS_CONDUCTIVE: MS_NEE_LOOP(MS_SINGLE_CONDUCTIVE) break;
-#endif
-#ifdef LSQT_HAS_BSDF_MS_DIELECTRIC
-    case LSQT_BSDF_MS_DIELECTRIC: MS_NEE_LOOP(MS_SINGLE_DIELECTRIC) break;
-#endif
-    default: break;
-    }
-#endif
+#define MS_STMT(p) { MS_NEE_LOOP(MS_VERTEX_TERMS(p)) }
+    LSQT_BSDFS(MS_DISPATCH_)
+#undef MS_STMT
 }
 
 LSQT_INLINE void ms_nee_first(__global const lsqt_dev_layer *l, const ms_vtx *x, real side, real w, const ms_sink *k)
 {
-#ifdef LSQT_NEE_RECORDS
-    (void)l;
-    ms_record(k, NEE_MS_FIRST, x, side, w);
-#elif defined(LSQT_HAS_BSDF_MS_LAMBERTIAN)
-    MS_NEE_LOOP(MS_FIRST_LAMBERTIAN)
-#endif
+#define MS_STMT(p) { MS_NEE_LOOP(MS_FIRST_TERMS(p)) }
+    LSQT_BSDFS(MS_DISPATCH_)
+#undef MS_STMT
 }
+#endif
 
 /* Relative index across the facets from side s (only the dielectric refracts). */
 LSQT_INLINE real ms_index(__global const lsqt_dev_layer *l, real s)
 {
-    return l->kind == LSQT_BSDF_MS_DIELECTRIC ? (s > R(0.0) ? l->p[1] : R(1.0) / l->p[1]) : R(1.0);
+#define MS_STMT(p) return p##_index(l, s);
+    LSQT_BSDFS(MS_DISPATCH_)
+#undef MS_STMT
+    return R(1.0);
 }
 
+/* The walk's step at vertex x: the facet's albedo, the new direction *r and whether it
+ * crossed to the other side (*cross). */
 LSQT_INLINE real ms_scatter(__global const lsqt_dev_layer *l, const ms_vtx *x, rng_t *rng, real3 *r, int *cross)
 {
     *cross = 0;
-    switch (l->kind) {
-#ifdef LSQT_HAS_BSDF_MS_CONDUCTIVE
-    case LSQT_BSDF_MS_CONDUCTIVE: return conductor_scatter(l, x, r);
-#endif
-#ifdef LSQT_HAS_BSDF_MS_DIELECTRIC
-    case LSQT_BSDF_MS_DIELECTRIC: return dielectric_scatter(l, x, rng_uniform(rng), r, cross);
-#endif
-#ifdef LSQT_HAS_BSDF_MS_LAMBERTIAN
-    case LSQT_BSDF_MS_LAMBERTIAN: {
-        real u0 = rng_uniform(rng), u1 = rng_uniform(rng);
-        return mslambert_scatter(l, x, u0, u1, rng_uniform(rng), r, cross);
-    }
-#endif
-    default: return R(0.0);
-    }
+#define MS_STMT(p) return p##_walk_scatter(l, x, rng, r, cross);
+    LSQT_BSDFS(MS_DISPATCH_)
+#undef MS_STMT
+    return R(0.0);
 }
 
 /* One walk from direction d (world frame). Vertices of order >= nee_from add their terms,
@@ -236,22 +187,28 @@ LSQT_INLINE real ms_walk(__global const lsqt_dev_layer *l, real3 d, rng_t *rng, 
     return weight;
 }
 
-/* The analytic single scatterers' samplers (use_multiple_scattering=false). */
+/* The models with closed-form single scattering: whether layer l is one, and its sampler
+ * (use_multiple_scattering=false). */
+#define MS_SINGLE_(ID, num, name, alias, p, sampler, mirror, transmits) \
+    LSQT_IF_SINGLE_##sampler(if (LSQT_ON(BSDF_##ID) && l->kind == LSQT_BSDF_##ID) MS_STMT(p))
+
+LSQT_INLINE int ms_analytic(__global const lsqt_dev_layer *l)
+{
+#define MS_STMT(p) return 1;
+    LSQT_BSDFS(MS_SINGLE_)
+#undef MS_STMT
+    return 0;
+}
+
 LSQT_INLINE real ms_single_sample(__global const lsqt_dev_layer *l, real3 wo, rng_t *rng, real3 *wi)
 {
     real u0 = rng_uniform(rng), u1 = rng_uniform(rng), u2 = rng_uniform(rng);
-    switch (l->kind) {
-#ifdef LSQT_HAS_BSDF_MS_CONDUCTIVE
-    case LSQT_BSDF_MS_CONDUCTIVE: return conductor_sample(l, wo, u1, u2, wi);
-#endif
-#ifdef LSQT_HAS_BSDF_MS_DIELECTRIC
-    case LSQT_BSDF_MS_DIELECTRIC: return dielectric_sample(l, wo, u0, u1, u2, wi);
-#endif
-    default: return R(0.0);
-    }
+#define MS_STMT(p) return p##_sample(l, wo, u0, u1, u2, wi);
+    LSQT_BSDFS(MS_SINGLE_)
+#undef MS_STMT
+    (void)u0, (void)u1, (void)u2, (void)wo, (void)wi;
+    return R(0.0);
 }
-
-LSQT_INLINE int ms_analytic(__global const lsqt_dev_layer *l) { return l->kind != LSQT_BSDF_MS_LAMBERTIAN; }
 
 /* A microsurface vertex reached along d with weight w: iter_count walks each add their
  * terms (weighted w / iter_count) to every direction of the sink, after the analytic
@@ -266,7 +223,7 @@ LSQT_INLINE real ms_vertex_walks(__global const lsqt_dev_layer *l, real3 d, rng_
         const real side = d.z < R(0.0) ? R(1.0) : R(-1.0);
         if (nee) {
             ms_vtx x = ms_vertex_single(l->p[0], make_real3(-d.x, -d.y, side * -d.z), ms_index(l, side));
-            ms_nee_single(l, &x, side, w, k);
+            ms_nee_first(l, &x, side, w, k);
         }
         if (!ms) return ms_single_sample(l, -d, rng, out);
     }

@@ -1,30 +1,9 @@
 /* Dispatch from a layer or medium table entry to its model, expanded from the model list
  * (include/lsqt/model_list.h). Only the models the assembly uses are compiled in: the host
- * passes -DLSQT_HAS_<CLASS>_<ID>=1 for each, and LSQT_ON(<CLASS>_<ID>) is 1 for those and
- * 0 for the rest, whose branches are dead code, so a scene pays for nothing it does not
- * contain (on a GPU, not even registers). */
-
-/* LSQT_ON(M): 1 when LSQT_HAS_M is defined as 1, else 0, usable inside a macro (where
- * #ifdef is not) and without variadic macros (OpenCL C 1.2 has none: NVIDIA's compiler
- * refuses them). LSQT_HAS_M defined as 1 pastes to LSQT_ON_1, which is 1; undefined, it
- * pastes to the enum constant LSQT_ON_LSQT_HAS_M, which the list declares 0 for every
- * model. Either way an integer constant: the branches of models not built are dead code. */
-#define LSQT_ON_1 1
-#define LSQT_ON_CAT_(a, b) a##b
-#define LSQT_ON_CAT(a, b) LSQT_ON_CAT_(a, b)
-#define LSQT_ON(M) LSQT_ON_CAT(LSQT_ON_, LSQT_HAS_##M)
-#define LSQT_ON_PHASE_(ID, num, name, alias, p, sampler, mirror) LSQT_ON_LSQT_HAS_PHASE_##ID = 0,
-#define LSQT_ON_BSDF_(ID, num, name, alias, p, sampler, mirror, transmits) LSQT_ON_LSQT_HAS_BSDF_##ID = 0,
-enum { LSQT_PHASES(LSQT_ON_PHASE_) LSQT_BSDFS(LSQT_ON_BSDF_) LSQT_ON_NONE_ = 0 };
-
-/* The list's SAMPLER column, as text kept or dropped (one argument: the statement's commas
- * are all inside parentheses). */
-#define LSQT_IF_CLOSED_CLOSED(s) s
-#define LSQT_IF_CLOSED_WALK(s)
-#define LSQT_IF_WALK_CLOSED(s)
-#define LSQT_IF_WALK_WALK(s) s
-#define LSQT_IF_VERTEX_EXACT(s)
-#define LSQT_IF_VERTEX_VERTEX(s) s
+ * passes -DLSQT_HAS_<CLASS>_<ID>=1 for each, and LSQT_ON(<CLASS>_<ID>) (model_list.h) is 1
+ * for those and 0 for the rest, whose branches are dead code, so a scene pays for nothing
+ * it does not contain (on a GPU, not even registers). The microsurfaces' walk dispatches
+ * the same way (microsurface.cl). */
 
 /* Evaluation takes LSQT_VW directions at once (next-event estimation's inner loop); the
  * single-direction form used by the test harness is lane 0 of the same code. For the

@@ -10,8 +10,8 @@
 #define NEE_LAYER 0     /* a layer's BSDF: v = wo */
 #define NEE_MEDIUM 1    /* a medium's phase: v = wo, m, the optical depths in lam_v, lg_v */
 #define NEE_MS_VERTEX 2 /* a microsurface walk's vertex (ms_vtx) */
-#define NEE_MS_SINGLE 3 /* the analytic single scattering */
-#define NEE_MS_FIRST 4  /* a Lambertian microsurface's first vertex */
+#define NEE_MS_FIRST 3  /* a microsurface's first record: its closed-form single scattering
+                         * (SINGLE_WALK) or its walk's first vertex (WALK) */
 
 /* Where a path's records go: rec[0 ...] (rec 0: only counted). */
 typedef struct {

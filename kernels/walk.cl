@@ -271,10 +271,15 @@ LSQT_INLINE void nee_ms_sink(const walk_ctx *c, __global const real *tab, int li
 LSQT_INLINE int nee_counting(const walk_ctx *c) { return c->count_only; }
 #endif
 
+/* Whether layer l is a microsurface, which its random walk samples and estimates. */
 LSQT_INLINE int layer_is_micro(__global const lsqt_dev_layer *l)
 {
-    return l->kind == LSQT_BSDF_MS_LAMBERTIAN || l->kind == LSQT_BSDF_MS_DIELECTRIC ||
-           l->kind == LSQT_BSDF_MS_CONDUCTIVE;
+#define X(ID, num, name, alias, p, sampler, mirror, transmits) \
+    LSQT_IF_WALK_##sampler(if (LSQT_ON(BSDF_##ID) && l->kind == LSQT_BSDF_##ID) return 1;)
+    LSQT_BSDFS(X)
+#undef X
+    (void)l;
+    return 0;
 }
 
 /* A vertex on layer li reached along d with weight w: next-event estimates towards upward
@@ -290,13 +295,11 @@ LSQT_INLINE real layer_vertex(const walk_ctx *c, int li, real3 d, real w, rng_t 
     const int visible = c->nee_on && nee_visible(tau_up, tau_down, up, down);
     __global const real *tab = c->tab + LSQT_LAYER_TAB(li);
     c->work[WORK_LAYER]++;
-#if defined(LSQT_HAS_BSDF_MS_LAMBERTIAN) || defined(LSQT_HAS_BSDF_MS_DIELECTRIC) || defined(LSQT_HAS_BSDF_MS_CONDUCTIVE)
-    if (layer_is_micro(l)) {
+    if (layer_is_micro(l)) { /* constant 0, and the walk dead code, in a scene without one */
         ms_sink k;
         nee_ms_sink(c, tab, li, &k);
         return ms_vertex_walks(l, d, rng, w, visible, &k, wi);
     }
-#endif
     if (visible) {
         c->work[WORK_NEE]++;
         nee_layer_terms(c, l, li, -d, w, tab);

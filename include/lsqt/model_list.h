@@ -26,16 +26,24 @@
 
 /* BSDFs (NullBsdf, kind 0, is the host's own): X(ID, kind number, seed name, short name,
  * kernel prefix, SAMPLER, MIRROR, TRANSMITS). kernels/bsdf_*.cl defines p_evalv(l, wo, wi)
- * and p_pdf(l, wo, wi); SAMPLER is CLOSED (p_sample(l, wo, u0, u1, u2, wi) returns the
- * weight f / pdf; next-event estimation evaluates p_evalv) or WALK (a microsurface: the
- * random walk of kernels/microsurface.cl samples and estimates it, p_evalv is its single-
- * scattering term). TRANSMITS is ALWAYS, NEVER, or the key whose value > 0 lets light
+ * and p_pdf(l, wo, wi). SAMPLER is
+ * - CLOSED: p_sample(l, wo, u0, u1, u2, wi) returns the weight f / pdf; next-event
+ *   estimation evaluates p_evalv;
+ * - WALK: a microsurface whose random walk (kernels/microsurface.cl) samples and
+ *   estimates every order; the file defines the facets' phase function p_phasev(l, x, u),
+ *   the walk's step p_walk_scatter(l, x, rng, r, cross), the index across the facets
+ *   p_index(l, side) and the terms of the estimate's first record p_firstv(l, x, u, lam,
+ *   lg) (the walk's first vertex, whose escape is averaged over heights);
+ * - SINGLE_WALK: as WALK, but single scattering is closed-form: p_firstv is it (the walk
+ *   adds orders >= 2), p_evalv is it for one direction, and p_sample samples it (the
+ *   layer's use_multiple_scattering=false).
+ * TRANSMITS is ALWAYS, NEVER, or the key whose value > 0 lets light
  * through (FT, KT): a layer that transmits nothing prunes what lies below it. */
 #define LSQT_BSDFS(X)                                                                                  \
     X(LAMBERTIAN, 1, "LambertianBsdf", "Lambertian", lambertian, CLOSED, 1, FT)                        \
     X(MS_LAMBERTIAN, 2, "MicrosurfaceLambertianBrdf", "MicrosurfaceLambertian", mslambert, WALK, 1, FT) \
-    X(MS_DIELECTRIC, 3, "MicrosurfaceDielectricBsdf", "MicrosurfaceDielectric", dielectric, WALK, 1, KT) \
-    X(MS_CONDUCTIVE, 4, "MicrosurfaceConductiveBrdf", "MicrosurfaceConductive", conductor, WALK, 0, NEVER) \
+    X(MS_DIELECTRIC, 3, "MicrosurfaceDielectricBsdf", "MicrosurfaceDielectric", dielectric, SINGLE_WALK, 1, KT) \
+    X(MS_CONDUCTIVE, 4, "MicrosurfaceConductiveBrdf", "MicrosurfaceConductive", conductor, SINGLE_WALK, 0, NEVER) \
     X(OREN_NAYAR, 5, "OrenNayarDiffuseBrdf", "OrenNayarDiffuse", oren_nayar, CLOSED, 0, NEVER)
 
 #define LSQT_X_PHASE_KIND_(ID, NUM, NAME, ALIAS, P, SAMPLER, MIRROR) LSQT_PHASE_##ID = NUM,
@@ -44,6 +52,36 @@ enum lsqt_phase_kind { LSQT_PHASE_NONE = 0, LSQT_PHASES(LSQT_X_PHASE_KIND_) };
 enum lsqt_bsdf_kind { LSQT_BSDF_NULL = 0, LSQT_BSDFS(LSQT_X_BSDF_KIND_) };
 #undef LSQT_X_PHASE_KIND_
 #undef LSQT_X_BSDF_KIND_
+
+/* ---- Dispatch (kernels/models.cl, kernels/microsurface.cl) ---------------------------- */
+
+/* LSQT_ON(M): 1 when LSQT_HAS_M is defined as 1, else 0, usable inside a macro (where
+ * #ifdef is not) and without variadic macros (OpenCL C 1.2 has none: NVIDIA's compiler
+ * refuses them). LSQT_HAS_M defined as 1 pastes to LSQT_ON_1, which is 1; undefined, it
+ * pastes to the enum constant LSQT_ON_LSQT_HAS_M, which the list declares 0 for every
+ * model. Either way an integer constant: the branches of models not built are dead code. */
+#define LSQT_ON_1 1
+#define LSQT_ON_CAT_(a, b) a##b
+#define LSQT_ON_CAT(a, b) LSQT_ON_CAT_(a, b)
+#define LSQT_ON(M) LSQT_ON_CAT(LSQT_ON_, LSQT_HAS_##M)
+#define LSQT_ON_PHASE_(ID, num, name, alias, p, sampler, mirror) LSQT_ON_LSQT_HAS_PHASE_##ID = 0,
+#define LSQT_ON_BSDF_(ID, num, name, alias, p, sampler, mirror, transmits) LSQT_ON_LSQT_HAS_BSDF_##ID = 0,
+enum { LSQT_PHASES(LSQT_ON_PHASE_) LSQT_BSDFS(LSQT_ON_BSDF_) LSQT_ON_NONE_ = 0 };
+
+/* The list's SAMPLER column, as text kept or dropped (one argument: the statement's commas
+ * are all inside parentheses). LSQT_IF_WALK keeps both kinds of walk; LSQT_IF_SINGLE the
+ * walks with closed-form single scattering. */
+#define LSQT_IF_CLOSED_CLOSED(s) s
+#define LSQT_IF_CLOSED_WALK(s)
+#define LSQT_IF_CLOSED_SINGLE_WALK(s)
+#define LSQT_IF_WALK_CLOSED(s)
+#define LSQT_IF_WALK_WALK(s) s
+#define LSQT_IF_WALK_SINGLE_WALK(s) s
+#define LSQT_IF_SINGLE_CLOSED(s)
+#define LSQT_IF_SINGLE_WALK(s)
+#define LSQT_IF_SINGLE_SINGLE_WALK(s) s
+#define LSQT_IF_VERTEX_EXACT(s)
+#define LSQT_IF_VERTEX_VERTEX(s) s
 
 /* Keys, packing and slots are the host's (the kernels read the packed tables); hidden from
  * OpenCL C, which has no variadic macros (LSQT_WORDS). */

@@ -135,6 +135,31 @@ def check_entry(m, seen):
     return why
 
 
+def compiles(m, cc="cc"):
+    """For a C file of the host or tests: the compiler's errors on the mutant (warnings
+    allowed: scratch builds are not -Werror), or "" when it compiles or cannot be
+    checked. A second, so a rotted replacement fails the list check, not a CI run."""
+    if not m["file"].endswith(".c") or not shutil.which(cc):
+        return ""
+    path = os.path.join(ROOT, m["file"])
+    with open(path, encoding="utf-8") as f:
+        text = f.read()
+    if text.count(m["find"]) != 1:
+        return ""
+    with tempfile.TemporaryDirectory(prefix="lsqt-mutant-cc.") as d:
+        mut = os.path.join(d, os.path.basename(path))
+        with open(mut, "w", encoding="utf-8") as f:
+            f.write(text.replace(m["find"], m["replace"], 1))
+        p = subprocess.run([cc, "-std=c11", "-fsyntax-only", "-w", "-D_POSIX_C_SOURCE=200809L",
+                            "-DCL_TARGET_OPENCL_VERSION=120", "-iquote", os.path.dirname(path),
+                            "-I", os.path.join(ROOT, "include"), "-I", os.path.join(ROOT, "tests"), mut],
+                           capture_output=True, text=True)
+    if p.returncode == 0:
+        return ""
+    errs = [l for l in p.stderr.splitlines() if "error" in l][:3]
+    return "the mutant does not compile: " + " | ".join(e.replace(d + os.sep, "") for e in errs)
+
+
 # ---- processes ----------------------------------------------------------------------
 
 def kill_session(sid):
@@ -347,31 +372,41 @@ def recent_files(hours):
     return {l.strip() for l in (out or "").splitlines() + dirty.splitlines() if l.strip()}
 
 
-def ci_select(muts, shares, seed, hours):
+def ci_select(muts, shares, seed, hours, cap):
     """CI's choice: every mutation whose file, or whose tests' source, changed recently,
     plus the share (seed mod shares) of the rest; each mutation belongs to the share
-    crc32(name) mod shares, so a mutation keeps its share when others are added.
-    Returns (selected, lines that say what was chosen)."""
+    crc32(name) mod shares, so a mutation keeps its share when others are added. At most
+    cap in all (CI's time budget): the recent ones first, each group cut in an order that
+    the seed rotates, so the ones left out run on later seeds. Returns (selected, lines
+    that say what was chosen)."""
     changed = recent_files(hours)
     why = []
     if changed is None:
-        return list(muts), ["no git history: every mutation runs"]
+        changed = {m["file"] for m in muts}
+        why.append("no git history: every mutation counts as recent")
     share = seed % shares
-    sel, n_changed, n_share = [], 0, 0
+    recent, rest = [], []
     for m in muts:
         srcs = {m["file"]} | {test_sources(t) for t in m["tests"].split()}
         if srcs & changed:
-            sel.append(m)
-            n_changed += 1
+            recent.append(m)
         elif zlib.crc32(m["name"].encode()) % shares == share:
-            sel.append(m)
-            n_share += 1
-    why.append("%d of %d mutations: %d whose file or tests changed in the commits of the %g hours "
-               "before HEAD (or are uncommitted), and share %d of %d of the rest, %d (seed %d: "
-               "LSQT_MUTATE_SEED, default the commit count of HEAD; each share comes round every %d "
-               "seeds); the other %d run on other seeds" % (len(sel), len(muts), n_changed, hours, share,
-                                                            shares, n_share, seed, shares,
-                                                            len(muts) - len(sel)))
+            rest.append(m)
+
+    def rotated(group):
+        return sorted(group, key=lambda m: zlib.crc32(("%s/%d" % (m["name"], seed)).encode()))
+
+    n_recent = min(len(recent), cap)
+    n_share = min(len(rest), cap - n_recent)
+    picked = rotated(recent)[:n_recent] + rotated(rest)[:n_share]
+    names = {m["name"] for m in picked}
+    sel = [m for m in muts if m["name"] in names]  # in the list's order
+    why.append("%d of %d mutations: %d of the %d whose file or tests changed in the commits of the "
+               "%g hours before HEAD (or are uncommitted), and %d of the %d in share %d of %d of the "
+               "rest (at most %d in all, LSQT_MUTATE_MAX; seed %d: LSQT_MUTATE_SEED, default the "
+               "commit count of HEAD, which rotates the shares and the cut); the other %d run on "
+               "other seeds" % (len(sel), len(muts), n_recent, len(recent), hours, n_share, len(rest),
+                                share, shares, cap, seed, len(muts) - len(sel)))
     return sel, why
 
 
@@ -416,8 +451,9 @@ def main():
                          "whole suite on this tree, as .ci/run has)")
     ap.add_argument("--ci", action="store_true",
                     help="CI's selection: the mutations of recently changed files and tests, and a "
-                         "rotating share of the rest (LSQT_MUTATE_SHARES, default 2; LSQT_MUTATE_SEED; "
-                         "LSQT_MUTATE_RECENT_HOURS, default 6)")
+                         "rotating share of the rest, at most LSQT_MUTATE_MAX (default 120) in all "
+                         "(LSQT_MUTATE_SHARES, default 2; LSQT_MUTATE_SEED; LSQT_MUTATE_RECENT_HOURS, "
+                         "default 6)")
     args = ap.parse_args()
 
     t_start = time.time()
@@ -430,6 +466,9 @@ def main():
     bad, seen = {}, set()
     for m in muts:
         why = check_entry(m, seen)
+        if args.list and not why:
+            cc = compiles(m)
+            why = [cc] if cc else []
         seen.add(m["name"])
         if why:
             bad[m["name"]] = "; ".join(why)
@@ -446,7 +485,8 @@ def main():
         seed_env = os.environ.get("LSQT_MUTATE_SEED")
         seed = int(seed_env) if seed_env else int((git("rev-list", "--count", "HEAD") or "0").strip() or 0)
         hours = float(os.environ.get("LSQT_MUTATE_RECENT_HOURS") or 6)
-        sel, lines = ci_select(sel, shares, seed, hours)
+        cap = max(1, int(os.environ.get("LSQT_MUTATE_MAX") or 120))
+        sel, lines = ci_select(sel, shares, seed, hours, cap)
         for l in lines:
             print("mutation check: " + l)
         # An entry that has rotted is reported whatever the share: the list must not rot.
