@@ -1,6 +1,9 @@
 /* The microsurface models' samplers (the random walk of Heitz, Hanika, d'Eon, Dachsbacher
  * 2016, kernels/microsurface.cl) against their evaluations, through the harness kernels
- * (the code the path loop runs). Release, 2 cores: about 80 s, nearly all of it kernels.
+ * (the code the path loop runs). `test_ms_models release` (the release suite) runs half of
+ * the goodness-of-fit grid of 1. (alphas and angles alternating), `power` (ctest label
+ * power) the other half, no argument all of it; 2 and 3 run in the release part. Release,
+ * 2 cores: about 90 s, nearly all of it kernels.
  *
  * 1. Goodness of fit of harness_sample (weights: the products of the facet albedos)
  *    against the evaluation integrated over bins: Lambertian facets (fR 0.7, fT 0.25),
@@ -915,9 +918,23 @@ static void test_walk_roulette(void)
     clReleaseMemObject(bl);
 }
 
-int main(void)
+/* Which goodness-of-fit cases run: the release suite takes half of the grid (alphas and
+ * angles alternating, so every alpha and every angle is in it), the power tier (ctest label
+ * "power") the other half; no argument runs them all. */
+static int part_release = 1, part_power = 1;
+static int case_runs(int ia, int it) { return (ia + it) % 2 == 0 ? part_release : part_power; }
+
+int main(int argc, char **argv)
 {
     double t_start = check_now();
+    if (argc > 1) {
+        part_release = strcmp(argv[1], "release") == 0;
+        part_power = strcmp(argv[1], "power") == 0;
+        if (!part_release && !part_power) {
+            fprintf(stderr, "usage: test_ms_models [release|power]\n");
+            return 2;
+        }
+    }
     fixture_open();
     prog = fixture_build("-cl-std=CL1.2 -DLSQT_HAS_BSDF_MS_LAMBERTIAN=1 -DLSQT_HAS_BSDF_MS_DIELECTRIC=1 "
                          "-DLSQT_HAS_BSDF_MS_CONDUCTIVE=1 -DLSQT_NWI=%d",
@@ -928,7 +945,7 @@ int main(void)
     cl_program vp =
         fixture_build_with(vndf_src, "-cl-std=CL1.2 -DLSQT_HAS_BSDF_MS_DIELECTRIC=1 -DLSQT_HAS_BSDF_MS_CONDUCTIVE=1");
     printf("builds %.1f s\n", check_now() - t_start);
-    test_walk_roulette();
+    if (part_release) test_walk_roulette();
 
     /* The cases. Walks for the evaluations: Lambertian facets have no analytic part, so
      * every vertex of every walk evaluates (ITEMS x 500 walks); for the conductor and the
@@ -940,6 +957,7 @@ int main(void)
     double t0 = check_now();
     for (int ia = 0; ia < 4; ia++)
         for (int it = 0; it < 3; it++) {
+            if (!case_runs(ia, it)) continue;
             const double a = alphas[ia], th = thetas[it];
             const int reps = a < 0.1 ? 320 : a < 0.5 ? 40 : 20, qm = a < 0.1 ? 3 : 2;
             gof_case lam = {"Lambertian", LSQT_BSDF_MS_LAMBERTIAN, a, 0.7, 0.25, 0, 1, th, 1, 2, NS, 500, 1, 2};
@@ -958,17 +976,18 @@ int main(void)
     /* Lambertian facets that only reflect, fR = 1: a furnace (every weight is 1, the
      * evaluation must integrate to 1), at 85 degrees. */
     for (int ia = 0; ia < 4; ia++) {
+        if (!case_runs(ia, 1)) continue;
         gof_case lam = {"Lambertian fR=1", LSQT_BSDF_MS_LAMBERTIAN, alphas[ia], 1.0, 0.0, 0, 1, 85, 1, 1, NS, 500, 1, 2};
         gof(&lam);
     }
     printf("goodness of fit %.1f s\n", check_now() - t0);
     t0 = check_now();
-    if (vp) test_vndf(vp), test_phase_bound(vp);
+    if (vp && part_release) test_vndf(vp), test_phase_bound(vp);
     if (vp) clReleaseProgram(vp);
     printf("visible normals %.1f s\n", check_now() - t0);
     t0 = check_now();
     /* walks per value: ITEMS x reps x iter_count (the dielectric's values are noisier) */
-    for (int ia = 1; ia <= 2; ia++) {
+    for (int ia = 1; ia <= 2 && part_release; ia++) {
         const double a = alphas[ia];
         char nm[64];
         lsqt_dev_layer lam = layer(LSQT_BSDF_MS_LAMBERTIAN, a, 0.7, 0.25, 0);
