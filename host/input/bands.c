@@ -1,0 +1,172 @@
+/* Wavelength lists and spectral tables (lsqt/bands.h). */
+#include "lsqt/bands.h"
+#include "lsqt/cli.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define WL_MAX 1e6 /* nm: a bound that keeps the numbers sane, far beyond any sensor */
+
+/* One token [p, p + n) as a finite number. */
+static int number(const char *p, size_t n, double *v)
+{
+    char buf[64];
+    if (n == 0 || n >= sizeof buf) return -1;
+    memcpy(buf, p, n);
+    buf[n] = '\0';
+    return lsqt_parse_double(buf, v);
+}
+
+static int range(const char *list, double **out, int *n, char *err, size_t errcap)
+{
+    const char *c1 = strchr(list, ':'), *c2 = c1 ? strchr(c1 + 1, ':') : NULL;
+    double a, b, s;
+    if (!c2 || strchr(c2 + 1, ':') || number(list, (size_t)(c1 - list), &a) ||
+        number(c1 + 1, (size_t)(c2 - c1 - 1), &b) || number(c2 + 1, strlen(c2 + 1), &s)) {
+        snprintf(err, errcap, "--wavelengths '%s': expected START:STOP:STEP, three numbers in nm", list);
+        return 2;
+    }
+    if (!(s > 0) || !(b >= a) || !(a > 0) || b > WL_MAX) {
+        snprintf(err, errcap, "--wavelengths '%s': expected 0 < START <= STOP <= %g and STEP > 0", list, WL_MAX);
+        return 2;
+    }
+    double k = (b - a) / s, whole = floor(k + 1e-9);
+    if (whole + 1 > LSQT_MAX_BANDS) {
+        snprintf(err, errcap, "--wavelengths '%s': %.0f bands, at most %d", list, whole + 1, LSQT_MAX_BANDS);
+        return 2;
+    }
+    *n = (int)whole + 1;
+    *out = malloc((size_t)*n * sizeof **out);
+    if (!*out) {
+        snprintf(err, errcap, "out of memory");
+        return 2;
+    }
+    for (int i = 0; i < *n; i++) (*out)[i] = a + i * s;
+    if (fabs(k - whole) <= 1e-9) (*out)[*n - 1] = b; /* STOP itself, not a rounded sum */
+    return 0;
+}
+
+int lsqt_parse_wavelengths(const char *list, double **out, int *n, char *err, size_t errcap)
+{
+    *out = NULL, *n = 0;
+    if (strchr(list, ':')) return range(list, out, n, err, errcap);
+    int cap = 1;
+    for (const char *p = list; *p; p++) cap += *p == ',';
+    if (cap > LSQT_MAX_BANDS) {
+        snprintf(err, errcap, "--wavelengths: %d bands, at most %d", cap, LSQT_MAX_BANDS);
+        return 2;
+    }
+    double *w = malloc((size_t)cap * sizeof *w);
+    if (!w) {
+        snprintf(err, errcap, "out of memory");
+        return 2;
+    }
+    const char *p = list;
+    for (int i = 0; i < cap; i++) {
+        const char *e = strchr(p, ',');
+        size_t len = e ? (size_t)(e - p) : strlen(p);
+        if (number(p, len, &w[i]) || !(w[i] > 0) || w[i] > WL_MAX) {
+            snprintf(err, errcap, "--wavelengths: bad wavelength '%.*s' (band %d): expected a number of nm in (0, %g]",
+                     (int)(len > 40 ? 40 : len), p, i + 1, WL_MAX);
+            free(w);
+            return 2;
+        }
+        if (i > 0 && !(w[i] > w[i - 1])) {
+            snprintf(err, errcap, "--wavelengths: '%.*s' (band %d) is not above the band before it (%g): the "
+                     "wavelengths must increase", (int)(len > 40 ? 40 : len), p, i + 1, w[i - 1]);
+            free(w);
+            return 2;
+        }
+        p = e ? e + 1 : p + len;
+    }
+    *out = w, *n = cap;
+    return 0;
+}
+
+/* Splits a row into at most 3 fields at spaces, tabs and commas; returns the count. */
+static int fields(const char *p, const char *end, const char *f[3], size_t fn[3])
+{
+    int k = 0;
+    while (p < end) {
+        while (p < end && (*p == ' ' || *p == '\t' || *p == ',' || *p == '\r')) p++;
+        if (p == end) break;
+        const char *s = p;
+        while (p < end && *p != ' ' && *p != '\t' && *p != ',' && *p != '\r') p++;
+        if (k == 3) return 4;
+        f[k] = s, fn[k] = (size_t)(p - s), k++;
+    }
+    return k;
+}
+
+int lsqt_band_table_parse(const char *text, size_t len, const char *name, lsqt_band_table *t, char *err,
+                          size_t errcap)
+{
+    memset(t, 0, sizeof *t);
+    int cap = 0, line = 0;
+    const char *p = text, *end = text + len;
+    while (p < end) {
+        const char *nl = memchr(p, '\n', (size_t)(end - p)), *le = nl ? nl : end, *hash = memchr(p, '#', (size_t)(le - p));
+        line++;
+        const char *f[3];
+        size_t fn[3];
+        int k = fields(p, hash ? hash : le, f, fn);
+        p = nl ? nl + 1 : end;
+        if (k == 0) continue;
+        double wl, v;
+        if (k != 2 || number(f[0], fn[0], &wl) || number(f[1], fn[1], &v)) {
+            snprintf(err, errcap, "%s:%d: expected two numbers, a wavelength in nm and its value", name, line);
+            lsqt_band_table_free(t);
+            return 2;
+        }
+        if (t->n > 0 && !(wl > t->wl[t->n - 1])) {
+            snprintf(err, errcap, "%s:%d: wavelength %g is not above the row before it (%g): the table's wavelengths "
+                     "must increase", name, line, wl, t->wl[t->n - 1]);
+            lsqt_band_table_free(t);
+            return 2;
+        }
+        if (t->n == cap) {
+            int nc = cap ? 2 * cap : 64;
+            double *a = realloc(t->wl, (size_t)nc * sizeof *a), *b = a ? realloc(t->v, (size_t)nc * sizeof *b) : NULL;
+            if (a) t->wl = a;
+            if (!b) {
+                snprintf(err, errcap, "%s: out of memory", name);
+                lsqt_band_table_free(t);
+                return 2;
+            }
+            t->v = b, cap = nc;
+        }
+        t->wl[t->n] = wl, t->v[t->n] = v, t->n++;
+    }
+    if (t->n == 0) {
+        snprintf(err, errcap, "%s: no rows: expected lines of a wavelength in nm and its value", name);
+        return 2;
+    }
+    return 0;
+}
+
+int lsqt_band_table_at(const lsqt_band_table *t, double wl, double *v)
+{
+    if (t->n == 0 || !(wl >= t->wl[0]) || !(wl <= t->wl[t->n - 1])) return -1;
+    int lo = 0, hi = t->n - 1; /* wl[lo] <= wl <= wl[hi] */
+    while (hi - lo > 1) {
+        int mid = (lo + hi) / 2;
+        if (t->wl[mid] <= wl) lo = mid;
+        else hi = mid;
+    }
+    if (wl == t->wl[lo] || lo == hi) {
+        *v = t->v[lo];
+        return 0;
+    }
+    double x = (wl - t->wl[lo]) / (t->wl[hi] - t->wl[lo]);
+    *v = t->v[lo] + x * (t->v[hi] - t->v[lo]);
+    return 0;
+}
+
+void lsqt_band_table_free(lsqt_band_table *t)
+{
+    free(t->wl);
+    free(t->v);
+    memset(t, 0, sizeof *t);
+}

@@ -1,0 +1,36 @@
+/* Wavelength bands: the run's wavelengths (--wavelengths) and the two-column tables a
+ * model parameter may be read from (KEY=@FILE), interpolated at those wavelengths. Host
+ * only; nothing here touches the kernels. */
+#ifndef LSQT_BANDS_H
+#define LSQT_BANDS_H
+
+#include <stddef.h>
+
+/* Most bands a run may have (400:2500:1 is 2101). */
+#define LSQT_MAX_BANDS 4096
+
+/* Parses LIST, "450,550,650" or "START:STOP:STEP" (both ends included when STOP is
+ * START plus a whole number of steps, to 1e-9 of a step), into *out (heap, *n values,
+ * strictly increasing, each in (0, 1e6] nm). Returns 0, or 2 with a message that names
+ * the token in err. */
+int lsqt_parse_wavelengths(const char *list, double **out, int *n, char *err, size_t errcap);
+
+/* A table of (wavelength nm, value) rows, wavelengths strictly increasing. */
+typedef struct lsqt_band_table {
+    int n;
+    double *wl, *v;
+} lsqt_band_table;
+
+/* Reads TEXT (len bytes; NAME for messages): one row per line, two numbers separated by
+ * spaces, tabs or a comma; '#' starts a comment; blank lines are skipped. Returns 0, or 2
+ * with "NAME:LINE: ..." in err. At least one row. */
+int lsqt_band_table_parse(const char *text, size_t len, const char *name, lsqt_band_table *t, char *err,
+                          size_t errcap);
+
+/* The table's value at wavelength wl, linear between rows (exact at a row). Returns 0,
+ * or -1 when wl is outside [first, last] row. */
+int lsqt_band_table_at(const lsqt_band_table *t, double wl, double *v);
+
+void lsqt_band_table_free(lsqt_band_table *t);
+
+#endif
