@@ -2,11 +2,14 @@
  * and their errors, and a table's reading, errors and linear interpolation, against values
  * worked out by hand in the checks. */
 #include "check.h"
+#include "lsqt/assembly.h"
 #include "lsqt/bands.h"
+#include "lsqt/model_list.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 static void wavelengths(void)
 {
@@ -74,9 +77,92 @@ static void tables(void)
     }
 }
 
+/* Band b of TEXT; its error (empty when it parsed) into err. */
+static int parse_band(const char *text, lsqt_bands *b, int band, lsqt_assembly *a, char err[1024])
+{
+    lsqt_diag d;
+    int rc = lsqt_parse_band(text, strlen(text), "t.lsqt", b, band, a, &d);
+    strcpy(err, d.error);
+    return rc;
+}
+
+/* The parser reads band b's element of a list and band b's table value; every rule holds
+ * per band and names the band. */
+static void parse_per_band(void)
+{
+    char dir[] = "/tmp/lsqt-test-bands.XXXXXX", path[256], err[1024];
+    CHECK(mkdtemp(dir) != NULL, "mkdtemp");
+    snprintf(path, sizeof path, "%s/fr.txt", dir);
+    FILE *f = fopen(path, "w");
+    CHECK(f != NULL, "%s", path);
+    if (!f) return;
+    fputs("# fR of a made-up paint\n400 0.1\n500 0.3\n700 0.9\n", f);
+    fclose(f);
+    const double wl[] = {450, 550, 650};
+    lsqt_bands b = {3, wl, dir, 0, NULL, NULL};
+    lsqt_assembly a;
+    /* a list: element b; a table: interpolated at wl[b] (450: 0.2, 550: 0.45, 650: 0.75) */
+    const char *text = "Medium\nLayer z=0 Lambertian fR=@fr.txt fT=0.05,0.1,0.15\nMedium\n";
+    const double want_fr[] = {0.2, 0.45, 0.75}, want_ft[] = {0.05, 0.1, 0.15};
+    for (int i = 0; i < 3; i++) {
+        int rc = parse_band(text, &b, i, &a, err);
+        CHECK(rc == 0 && fabs(a.layers[0].v[LSQT_LAMBERTIAN_fR] - want_fr[i]) < 1e-15 &&
+                  a.layers[0].v[LSQT_LAMBERTIAN_fT] == want_ft[i],
+              "band %d: rc %d fR %g fT %g %s", i, rc, rc ? 0 : a.layers[0].v[LSQT_LAMBERTIAN_fR],
+              rc ? 0 : a.layers[0].v[LSQT_LAMBERTIAN_fT], err);
+        if (!rc) lsqt_assembly_free(&a);
+    }
+    CHECK(b.n_tables == 1, "the table is read once: %d", b.n_tables);
+    /* media keys and phase keys too */
+    text = "Medium\nLayer z=1 Null\nMedium mus=1,2,3 mua=0.5 HenyeyGreenstein g=0.1,0.2,0.3\nLayer z=0 Null\nMedium\n";
+    CHECK(parse_band(text, &b, 2, &a, err) == 0 && a.media[1].mus == 3 && a.media[1].phase.v[LSQT_HG_g] == 0.3, "%s", err);
+    if (!err[0]) lsqt_assembly_free(&a);
+    /* errors: each names the band where it is per band */
+    const struct {
+        const char *text;
+        int band;
+        const char *says;
+    } bad[] = {
+        /* fR + fT > 1 in band 3 only (0.75 + 0.3) */
+        {"Medium\nLayer z=0 Lambertian fR=@fr.txt fT=0.1,0.1,0.3\nMedium\n", 2, "band 3 (650 nm): fR + fT = 1.05 exceeds 1"},
+        {"Medium\nLayer z=0 Lambertian fR=0.1,0.2\nMedium\n", 0, "wrong number of values at 'fR=0.1,0.2'; expected 3"},
+        {"Medium\nLayer z=0 Lambertian fR=0.1,,0.2\nMedium\n", 1, "band 2 (550 nm): empty value in the list"},
+        {"Medium\nLayer z=0 Lambertian fR=0.1,1.2,0.2\nMedium\n", 1, "band 2 (550 nm): value out of range"},
+        {"Medium\nLayer z=0 Lambertian fR=@missing.txt\nMedium\n", 0, "unreadable table"},
+        {"Medium\nLayer z=0,1,2 Lambertian\nMedium\n", 0, "z as a value per band"},
+        {"Medium\nLayer z=1 Null\nMedium eta=1.5,0.9,1.5 mus=1 HenyeyGreenstein\nLayer z=0 Null\nMedium\n", 1,
+         "band 2 (550 nm): eta below 1"},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        int rc = parse_band(bad[i].text, &b, bad[i].band, &a, err);
+        CHECK(rc == 2 && strstr(err, bad[i].says), "case %zu: rc %d '%s'", i, rc, err);
+    }
+    /* a wavelength outside the table */
+    const double far[] = {450, 550, 750};
+    lsqt_bands b2 = {3, far, dir, 0, NULL, NULL};
+    CHECK(parse_band("Medium\nLayer z=0 Lambertian fR=@fr.txt\nMedium\n", &b2, 2, &a, err) == 2 &&
+              strstr(err, "band 3 (750 nm): wavelength outside the table") && strstr(err, "400 to 700 nm"),
+          "%s", err);
+    lsqt_bands_free(&b2);
+    /* unnamed bands (lists only): no tables, and the band has no wavelength in messages */
+    lsqt_bands rgb = {3, NULL, dir, 0, NULL, NULL};
+    CHECK(parse_band("Medium\nLayer z=0 Lambertian fR=@fr.txt\nMedium\n", &rgb, 0, &a, err) == 2 &&
+              strstr(err, "a table without wavelengths"), "%s", err);
+    CHECK(parse_band("Medium\nLayer z=0 Lambertian fR=0.9,0.9,0.5 fT=0,0,0.6\nMedium\n", &rgb, 2, &a, err) == 2 &&
+              strstr(err, "error: band 3: fR + fT"), "%s", err);
+    /* one band (lsqt_parse): a list is refused, as before bands */
+    lsqt_diag d;
+    CHECK(lsqt_parse("Medium\nLayer z=0 Lambertian fR=0.1,0.2\nMedium\n", strlen("Medium\nLayer z=0 Lambertian fR=0.1,0.2\nMedium\n"), "t", &a, &d) == 2 &&
+              strstr(d.error, "a list of values in a run of one band"), "%s", d.error);
+    lsqt_bands_free(&b);
+    unlink(path);
+    rmdir(dir);
+}
+
 int main(void)
 {
     wavelengths();
     tables();
+    parse_per_band();
     return check_finish("test_bands");
 }

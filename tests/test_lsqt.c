@@ -97,7 +97,7 @@ static const bad_case bad_cases[] = {
     { MEDIUM1("eta=1..2"), 1, "not a number at 'eta=1..2'" },
     { MEDIUM1("eta=--1"), 1, "not a number at 'eta=--1'" },
     { MEDIUM1("eta=1=2"), 1, "not a number at 'eta=1=2'" },
-    { MEDIUM1("eta=1,5"), 1, "not a number at 'eta=1,5'" },
+    { MEDIUM1("eta=1,5"), 1, "a list of values in a run of one band at 'eta=1,5'" },
     { MEDIUM1("eta=1.00000000000000000000000000000000000000000000000000000000000000000000000000"
               "000000000000000000000000000000000000000000000000000000000000000000000000000000"
               "0000000000000"),

@@ -170,3 +170,14 @@ void lsqt_band_table_free(lsqt_band_table *t)
     free(t->v);
     memset(t, 0, sizeof *t);
 }
+
+void lsqt_bands_free(lsqt_bands *b)
+{
+    for (int i = 0; i < b->n_tables; i++) {
+        free(b->table_paths[i]);
+        lsqt_band_table_free(&b->tables[i]);
+    }
+    free(b->table_paths);
+    free(b->tables);
+    b->n_tables = 0, b->table_paths = NULL, b->tables = NULL;
+}

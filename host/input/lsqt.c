@@ -6,6 +6,8 @@
  * bottom medium and notes. The input is untrusted (it is fuzzed): it need not be NUL
  * terminated, may hold any bytes, and every failure is a message, never a crash. */
 #include "lsqt/assembly.h"
+#include "lsqt/bands.h"
+#include "lsqt/util.h"
 #include "lsqt_internal.h"
 
 #include <errno.h>
@@ -148,6 +150,8 @@ typedef struct parser {
     lsqt_layer *layers;
     int n_layers, cap_layers;
     int n_pruned;
+    lsqt_bands *bands; /* NULL: one band, numbers only */
+    int band;          /* the band whose values are read */
 } parser;
 
 /* One line being read. */
@@ -177,7 +181,14 @@ static int fail(parser *P, int line, const span *tok, const char *what, const ch
     lsqt_sb_printf(&sb, "%s", P->name);
     if (line > 0)
         lsqt_sb_printf(&sb, ":%d", line);
-    lsqt_sb_printf(&sb, ": error: %s", what);
+    lsqt_sb_printf(&sb, ": error: ");
+    if (P->bands && P->bands->n > 1) {
+        lsqt_sb_printf(&sb, "band %d", P->band + 1);
+        if (P->bands->wl)
+            lsqt_sb_printf(&sb, " (%g nm)", P->bands->wl[P->band]);
+        lsqt_sb_printf(&sb, ": ");
+    }
+    lsqt_sb_printf(&sb, "%s", what);
     if (tok) {
         char shown[48];
         lsqt_sb_printf(&sb, " at '%s'", show(*tok, shown));
@@ -396,6 +407,15 @@ static const char *parse_number(span s, double *v)
     return NULL;
 }
 
+static const char *check_range(const lsqt_key *k, double v)
+{
+    if (k->lo_open ? !(v > k->lo) : !(v >= k->lo))
+        return "value out of range";
+    if (k->hi_open ? !(v < k->hi) : !(v <= k->hi))
+        return "value out of range";
+    return NULL;
+}
+
 /* Returns NULL or why the text is not a valid value of the key. */
 static const char *parse_value(const lsqt_key *k, span text, double *v)
 {
@@ -413,11 +433,7 @@ static const char *parse_value(const lsqt_key *k, span text, double *v)
     const char *why = parse_number(text, v);
     if (!why && k->type == LSQT_INT && *v != floor(*v))
         why = "not an integer";
-    if (!why && (k->lo_open ? !(*v > k->lo) : !(*v >= k->lo)))
-        why = "value out of range";
-    if (!why && (k->hi_open ? !(*v < k->hi) : !(*v <= k->hi)))
-        why = "value out of range";
-    return why;
+    return why ? why : check_range(k, *v);
 }
 
 static void store(unsigned char *base, const lsqt_key *k, double v)
@@ -432,6 +448,101 @@ static void apply_defaults(const lsqt_model *m, unsigned char *base)
 {
     for (int i = 0; i < m->n_keys; i++)
         store(base, &m->keys[i], m->keys[i].def);
+}
+
+/* ---- Values per band ------------------------------------------------------------------ */
+
+/* The table of @FILE (path relative to the bands' folder), read once; NULL after a
+ * failure recorded with fail(). */
+static const lsqt_band_table *band_table(parser *P, span tok, span file)
+{
+    lsqt_bands *b = P->bands;
+    char path[LSQT_PATH_CAP], err[512];
+    int n = snprintf(path, sizeof path, "%s%s%.*s", file.n && file.p[0] != '/' && b->dir ? b->dir : "",
+                     file.n && file.p[0] != '/' && b->dir ? "/" : "", (int)file.n, file.p);
+    if (n < 0 || (size_t)n >= sizeof path) {
+        fail(P, P->line, &tok, "table path too long", "a path of fewer than %d bytes", LSQT_PATH_CAP);
+        return NULL;
+    }
+    for (int i = 0; i < b->n_tables; i++)
+        if (strcmp(b->table_paths[i], path) == 0)
+            return &b->tables[i];
+    size_t len = 0;
+    char *text = lsqt_read_text(path, LSQT_INPUT_MAX, &len, err, sizeof err);
+    lsqt_band_table t;
+    if (!text || lsqt_band_table_parse(text, len, path, &t, err, sizeof err)) {
+        free(text);
+        fail(P, P->line, &tok, "unreadable table", "a table of wavelength (nm) and value rows: %s", err);
+        return NULL;
+    }
+    free(text);
+    char **paths = realloc(b->table_paths, (size_t)(b->n_tables + 1) * sizeof *paths);
+    if (paths)
+        b->table_paths = paths;
+    lsqt_band_table *tables = paths ? realloc(b->tables, (size_t)(b->n_tables + 1) * sizeof *tables) : NULL;
+    if (tables)
+        b->tables = tables;
+    char *copy = tables ? malloc(strlen(path) + 1) : NULL;
+    if (!copy) {
+        lsqt_band_table_free(&t);
+        out_of_memory(P);
+        return NULL;
+    }
+    strcpy(copy, path);
+    b->table_paths[b->n_tables] = copy, b->tables[b->n_tables] = t;
+    return &b->tables[b->n_tables++];
+}
+
+/* A number key written as a list or @FILE: its value in band P->band into *v (range
+ * checked). Returns 0, or 2 after fail(). text is the value after '='. */
+static int band_value(parser *P, const lsqt_key *k, span tok, span text, double *v)
+{
+    char buf[640];
+    lsqt_sb sb;
+    lsqt_sb_init(&sb, buf, sizeof buf);
+    const int nb = P->bands ? P->bands->n : 1;
+    if (strcmp(k->name, "z") == 0)
+        return fail(P, P->line, &tok, "z as a value per band", "one number: z is geometry, the same in every band");
+    const char *why;
+    if (text.p[0] == '@') {
+        if (!P->bands || !P->bands->wl)
+            return fail(P, P->line, &tok, "a table without wavelengths",
+                        "a number or a comma list (KEY=@FILE needs --wavelengths: the table is read at them)");
+        span file = { text.p + 1, text.n - 1 };
+        const lsqt_band_table *t = band_table(P, tok, file);
+        if (!t)
+            return 2;
+        double wl = P->bands->wl[P->band];
+        if (lsqt_band_table_at(t, wl, v))
+            return fail(P, P->line, &tok, "wavelength outside the table",
+                        "a table that covers %g nm (it covers %g to %g nm)", wl, t->wl[0], t->wl[t->n - 1]);
+        why = check_range(k, *v);
+    } else {
+        int count = 1;
+        for (size_t i = 0; i < text.n; i++)
+            count += text.p[i] == ',';
+        if (nb == 1)
+            return fail(P, P->line, &tok, "a list of values in a run of one band",
+                        "one number, with '.' as its decimal point (a comma list gives one value per band: "
+                        "a run with bands, such as --wavelengths, reads it)");
+        if (count != nb) {
+            describe_value(k, &sb);
+            return fail(P, P->line, &tok, "wrong number of values",
+                        "%d comma-separated values, one per band (this list has %d), or one number: %s", nb, count,
+                        buf);
+        }
+        const char *p = text.p, *end = text.p + text.n;
+        for (int i = 0; i < P->band; i++)
+            p = (const char *)memchr(p, ',', (size_t)(end - p)) + 1;
+        const char *e = memchr(p, ',', (size_t)(end - p));
+        span one = { p, (size_t)((e ? e : end) - p) };
+        why = one.n ? parse_value(k, one, v) : "empty value in the list";
+    }
+    if (why) {
+        describe_value(k, &sb);
+        return fail(P, P->line, &tok, why, "%s", buf);
+    }
+    return 0;
 }
 
 /* ---- One line ------------------------------------------------------------------------ */
@@ -459,10 +570,15 @@ static int read_key(parser *P, line_state *ls, span tok, const char *eq)
         return fail(P, P->line, &tok, "repeated key", "%s at most once (already given as '%s')",
                     k->name, show(*given, shown));
     double v = 0;
-    const char *why = parse_value(k, text, &v);
-    if (why) {
-        describe_value(k, &sb);
-        return fail(P, P->line, &tok, why, "%s", buf);
+    if (k->type == LSQT_NUM && text.n && (text.p[0] == '@' || memchr(text.p, ',', text.n))) {
+        if (band_value(P, k, tok, text, &v))
+            return 2;
+    } else {
+        const char *why = parse_value(k, text, &v);
+        if (why) {
+            describe_value(k, &sb);
+            return fail(P, P->line, &tok, why, "%s", buf);
+        }
     }
     store(ls->base, k, v);
     *given = tok;
@@ -794,9 +910,16 @@ static int parse_lines(parser *P, const char *text, size_t len)
 int lsqt_parse(const char *text, size_t len, const char *name, lsqt_assembly *out,
                lsqt_diag *diag)
 {
+    return lsqt_parse_band(text, len, name, NULL, 0, out, diag);
+}
+
+int lsqt_parse_band(const char *text, size_t len, const char *name, lsqt_bands *bands, int band,
+                    lsqt_assembly *out, lsqt_diag *diag)
+{
     lsqt_diag scratch;
     parser P;
     memset(&P, 0, sizeof P);
+    P.bands = bands, P.band = band;
     P.name = name ? name : "<input>";
     P.diag = diag ? diag : &scratch;
     memset(P.diag, 0, sizeof *P.diag);

@@ -56,6 +56,14 @@ typedef struct lsqt_diag {
 int lsqt_parse(const char *text, size_t len, const char *name, lsqt_assembly *out,
                lsqt_diag *diag);
 
+/* The same for band `band` of a run with bands (lsqt/bands.h): a number key may then be a
+ * comma list (one value per band) or @FILE (a table, interpolated at the band's
+ * wavelength), and this takes band `band`'s value; every rule holds per band, and an error
+ * names the band. bands NULL is lsqt_parse. */
+struct lsqt_bands;
+int lsqt_parse_band(const char *text, size_t len, const char *name, struct lsqt_bands *bands, int band,
+                    lsqt_assembly *out, lsqt_diag *diag);
+
 void lsqt_assembly_free(lsqt_assembly *a);
 
 /* Canonical text of the assembly: one line per medium/layer, seed model names, every

@@ -33,4 +33,19 @@ int lsqt_band_table_at(const lsqt_band_table *t, double wl, double *v);
 
 void lsqt_band_table_free(lsqt_band_table *t);
 
+/* What the parser needs to read band b of a key written as a list or a table: the run's
+ * band count and wavelengths (NULL when the bands are unnamed: lists only), and the folder
+ * a relative @FILE is read from. Tables read once are kept (tables, n_tables), so a parse
+ * per band reads each file once; lsqt_bands_free releases them. */
+typedef struct lsqt_bands {
+    int n;
+    const double *wl;
+    const char *dir;
+    int n_tables;
+    char **table_paths;
+    lsqt_band_table *tables;
+} lsqt_bands;
+
+void lsqt_bands_free(lsqt_bands *b);
+
 #endif
