@@ -99,7 +99,7 @@ static void parse_per_band(void)
     fputs("# fR of a made-up paint\n400 0.1\n500 0.3\n700 0.9\n", f);
     fclose(f);
     const double wl[] = {450, 550, 650};
-    lsqt_bands b = {3, wl, dir, 0, NULL, NULL};
+    lsqt_bands b = {3, wl, dir, 0, NULL, NULL, 0};
     lsqt_assembly a;
     /* a list: element b; a table: interpolated at wl[b] (450: 0.2, 550: 0.45, 650: 0.75) */
     const char *text = "Medium\nLayer z=0 Lambertian fR=@fr.txt fT=0.05,0.1,0.15\nMedium\n";
@@ -139,13 +139,13 @@ static void parse_per_band(void)
     }
     /* a wavelength outside the table */
     const double far[] = {450, 550, 750};
-    lsqt_bands b2 = {3, far, dir, 0, NULL, NULL};
+    lsqt_bands b2 = {3, far, dir, 0, NULL, NULL, 0};
     CHECK(parse_band("Medium\nLayer z=0 Lambertian fR=@fr.txt\nMedium\n", &b2, 2, &a, err) == 2 &&
               strstr(err, "band 3 (750 nm): wavelength outside the table") && strstr(err, "400 to 700 nm"),
           "%s", err);
     lsqt_bands_free(&b2);
     /* unnamed bands (lists only): no tables, and the band has no wavelength in messages */
-    lsqt_bands rgb = {3, NULL, dir, 0, NULL, NULL};
+    lsqt_bands rgb = {3, NULL, dir, 0, NULL, NULL, 0};
     CHECK(parse_band("Medium\nLayer z=0 Lambertian fR=@fr.txt\nMedium\n", &rgb, 0, &a, err) == 2 &&
               strstr(err, "a table without wavelengths"), "%s", err);
     CHECK(parse_band("Medium\nLayer z=0 Lambertian fR=0.9,0.9,0.5 fT=0,0,0.6\nMedium\n", &rgb, 2, &a, err) == 2 &&

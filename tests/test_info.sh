@@ -158,8 +158,8 @@ cp L.lsqt.lss magic.lss
 printf 'XSQT' | dd of=magic.lss bs=1 seek=0 conv=notrunc status=none
 cp L.lsqt.lss v1.lss
 printf '\001\000\000\000' | dd of=v1.lss bs=1 seek=8 conv=notrunc status=none
-cp L.lsqt.lss v7.lss
-printf '\007\000\000\000' | dd of=v7.lss bs=1 seek=8 conv=notrunc status=none
+cp L.lsqt.lss v8.lss
+printf '\010\000\000\000' | dd of=v8.lss bs=1 seek=8 conv=notrunc status=none
 : > empty.lss
 printf 'Medium\nLayer z=0 NullBsdf\nMedium\n' > text.lss
 mkdir dir.lss
@@ -184,8 +184,8 @@ flip.lss|corrupt LSS file (CRC mismatch
 long.lss|corrupt LSS file: $((n + 1)) bytes where its header announces $n
 magic.lss|not an LSS file (bad magic)
 text.lss|not an LSS file (bad magic)
-v1.lss|LSS version 1, this lsqt-cl reads versions 5 and 6
-v7.lss|LSS version 7, this lsqt-cl reads versions 5 and 6
+v1.lss|LSS version 1, this lsqt-cl reads versions 5 to 7
+v8.lss|LSS version 8, this lsqt-cl reads versions 5 to 7
 empty.lss|empty file (not an LSS file)
 dir.lss|is a directory, not an LSS file
 fifo.lss|is a FIFO, not an LSS file

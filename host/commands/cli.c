@@ -57,6 +57,12 @@ static void help_usage_and_sampling(FILE *f)
 /* --help, part 2: the flags of the sides, the seed, the device and the outputs. */
 static void help_run_flags(FILE *f)
 {
+    fputs("      --wavelengths LIST      the run's bands, in nm: 450,550,650 or START:STOP:STEP (both\n"
+          "                              ends included); a number key may then be a comma list (one\n"
+          "                              value per band) or @FILE (a table of nm and value, read\n"
+          "                              at each band); without it, comma lists alone set the bands\n"
+          "                              (three are R, G, B). One RAW per band: OUT.550nm.raw\n"
+          ,f);
     fputs("      --from-below            when the stack transmits, also the slices of light entering\n"
           "                              from the bottom medium (the full two-sided BSDF), written\n"
           "                              to OUT.below.raw (the stack turned upside down: negate z of\n"
@@ -132,7 +138,7 @@ void lsqt_cli_help(FILE *f)
 
 enum flag_id {
     F_PATHS, F_WO, F_WO_ANGLES, F_WI, F_WI_FILE, F_RX, F_RP, F_RESTART, F_SEED, F_THREADS, F_OUTPUT,
-    F_HEMI, F_SPREAD, F_GRID, F_RGL_GRID, F_BELOW, F_CHECKPOINT, F_SHARD, F_REFINE, F_DEVICE, F_LIST, F_DOUBLE, F_TIME, F_TARGET, F_LSS, F_JSON, F_QUIET, F_VERBOSE, F_HELP
+    F_HEMI, F_SPREAD, F_GRID, F_RGL_GRID, F_WAVELENGTHS, F_BELOW, F_CHECKPOINT, F_SHARD, F_REFINE, F_DEVICE, F_LIST, F_DOUBLE, F_TIME, F_TARGET, F_LSS, F_JSON, F_QUIET, F_VERBOSE, F_HELP
 };
 
 static const struct flag {
@@ -154,6 +160,7 @@ static const struct flag {
     {NULL, "--checkpoint", F_CHECKPOINT, 1}, {NULL, "--shard", F_SHARD, 1},
     {NULL, "--refine", F_REFINE, 0}, {NULL, "--from-below", F_BELOW, 0},
     {NULL, "--grid", F_GRID, 1},             {NULL, "--rgl-grid", F_RGL_GRID, 1},
+    {NULL, "--wavelengths", F_WAVELENGTHS, 1},
 };
 
 /* --grid NO,NI,NPHI or --grid N (= N,N,4(N-1)): NO, NI in 2-1024, NPHI even in 2-2048
@@ -252,6 +259,7 @@ static int apply(const struct flag *fl, const char *name, const char *v, lsqt_cl
         if (both) c->grid_rgl = 2;
         if (parse_grid(v, c)) expect = "NO,NI,NPHI (or N for N,N,4(N-1)): NO and NI in 2-1024, NPHI even in 2-2048";
         c->sampling_given = 1; break;
+    case F_WAVELENGTHS: if (!*v) expect = "wavelengths in nm: a list (450,550,650) or START:STOP:STEP"; c->wavelengths = v; break;
     case F_BELOW: c->from_below = 1; c->sampling_given = 1; break;
     case F_CHECKPOINT: if (lsqt_parse_double(v, &d) || !(d >= 0)) expect = "seconds >= 0 (0: no checkpoints)"; else c->checkpoint = d; break;
     case F_SHARD: if (parse_shard(v, c)) expect = "K/N with 0 <= K < N <= 65536 (e.g. 0/4; SLURM: $SLURM_ARRAY_TASK_ID/N)"; break;

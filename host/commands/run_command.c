@@ -6,6 +6,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "lsqt/bands.h"
 #include "lsqt/device.h"
 #include "lsqt/directions.h"
 #include "lsqt/lss.h"
@@ -39,8 +40,20 @@ static int read_assembly(const lsqt_cli *c, int from_stdin, lsqt_assembly *a)
     if (!text) return fail(2, "%s%s", err, "");
     lsqt_diag diag;
     memset(&diag, 0, sizeof diag);
-    int prc = lsqt_parse(text, len, from_stdin ? "<stdin>" : c->input, a, &diag);
+    double *wl = NULL;
+    int n_wl = 0;
+    if (c->wavelengths && lsqt_parse_wavelengths(c->wavelengths, &wl, &n_wl, err, sizeof err)) {
+        free(text);
+        return fail(2, "--wavelengths: %s%s", err, "");
+    }
+    /* a relative @FILE is read from the LSQT file's folder */
+    char dir[LSQT_PATH_CAP];
+    const char *slash = from_stdin ? NULL : strrchr(c->input, '/');
+    snprintf(dir, sizeof dir, "%.*s", slash ? (int)(slash - c->input) + (slash == c->input) : 1,
+             slash ? c->input : ".");
+    int prc = lsqt_parse_bands(text, len, from_stdin ? "<stdin>" : c->input, wl, n_wl, dir, a, &diag);
     free(text);
+    free(wl);
     if (!c->quiet)
         for (int i = 0; i < diag.n_notes; i++) fprintf(stderr, "%s\n", diag.notes[i]);
     if (prc) {

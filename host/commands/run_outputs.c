@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "lsqt/bands.h"
 #include "lsqt/below.h"
 #include "lsqt/lss.h"
 #include "lsqt/raw.h"
@@ -143,12 +144,26 @@ int run_lock_states(const outputs *o, int quiet)
     return 0;
 }
 
+/* "X.raw" or, with bands, "X.{450nm,...,650nm}.raw" */
+static void raw_shown(const lsqt_state *st, const char *path, char *buf, size_t cap)
+{
+    if (st->n_bands <= 1) {
+        snprintf(buf, cap, "%s", path);
+        return;
+    }
+    char l0[48], l1[48], braces[128];
+    lsqt_band_label(st->n_bands, st->wavelengths, 0, l0, sizeof l0);
+    lsqt_band_label(st->n_bands, st->wavelengths, st->n_bands - 1, l1, sizeof l1);
+    snprintf(braces, sizeof braces, "{%s,%s%s}", l0, st->n_bands > 2 ? "...," : "", l1);
+    lsqt_band_path(path, braces, buf, cap);
+}
+
 int run_write_outputs(const outputs *o, const lsqt_cli *c, const lsqt_state *st, const lsqt_state *lss_st,
                       const lsqt_slice_est *est, const lsqt_run_info *ri, FILE *info)
 {
     char err[LSQT_PATH_CAP + 512];
     int failed = 0, wrote = 0, skipped = 0, sk = 0;
-    char done[OUT_COUNT * (LSQT_PATH_CAP + 2)];
+    char done[OUT_COUNT * (LSQT_PATH_CAP + 164)];
     int written[OUT_COUNT] = {0};
     done[0] = '\0';
     /* RAW files hold one side each: the main one exactly what it is without --from-below */
@@ -172,9 +187,9 @@ int run_write_outputs(const outputs *o, const lsqt_cli *c, const lsqt_state *st,
         int rc = i == OUT_LSS    ? lsqt_lss_write(p, lss_st, err, sizeof err)
                  : i == OUT_JSON ? lsqt_report_json(p, st, est, ri, err, sizeof err)
                  : i == OUT_RAW_T || i == OUT_RAW_BT
-                     ? lsqt_raw_write(p, rs, re, LSQT_RAW_TRANSMIT, &sk, err, sizeof err)
-                     : lsqt_raw_write(p, rs, re, c->only_hemispherical ? LSQT_RAW_REFLECT : LSQT_RAW_ALL,
-                                      &skipped, err, sizeof err);
+                     ? lsqt_raw_write_bands(p, rs, re, LSQT_RAW_TRANSMIT, &sk, err, sizeof err)
+                     : lsqt_raw_write_bands(p, rs, re, c->only_hemispherical ? LSQT_RAW_REFLECT : LSQT_RAW_ALL,
+                                     &skipped, err, sizeof err);
         if (rc) {
             fail(1, "%s%s", err, "");
             failed++;
@@ -184,8 +199,11 @@ int run_write_outputs(const outputs *o, const lsqt_cli *c, const lsqt_state *st,
     }
     for (int i = 0; i < OUT_COUNT; i++) /* in the usual order: RAW files, LSS, JSON */
         if (written[i]) {
+            char shown[LSQT_PATH_CAP + 160];
+            if (i == OUT_LSS || i == OUT_JSON) snprintf(shown, sizeof shown, "%s", o->path[i]);
+            else raw_shown(st, o->path[i], shown, sizeof shown);
             size_t n = strlen(done);
-            snprintf(done + n, sizeof done - n, "%s%s", wrote++ ? ", " : "", o->path[i]);
+            snprintf(done + n, sizeof done - n, "%s%s", wrote++ ? ", " : "", shown);
         }
     if (!c->quiet && wrote) fprintf(info, "wrote %s\n", done);
     if (!c->quiet && c->only_hemispherical && !o->path[OUT_RAW_T])

@@ -64,8 +64,60 @@ static void write_line(lsqt_sb *sb, const lsqt_line_desc *d, const void *obj, in
     lsqt_sb_printf(sb, "\n");
 }
 
+/* The bands' texts merged token by token: a token the same in every band once, a
+ * KEY=VALUE that differs as KEY=V1,V2,... (the bands share their structure). */
+static size_t canonical_bands(const lsqt_assembly *a, char *buf, size_t cap)
+{
+    lsqt_sb sb;
+    lsqt_sb_init(&sb, buf, cap);
+    const int n = a->n_bands;
+    char **text = calloc((size_t)n, sizeof *text);
+    const char **at = calloc((size_t)n, sizeof *at);
+    for (int b = 0; text && at && b < n; b++) {
+        size_t len = lsqt_assembly_canonical(&a->band[b], NULL, 0);
+        if ((text[b] = malloc(len + 1)) != NULL)
+            lsqt_assembly_canonical(&a->band[b], text[b], len + 1);
+        at[b] = text[b];
+    }
+    int ok = text && at;
+    for (int b = 0; ok && b < n; b++)
+        ok = text[b] != NULL;
+    if (ok) {
+        lsqt_sb_printf(&sb, "# bands %d", n);
+        for (int b = 0; a->wavelengths && b < n; b++)
+            lsqt_sb_printf(&sb, "%s%.17g", b ? "," : ": ", a->wavelengths[b]);
+        lsqt_sb_printf(&sb, "%s\n", a->wavelengths ? " nm" : "");
+    }
+    while (ok && *at[0]) {
+        const size_t l0 = strcspn(at[0], " \n");
+        int same = 1;
+        for (int b = 1; b < n; b++)
+            same &= strcspn(at[b], " \n") == l0 && memcmp(at[b], at[0], l0) == 0;
+        const char *eq = memchr(at[0], '=', l0);
+        const size_t key = eq ? (size_t)(eq - at[0]) + 1 : 0;
+        lsqt_sb_printf(&sb, "%.*s", (int)(same || !eq ? l0 : key), at[0]);
+        for (int b = 0; !same && eq && b < n; b++) {
+            const size_t lb = strcspn(at[b], " \n");
+            lsqt_sb_printf(&sb, "%s%.*s", b ? "," : "", (int)(lb > key ? lb - key : 0), at[b] + key);
+        }
+        for (int b = 0; b < n; b++) /* past the token and its separator, written once */
+            at[b] += strcspn(at[b], " \n");
+        if (*at[0])
+            lsqt_sb_printf(&sb, "%c", *at[0]);
+        for (int b = 0; b < n; b++)
+            at[b] += *at[b] != '\0';
+    }
+    for (int b = 0; text && b < n; b++)
+        free(text[b]);
+    free(text);
+    free(at);
+    return sb.len;
+}
+
 size_t lsqt_assembly_canonical(const lsqt_assembly *a, char *buf, size_t cap)
 {
+    if (a->n_bands > 1)
+        return canonical_bands(a, buf, cap);
     lsqt_sb sb;
     lsqt_sb_init(&sb, buf, cap);
     for (int i = 0; a->media && i <= a->n_layers; i++) {

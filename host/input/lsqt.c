@@ -152,6 +152,13 @@ typedef struct parser {
     int n_pruned;
     lsqt_bands *bands; /* NULL: one band, numbers only */
     int band;          /* the band whose values are read */
+    /* A run with bands parses every band twice (lsqt_parse_bands): first a survey (no
+     * pruning, no rule on the bottom medium) that finds what every band shares, then each
+     * band with the shared decisions. */
+    int survey;
+    int prune_at;                   /* >= 0: prune below this layer (the first opaque in every band) */
+    const unsigned char *keep_phase; /* per medium: 1 when it scatters in some band, so its phase
+                                      * model stays where its mus is 0 */
 } parser;
 
 /* One line being read. */
@@ -521,15 +528,21 @@ static int band_value(parser *P, const lsqt_key *k, span tok, span text, double 
         int count = 1;
         for (size_t i = 0; i < text.n; i++)
             count += text.p[i] == ',';
-        if (nb == 1)
+        if (nb == 0) { /* no --wavelengths: the first list sets the band count */
+            P->bands->n = count, P->bands->count_line = P->line;
+        } else if (nb == 1)
             return fail(P, P->line, &tok, "a list of values in a run of one band",
                         "one number, with '.' as its decimal point (a comma list gives one value per band: "
                         "a run with bands, such as --wavelengths, reads it)");
-        if (count != nb) {
+        if (count != P->bands->n) {
             describe_value(k, &sb);
+            if (P->bands->count_line)
+                return fail(P, P->line, &tok, "lists of different lengths",
+                            "%d comma-separated values, as the list on line %d (this list has %d), or one number: %s",
+                            P->bands->n, P->bands->count_line, count, buf);
             return fail(P, P->line, &tok, "wrong number of values",
-                        "%d comma-separated values, one per band (this list has %d), or one number: %s", nb, count,
-                        buf);
+                        "%d comma-separated values, one per band of --wavelengths (this list has %d), or one "
+                        "number: %s", P->bands->n, count, buf);
         }
         const char *p = text.p, *end = text.p + text.n;
         for (int i = 0; i < P->band; i++)
@@ -701,7 +714,7 @@ static int finish_medium(parser *P, line_state *ls, lsqt_medium *m)
         return fail(P, P->line, mus_tok, "scattering medium without a phase model",
                     "a phase model after the Medium keys when mus > 0: one of %s", buf);
     }
-    if (m->mus == 0 && ls->model) {
+    if (m->mus == 0 && ls->model && !(P->keep_phase && P->keep_phase[P->n_media])) {
         note(P, P->line, "%s ignored: mus=0, the medium does not scatter", ls->model->name);
         memset(&m->phase, 0, sizeof m->phase);
     }
@@ -806,6 +819,8 @@ static void prune(parser *P)
     int p = 0;
     while (p < P->n_layers && lsqt_layer_transmits(&P->layers[p]))
         p++;
+    if (P->prune_at >= 0) /* bands: where every band is stopped, not this one */
+        p = P->prune_at < P->n_layers ? P->prune_at : P->n_layers;
     if (p == P->n_layers)
         return;
     const lsqt_layer *stop = &P->layers[p];
@@ -863,6 +878,8 @@ static int finish_assembly(parser *P)
         return fail(P, P->layers[P->n_layers - 1].line, NULL, "the input ends with a layer",
                     "a bottom Medium line after the Layer on line %d",
                     P->layers[P->n_layers - 1].line);
+    if (P->survey)
+        return 0;
     prune(P);
     if (P->layers[P->n_layers - 1].kind != LSQT_BSDF_MS_CONDUCTIVE &&
         require_clear(P, &P->media[P->n_media - 1], "bottom"))
@@ -913,30 +930,132 @@ int lsqt_parse(const char *text, size_t len, const char *name, lsqt_assembly *ou
     return lsqt_parse_band(text, len, name, NULL, 0, out, diag);
 }
 
-int lsqt_parse_band(const char *text, size_t len, const char *name, lsqt_bands *bands, int band,
-                    lsqt_assembly *out, lsqt_diag *diag)
+/* One parse with the parser's settings (bands, survey, shared decisions) filled in. */
+static int parse_into(parser *P, const char *text, size_t len, const char *name, lsqt_assembly *out,
+                      lsqt_diag *diag)
 {
     lsqt_diag scratch;
-    parser P;
-    memset(&P, 0, sizeof P);
-    P.bands = bands, P.band = band;
-    P.name = name ? name : "<input>";
-    P.diag = diag ? diag : &scratch;
-    memset(P.diag, 0, sizeof *P.diag);
+    P->name = name ? name : "<input>";
+    P->diag = diag ? diag : &scratch;
+    memset(P->diag, 0, sizeof *P->diag);
     if (!out)
-        return fail(&P, 0, NULL, "no assembly to fill", "a non-NULL output");
+        return fail(P, 0, NULL, "no assembly to fill", "a non-NULL output");
     memset(out, 0, sizeof *out);
 
     int rc;
     if (!text && len > 0)
-        rc = fail(&P, 0, NULL, "no text", "a non-NULL text");
+        rc = fail(P, 0, NULL, "no text", "a non-NULL text");
     else
-        rc = text ? parse_lines(&P, text, len) : 0;
+        rc = text ? parse_lines(P, text, len) : 0;
     if (!rc)
-        rc = finish_assembly(&P);
+        rc = finish_assembly(P);
     if (!rc)
-        rc = hand_over(&P, out);
-    free(P.media);
-    free(P.layers);
+        rc = hand_over(P, out);
+    free(P->media);
+    free(P->layers);
+    return rc;
+}
+
+int lsqt_parse_band(const char *text, size_t len, const char *name, lsqt_bands *bands, int band,
+                    lsqt_assembly *out, lsqt_diag *diag)
+{
+    parser P;
+    memset(&P, 0, sizeof P);
+    P.bands = bands, P.band = band, P.prune_at = -1;
+    return parse_into(&P, text, len, name, out, diag);
+}
+
+/* What the bands share, from a survey of each: a layer is pruned only where every band
+ * is stopped, and a medium keeps its phase model when it scatters in any band (an albedo
+ * of 0 in one band is a value, not another model). */
+static int survey_bands(const char *text, size_t len, const char *name, lsqt_bands *bands, int *prune_at,
+                        unsigned char **keep_phase, lsqt_diag *diag)
+{
+    int n_layers = -1;
+    unsigned char *opaque = NULL;
+    for (int b = 0; b < bands->n; b++) {
+        parser P;
+        memset(&P, 0, sizeof P);
+        P.bands = bands, P.band = b, P.prune_at = -1, P.survey = 1;
+        lsqt_assembly a;
+        if (parse_into(&P, text, len, name, &a, diag))
+            return 2;
+        if (n_layers < 0) {
+            n_layers = a.n_layers;
+            opaque = malloc((size_t)n_layers + 1);
+            *keep_phase = calloc((size_t)n_layers + 2, 1);
+            if (!opaque || !*keep_phase) {
+                lsqt_assembly_free(&a);
+                free(opaque);
+                return 2;
+            }
+            memset(opaque, 1, (size_t)n_layers + 1);
+        }
+        for (int i = 0; i < a.n_layers; i++)
+            opaque[i] &= (unsigned char)!lsqt_layer_transmits(&a.layers[i]);
+        for (int m = 0; m <= a.n_layers; m++)
+            (*keep_phase)[m] |= (unsigned char)(a.media[m].mus > 0);
+        lsqt_assembly_free(&a);
+    }
+    *prune_at = n_layers;
+    for (int i = 0; i < n_layers; i++)
+        if (opaque[i]) {
+            *prune_at = i;
+            break;
+        }
+    free(opaque);
+    return 0;
+}
+
+int lsqt_parse_bands(const char *text, size_t len, const char *name, const double *wl, int n_wl,
+                     const char *dir, lsqt_assembly *out, lsqt_diag *diag)
+{
+    lsqt_bands bands;
+    memset(&bands, 0, sizeof bands);
+    bands.n = n_wl, bands.wl = wl, bands.dir = dir;
+    /* The band count: --wavelengths, else the first list (a survey of band 1 finds it). */
+    int rc = 0;
+    if (n_wl == 0) {
+        parser P;
+        memset(&P, 0, sizeof P);
+        P.bands = &bands, P.prune_at = -1, P.survey = 1;
+        lsqt_assembly a;
+        rc = parse_into(&P, text, len, name, &a, diag);
+        if (!rc)
+            lsqt_assembly_free(&a);
+        if (!rc && bands.n == 0)
+            bands.n = 1; /* no list: one band */
+    }
+    if (!rc && bands.n == 1) {
+        rc = lsqt_parse_band(text, len, name, &bands, 0, out, diag);
+        lsqt_bands_free(&bands);
+        return rc;
+    }
+    int prune_at = -1;
+    unsigned char *keep = NULL;
+    if (!rc)
+        rc = survey_bands(text, len, name, &bands, &prune_at, &keep, diag);
+    lsqt_assembly *each = rc ? NULL : calloc((size_t)bands.n, sizeof *each);
+    int done = 0;
+    for (; !rc && each && done < bands.n; done++) {
+        parser P;
+        memset(&P, 0, sizeof P);
+        P.bands = &bands, P.band = done, P.prune_at = prune_at, P.keep_phase = keep;
+        lsqt_diag scratch; /* the notes are band 1's: the others would repeat them */
+        rc = parse_into(&P, text, len, name, &each[done], done ? &scratch : diag);
+        if (rc && done && diag)
+            *diag = scratch;
+    }
+    free(keep);
+    lsqt_bands_free(&bands);
+    if (!rc && (!each || lsqt_assembly_join(each, bands.n, wl, out))) {
+        rc = 2;
+        if (diag)
+            snprintf(diag->error, sizeof diag->error, "%s: error: out of memory", name ? name : "<input>");
+    }
+    if (rc)
+        for (int b = 0; b < done && b < bands.n; b++)
+            lsqt_assembly_free(&each[b]);
+    free(each);
     return rc;
 }

@@ -9,9 +9,44 @@ void lsqt_assembly_free(lsqt_assembly *a)
 {
     if (!a)
         return;
+    for (int b = 0; a->band && b < a->n_bands; b++)
+        lsqt_assembly_free(&a->band[b]);
+    free(a->band);
+    free(a->wavelengths);
     free(a->layers);
     free(a->media);
     memset(a, 0, sizeof *a);
+}
+
+int lsqt_assembly_join(lsqt_assembly *each, int n, const double *wl, lsqt_assembly *out)
+{
+    memset(out, 0, sizeof *out);
+    const int nl = each[0].n_layers;
+    out->band = malloc((size_t)n * sizeof *out->band);
+    out->wavelengths = wl ? malloc((size_t)n * sizeof *wl) : NULL;
+    out->layers = malloc((size_t)nl * sizeof *out->layers);
+    out->media = malloc(((size_t)nl + 1) * sizeof *out->media);
+    if (!out->band || (wl && !out->wavelengths) || !out->layers || !out->media) {
+        free(out->band), free(out->wavelengths), free(out->layers), free(out->media);
+        memset(out, 0, sizeof *out);
+        return 2;
+    }
+    memcpy(out->layers, each[0].layers, (size_t)nl * sizeof *out->layers);
+    memcpy(out->media, each[0].media, ((size_t)nl + 1) * sizeof *out->media);
+    out->n_layers = nl;
+    out->n_pruned_layers = each[0].n_pruned_layers;
+    memcpy(out->band, each, (size_t)n * sizeof *each);
+    if (wl)
+        memcpy(out->wavelengths, wl, (size_t)n * sizeof *wl);
+    out->n_bands = n;
+    return 0;
+}
+
+int lsqt_assembly_bands(const lsqt_assembly *a) { return a->n_bands > 1 ? a->n_bands : 1; }
+
+const lsqt_assembly *lsqt_assembly_band(const lsqt_assembly *a, int b)
+{
+    return a->n_bands > 1 ? &a->band[b] : a;
 }
 
 int lsqt_layer_transmits(const lsqt_layer *l)
@@ -26,6 +61,12 @@ int lsqt_layer_transmits(const lsqt_layer *l)
 
 int lsqt_assembly_transmits(const lsqt_assembly *a)
 {
+    if (a->n_bands > 1) {
+        for (int b = 0; b < a->n_bands; b++)
+            if (lsqt_assembly_transmits(&a->band[b]))
+                return 1;
+        return 0;
+    }
     for (int i = 0; i < a->n_layers; i++)
         if (!lsqt_layer_transmits(&a->layers[i]))
             return 0;

@@ -35,33 +35,15 @@ static int phase_self_mirror(int kind)
 #undef MIRRORS
 }
 
-int lsqt_assembly_mirror(const lsqt_assembly *a, lsqt_assembly *out, char *err, size_t errcap)
+/* A's stack upside down, without checks. Returns 0, or 2 out of memory. */
+static int mirror_one(const lsqt_assembly *a, lsqt_assembly *out)
 {
     memset(out, 0, sizeof *out);
     const int n = a->n_layers;
-    for (int i = 0; i < n; i++)
-        if (!lsqt_layer_transmits(&a->layers[i])) {
-            snprintf(err, errcap, "line %d: %s transmits nothing, so light from below never reaches what lies "
-                                  "above it", a->layers[i].line, lsqt_bsdf_name(a->layers[i].kind));
-            return 2;
-        }
-    for (int i = 0; i < n; i++)
-        if (!layer_self_mirror(a->layers[i].kind)) {
-            snprintf(err, errcap, "line %d: %s has no mirror image (light from below) that lsqt-cl can express",
-                     a->layers[i].line, lsqt_bsdf_name(a->layers[i].kind));
-            return 2;
-        }
-    for (int m = 0; m <= n; m++)
-        if (a->media[m].mus > 0 && !phase_self_mirror(a->media[m].phase.kind)) {
-            snprintf(err, errcap, "line %d: %s has no mirror image (light from below) that lsqt-cl can express",
-                     a->media[m].line, lsqt_phase_name(a->media[m].phase.kind));
-            return 2;
-        }
     out->layers = calloc((size_t)(n > 0 ? n : 1), sizeof *out->layers);
     out->media = calloc((size_t)n + 1, sizeof *out->media);
     if (!out->layers || !out->media) {
         lsqt_assembly_free(out);
-        snprintf(err, errcap, "out of memory");
         return 2;
     }
     out->n_layers = n;
@@ -74,6 +56,50 @@ int lsqt_assembly_mirror(const lsqt_assembly *a, lsqt_assembly *out, char *err, 
     return 0;
 }
 
+/* Layer i lets light through in some band. */
+static int layer_transmits_any(const lsqt_assembly *a, int i)
+{
+    for (int b = 0; b < lsqt_assembly_bands(a); b++)
+        if (lsqt_layer_transmits(&lsqt_assembly_band(a, b)->layers[i])) return 1;
+    return 0;
+}
+
+int lsqt_assembly_mirror(const lsqt_assembly *a, lsqt_assembly *out, char *err, size_t errcap)
+{
+    memset(out, 0, sizeof *out);
+    const int n = a->n_layers;
+    for (int i = 0; i < n; i++)
+        if (!layer_transmits_any(a, i)) {
+            snprintf(err, errcap, "line %d: %s transmits nothing, so light from below never reaches what lies "
+                                  "above it", a->layers[i].line, lsqt_bsdf_name(a->layers[i].kind));
+            return 2;
+        }
+    for (int i = 0; i < n; i++)
+        if (!layer_self_mirror(a->layers[i].kind)) {
+            snprintf(err, errcap, "line %d: %s has no mirror image (light from below) that lsqt-cl can express",
+                     a->layers[i].line, lsqt_bsdf_name(a->layers[i].kind));
+            return 2;
+        }
+    /* a phase model is kept only where the medium scatters (in some band) */
+    for (int m = 0; m <= n; m++)
+        if (!phase_self_mirror(a->media[m].phase.kind)) {
+            snprintf(err, errcap, "line %d: %s has no mirror image (light from below) that lsqt-cl can express",
+                     a->media[m].line, lsqt_phase_name(a->media[m].phase.kind));
+            return 2;
+        }
+    const int nb = a->n_bands > 1 ? a->n_bands : 0;
+    lsqt_assembly *each = nb ? calloc((size_t)nb, sizeof *each) : NULL;
+    int rc = nb && !each ? 2 : 0;
+    for (int b = 0; b < nb && !rc; b++) rc = mirror_one(&a->band[b], &each[b]);
+    if (!rc) rc = nb ? lsqt_assembly_join(each, nb, a->wavelengths, out) : mirror_one(a, out);
+    if (rc) {
+        for (int b = 0; each && b < nb; b++) lsqt_assembly_free(&each[b]);
+        snprintf(err, errcap, "out of memory");
+    }
+    free(each);
+    return rc;
+}
+
 int lsqt_state_below_count(const lsqt_state *st)
 {
     int k = 0;
@@ -84,7 +110,9 @@ int lsqt_state_below_count(const lsqt_state *st)
 /* OUT: N slices (zero), every setting and the ranges of ST. */
 static int init_like(lsqt_state *out, const lsqt_state *st, int n)
 {
-    if (lsqt_state_init(out, st->canonical, st->hash, st->seed, n, st->n_wi, st->transmits)) return -1;
+    if (lsqt_state_init_bands(out, st->canonical, st->hash, st->seed, n, st->n_wi, st->transmits, st->n_bands,
+                              st->wavelengths))
+        return -1;
     out->use_double = st->use_double;
     out->span_end = st->span_end;
     out->stage = st->stage;
@@ -103,15 +131,11 @@ static int init_like(lsqt_state *out, const lsqt_state *st, int n)
 /* Slice ss of SRC (direction, flags, tallies) as slice ds of DST (same n_wi). */
 static void copy_slice(lsqt_state *dst, int ds, const lsqt_state *src, int ss)
 {
-    const size_t B = LSQT_BATCHES, nw = (size_t)src->n_wi;
+    const size_t nw = (size_t)src->n_wi;
     dst->theta_o[ds] = src->theta_o[ss];
     dst->slice_flags[ds] = src->slice_flags[ss];
     memcpy(dst->wi + (size_t)ds * nw * 4, src->wi + (size_t)ss * nw * 4, nw * 4 * sizeof *src->wi);
-    memcpy(dst->nee + (size_t)ds * B * nw, src->nee + (size_t)ss * B * nw, B * nw * sizeof *src->nee);
-    memcpy(dst->scalars + (size_t)ds * B * LSQT_T_COUNT, src->scalars + (size_t)ss * B * LSQT_T_COUNT,
-           B * LSQT_T_COUNT * sizeof *src->scalars);
-    memcpy(dst->hist + (size_t)ds * B * LSQT_HIST_BINS, src->hist + (size_t)ss * B * LSQT_HIST_BINS,
-           B * LSQT_HIST_BINS * sizeof *src->hist);
+    lsqt_state_copy_slice_tallies(dst, ds, src, ss);
 }
 
 int lsqt_state_split_sides(const lsqt_state *st, lsqt_state *above, lsqt_state *below)

@@ -369,7 +369,8 @@ int lsqt_rrss_pilot(lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *
     const int n = st->n_wi, m = rx * n, ns = st->n_slices;
     info->candidates = m;
     /* slice s's candidate block j is launch slice s * rx + j */
-    if (lsqt_state_init(ps, st->canonical, st->hash, st->seed, ns * rx, n, st->transmits)) {
+    if (lsqt_state_init_bands(ps, st->canonical, st->hash, st->seed, ns * rx, n, st->transmits, st->n_bands,
+                              st->wavelengths)) {
         snprintf(err, errcap, "out of memory");
         return 1;
     }
@@ -423,7 +424,8 @@ int lsqt_rrss_choose(const lsqt_state *ps, lsqt_state *st, lsqt_rrss_info *info,
 {
     const int rx = (int)ps->rx, n = ps->n_wi, m = rx * n, ns = ps->n_slices / rx;
     info->candidates = m;
-    if (lsqt_state_init(st, ps->canonical, ps->hash, ps->seed, ns, n, ps->transmits)) {
+    if (lsqt_state_init_bands(st, ps->canonical, ps->hash, ps->seed, ns, n, ps->transmits, ps->n_bands,
+                              ps->wavelengths)) {
         snprintf(err, errcap, "out of memory");
         return 1;
     }
@@ -435,9 +437,15 @@ int lsqt_rrss_choose(const lsqt_state *ps, lsqt_state *st, lsqt_rrss_info *info,
     for (int sl = 0; sl < ns; sl++) st->theta_o[sl] = ps->theta_o[sl * rx], st->slice_flags[sl] = ps->slice_flags[sl * rx];
     double *f = calloc((size_t)m, sizeof *f);
     unsigned char *keep = calloc((size_t)m, 1);
-    lsqt_slice_est *est = lsqt_estimates(ps);
-    int rc = 1;
-    if (!f || !keep || !est || lsqt_state_set_ranges(st, ps->ranges, ps->n_ranges)) {
+    /* With bands, the choice is made on their sum: a direction bright in any band counts. */
+    const int nbands = ps->n_bands > 1 ? ps->n_bands : 1;
+    lsqt_slice_est **est = calloc((size_t)nbands, sizeof *est);
+    int rc = 1, have_est = est != NULL;
+    for (int b = 0; have_est && b < nbands; b++) {
+        const lsqt_state view = lsqt_state_band(ps, b);
+        have_est = (est[b] = lsqt_estimates(&view)) != NULL;
+    }
+    if (!f || !keep || !have_est || lsqt_state_set_ranges(st, ps->ranges, ps->n_ranges)) {
         snprintf(err, errcap, "out of memory");
         goto done;
     }
@@ -447,7 +455,10 @@ int lsqt_rrss_choose(const lsqt_state *ps, lsqt_state *st, lsqt_rrss_info *info,
     const double t_sel = lsqt_now();
     for (int sl = 0; sl < ns; sl++) {
         const float *cand = ps->wi + (size_t)sl * m * 4; /* the blocks of slice sl, in order */
-        for (int c = 0; c < m; c++) f[c] = est[sl * rx + c / n].f[c % n].mean;
+        for (int c = 0; c < m; c++) {
+            f[c] = 0.0;
+            for (int b = 0; b < nbands; b++) f[c] += est[b][sl * rx + c / n].f[c % n].mean;
+        }
         int fb = lsqt_rrss_select(cand, f, m, n, st->transmits, keep);
         if (fb < 0) {
             snprintf(err, errcap, "out of memory");
@@ -460,20 +471,28 @@ int lsqt_rrss_choose(const lsqt_state *ps, lsqt_state *st, lsqt_rrss_info *info,
             if (!keep[c]) continue;
             const int v = sl * rx + c / n, kk = c % n;
             memcpy(st->wi + ((size_t)sl * n + (size_t)k) * 4, cand + (size_t)c * 4, 16);
-            for (size_t b = 0; b < B; b++)
-                st->nee[((size_t)sl * B + b) * (size_t)n + (size_t)k] = ps->nee[((size_t)v * B + b) * (size_t)n + (size_t)kk];
+            for (int band = 0; band < nbands; band++) {
+                const lsqt_state to = lsqt_state_band(st, band), from = lsqt_state_band(ps, band);
+                for (size_t b = 0; b < B; b++)
+                    to.nee[((size_t)sl * B + b) * (size_t)n + (size_t)k] =
+                        from.nee[((size_t)v * B + b) * (size_t)n + (size_t)kk];
+            }
             k++;
         }
         /* the paths are those of every block: their scalars and histogram are block 0's */
-        memcpy(st->scalars + (size_t)sl * B * LSQT_T_COUNT, ps->scalars + (size_t)sl * rx * B * LSQT_T_COUNT,
-               B * LSQT_T_COUNT * sizeof *st->scalars);
-        memcpy(st->hist + (size_t)sl * B * LSQT_HIST_BINS, ps->hist + (size_t)sl * rx * B * LSQT_HIST_BINS,
-               B * LSQT_HIST_BINS * sizeof *st->hist);
+        for (int band = 0; band < nbands; band++) {
+            const lsqt_state to = lsqt_state_band(st, band), from = lsqt_state_band(ps, band);
+            memcpy(to.scalars + (size_t)sl * B * LSQT_T_COUNT, from.scalars + (size_t)sl * rx * B * LSQT_T_COUNT,
+                   B * LSQT_T_COUNT * sizeof *st->scalars);
+            memcpy(to.hist + (size_t)sl * B * LSQT_HIST_BINS, from.hist + (size_t)sl * rx * B * LSQT_HIST_BINS,
+                   B * LSQT_HIST_BINS * sizeof *st->hist);
+        }
     }
     info->select_seconds = lsqt_now() - t_sel;
     rc = 0;
 done:
-    lsqt_estimates_free(est, ps->n_slices);
+    for (int b = 0; est && b < nbands; b++) lsqt_estimates_free(est[b], ps->n_slices);
+    free(est);
     free(f);
     free(keep);
     if (rc) lsqt_state_free(st);

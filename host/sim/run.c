@@ -11,17 +11,21 @@
 /* Target-error checks fall on multiples of this many paths (whole chunks of every batch). */
 #define CHECK_STEP ((uint64_t)LSQT_CHUNK * LSQT_BATCHES)
 
+/* The worst band's: a run with bands stops when every band has reached the target. */
 double lsqt_max_rel_err(const lsqt_state *st)
 {
     if (st->paths < LSQT_STOP_ERR_PATHS) return NAN;
-    lsqt_slice_est *est = lsqt_estimates(st);
-    if (!est) return NAN;
     double m = 0.0;
-    for (int s = 0; s < st->n_slices; s++) {
-        if (isnan(est[s].max_rel_err)) m = NAN;
-        else if (!isnan(m) && est[s].max_rel_err > m) m = est[s].max_rel_err;
+    for (int b = 0; b < (st->n_bands > 1 ? st->n_bands : 1); b++) {
+        const lsqt_state view = lsqt_state_band(st, b);
+        lsqt_slice_est *est = lsqt_estimates(&view);
+        if (!est) return NAN;
+        for (int s = 0; s < st->n_slices; s++) {
+            if (isnan(est[s].max_rel_err)) m = NAN;
+            else if (!isnan(m) && est[s].max_rel_err > m) m = est[s].max_rel_err;
+        }
+        lsqt_estimates_free(est, st->n_slices);
     }
-    lsqt_estimates_free(est, st->n_slices);
     return m;
 }
 

@@ -289,9 +289,11 @@ static int make_kernels(lsqt_session *s, const lsqt_state *st, int gpu, char *er
     return 0;
 }
 
-int lsqt_session_open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st,
-                              int slice_group, const char *extra_options, size_t local_size, int verbose,
-                              char *err, size_t errcap)
+/* One band's session: the program built (or PROG, another band's, shared), its kernels,
+ * tables and tallies. */
+static int open_band(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st,
+                     int slice_group, const char *extra_options, size_t local_size, int verbose, cl_program prog,
+                     char *err, size_t errcap)
 {
     memset(s, 0, sizeof *s);
     s->cx = cx;
@@ -316,9 +318,10 @@ int lsqt_session_open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_asse
         strcat(opt, " ");
         strcat(opt, extra_options);
     }
-    if (verbose) fprintf(stderr, "kernel build options: %s\n", opt);
+    if (verbose && !prog) fprintf(stderr, "kernel build options: %s\n", opt);
     char *log = NULL;
-    s->prog = lsqt_program_build(cx, opt, &log, err, errcap);
+    if (prog) clRetainProgram(prog);
+    s->prog = prog ? prog : lsqt_program_build(cx, opt, &log, err, errcap);
     if (!s->prog) {
         if (log) fprintf(stderr, "OpenCL build log:\n%s\n", log);
         free(log);
@@ -331,13 +334,46 @@ int lsqt_session_open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_asse
     clGetKernelWorkGroupInfo(s->walk, cx->dev.id, CL_KERNEL_WORK_GROUP_SIZE, sizeof kmax, &kmax, NULL);
     if (kmax && ls > kmax) ls = kmax;
     s->local_size = ls;
-    if (check_kernel_memory(s, verbose, err, errcap)) {
+    if (check_kernel_memory(s, verbose && !prog, err, errcap)) {
         lsqt_session_close(s);
         return 1;
     }
     if (upload(s, a, st, err, errcap)) {
         lsqt_session_close(s);
         return 1;
+    }
+    return 0;
+}
+
+int lsqt_session_open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st,
+                              int slice_group, const char *extra_options, size_t local_size, int verbose,
+                              char *err, size_t errcap)
+{
+    const int nb = lsqt_assembly_bands(a);
+    if (nb != (st->n_bands > 1 ? st->n_bands : 1)) {
+        snprintf(err, errcap, "the assembly has %d bands and the state %d", nb, st->n_bands);
+        return 1;
+    }
+    const lsqt_state v0 = lsqt_state_band(st, 0);
+    if (open_band(s, cx, lsqt_assembly_band(a, 0), &v0, slice_group, extra_options, local_size, verbose, NULL, err,
+                  errcap))
+        return 1;
+    if (nb == 1) return 0;
+    /* Every band has the same models, so the same build options: one program serves all. */
+    s->bands = calloc((size_t)nb - 1, sizeof *s->bands);
+    if (!s->bands) {
+        snprintf(err, errcap, "out of memory");
+        lsqt_session_close(s);
+        return 1;
+    }
+    for (int b = 1; b < nb; b++) {
+        const lsqt_state vb = lsqt_state_band(st, b);
+        if (open_band(&s->bands[b - 1], cx, lsqt_assembly_band(a, b), &vb, slice_group, extra_options, local_size,
+                      verbose, s->prog, err, errcap)) {
+            lsqt_session_close(s);
+            return 1;
+        }
+        s->n_bands = b + 1;
     }
     return 0;
 }
@@ -454,6 +490,8 @@ static cl_int launch_records(lsqt_session *s, uint64_t begin, uint64_t end, int 
 
 int lsqt_session_launch(lsqt_session *s, uint64_t begin, uint64_t end, char *err, size_t errcap)
 {
+    for (int b = 1; b < s->n_bands; b++)
+        if (lsqt_session_launch(&s->bands[b - 1], begin, end, err, errcap)) return 1;
     if (end <= begin) return 0;
     int no_memory = 0;
     cl_int e = s->records ? launch_records(s, begin, end, &no_memory) : run_chunks(s, s->walk, 6, begin, end);
@@ -465,7 +503,19 @@ int lsqt_session_launch(lsqt_session *s, uint64_t begin, uint64_t end, char *err
     return 0;
 }
 
+static int read_band(lsqt_session *s, lsqt_state *st, char *err, size_t errcap);
+
 int lsqt_session_read(lsqt_session *s, lsqt_state *st, char *err, size_t errcap)
+{
+    for (int b = 0; b < (s->n_bands > 1 ? s->n_bands : 1); b++) {
+        lsqt_state view = lsqt_state_band(st, b);
+        if (read_band(b ? &s->bands[b - 1] : s, &view, err, errcap)) return 1;
+        st->flags |= view.flags;
+    }
+    return 0;
+}
+
+static int read_band(lsqt_session *s, lsqt_state *st, char *err, size_t errcap)
 {
     cl_command_queue q = s->cx->queue;
     cl_uint fl = 0;
@@ -483,6 +533,8 @@ int lsqt_session_read(lsqt_session *s, lsqt_state *st, char *err, size_t errcap)
 
 int lsqt_session_set_directions(lsqt_session *s, const lsqt_state *st, char *err, size_t errcap)
 {
+    for (int b = 1; b < s->n_bands; b++)
+        if (lsqt_session_set_directions(&s->bands[b - 1], st, err, errcap)) return 1;
     size_t bytes = 0;
     void *dirs = directions_of(st, s->slice_group, s->vw, &bytes);
     if (!dirs) {
@@ -540,6 +592,8 @@ int lsqt_session_exits(lsqt_session *s, uint64_t begin, uint32_t n, float *out, 
 
 void lsqt_session_close(lsqt_session *s)
 {
+    for (int b = 1; b < s->n_bands; b++) lsqt_session_close(&s->bands[b - 1]);
+    free(s->bands);
     cl_mem *all[] = {&s->scene, &s->media, &s->layers, &s->wo, &s->wi, &s->tab,
                      &s->nee, &s->scalars, &s->hist, &s->flags, &s->rec, &s->rec_off};
     for (size_t i = 0; i < sizeof all / sizeof *all; i++)

@@ -1,4 +1,5 @@
 #include "lsqt/lss.h"
+#include "lsqt/bands.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -128,8 +129,9 @@ static void put_f32(wbuf *w, float f)
 static void put_state(wbuf *w, const lsqt_state *st, uint64_t file_bytes)
 {
     const size_t nw = (size_t)st->n_wi;
+    const int bands = st->n_bands > 1; /* one band: version 6, as before bands */
     put(w, magic, 8);
-    put_u32(w, LSQT_LSS_VERSION);
+    put_u32(w, bands ? LSQT_LSS_VERSION : 6u);
     uint32_t layout[] = {LSQT_CHUNK, LSQT_BATCHES, LSQT_FIX_BITS, LSQT_HIST_NMU, LSQT_HIST_NPHI, LSQT_T_COUNT};
     for (size_t i = 0; i < 6; i++) put_u32(w, layout[i]);
     put_u64(w, st->seed);
@@ -151,7 +153,12 @@ static void put_state(wbuf *w, const lsqt_state *st, uint64_t file_bytes)
     put_u64(w, file_bytes);
     put_u32(w, st->grid_ni);
     put_u32(w, st->grid_nphi);
+    if (bands) {
+        put_u32(w, (uint32_t)st->n_bands);
+        put_u32(w, st->wavelengths != NULL);
+    }
     put(w, st->canonical, tl);
+    for (int b = 0; bands && st->wavelengths && b < st->n_bands; b++) put_f64(w, st->wavelengths[b]);
     for (int i = 0; i < 2 * st->n_ranges; i++) put_u64(w, st->ranges[i]);
     for (int s = 0; s < st->n_slices; s++) {
         put_f64(w, st->theta_o[s]);
@@ -159,8 +166,11 @@ static void put_state(wbuf *w, const lsqt_state *st, uint64_t file_bytes)
         put_u64(w, st->paths);
         for (size_t k = 0; k < nw; k++)
             for (int c = 0; c < 3; c++) put_f32(w, st->wi[((size_t)s * nw + k) * 4 + (size_t)c]);
-        const tally_run t = slice_tallies(st, (size_t)s);
-        put_tallies(w, &t);
+        for (int b = 0; b < (bands ? st->n_bands : 1); b++) {
+            const lsqt_state band = lsqt_state_band(st, b);
+            const tally_run t = slice_tallies(&band, (size_t)s);
+            put_tallies(w, &t);
+        }
     }
 }
 
@@ -305,7 +315,8 @@ static void get_tallies(rbuf *r, const tally_run *t)
  * span end, stage, range count, text length; and from version 6 on the file's size and
  * the grid's NI and NPHI. */
 #define LSS_HEADER_V5 (8 + 4 + 6 * 4 + 8 + 8 + 3 * 4 + 4 + 4 + 8 + 2 * 4 + 8 + 8 + 4 + 4 + 4)
-#define LSS_HEADER_BYTES (LSS_HEADER_V5 + 8 + 4 + 4)
+#define LSS_HEADER_V6 (LSS_HEADER_V5 + 8 + 4 + 4)
+#define LSS_HEADER_V7 (LSS_HEADER_V6 + 4 + 4)
 
 /* Contents a valid CRC cannot vouch for: every slice's theta_o in [0, pi/2) (from its own
  * side's normal), and its incident directions finite unit vectors (those a run used or,
@@ -345,6 +356,7 @@ typedef struct lss_header {
     uint32_t stage, n_ranges, tl;
     uint64_t file_bytes;
     uint32_t grid_ni, grid_nphi;
+    uint32_t n_bands, named; /* version 7: bands, and whether their wavelengths follow the text */
     int sane;    /* the counts are in range */
     size_t want; /* the file's size (0: unknown) */
 } lss_header;
@@ -373,13 +385,16 @@ static int check_start(const unsigned char *data, size_t len, char *err, size_t 
 static void announced_size(lss_header *h)
 {
     const uint32_t n_slices = h->n_slices, n_wi = h->n_wi, tl = h->tl, n_ranges = h->n_ranges;
+    const uint32_t nb = h->version >= 7 ? h->n_bands : 1;
     int sane = n_slices >= 1 && n_slices <= 4096 * 8 && n_wi >= 1 && n_wi <= 65536 && tl <= (1u << 24) &&
-               n_ranges <= (1u << 20);
-    const size_t tallies = (size_t)LSQT_BATCHES * (n_wi + LSQT_T_COUNT + LSQT_HIST_BINS);
-    const size_t fixed = sane ? h->header + (size_t)tl + (size_t)n_ranges * 16 + (20 + (size_t)n_wi * 12) * n_slices + 4 : 0;
+               n_ranges <= (1u << 20) && (h->version < 7 || (nb >= 2 && nb <= LSQT_MAX_BANDS && h->named <= 1));
+    const size_t tallies = (size_t)LSQT_BATCHES * (n_wi + LSQT_T_COUNT + LSQT_HIST_BINS) * nb;
+    const size_t fixed = sane ? h->header + (size_t)tl + (h->named ? (size_t)nb * 8 : 0) + (size_t)n_ranges * 16 +
+                                    (20 + (size_t)n_wi * 12) * n_slices + 4
+                              : 0;
     size_t want = sane ? fixed + tallies * 16 * n_slices : 0;
     if (h->packed) {
-        sane = sane && h->file_bytes >= fixed + n_slices && h->file_bytes <= fixed + tallies * 17 * n_slices;
+        sane = sane && h->file_bytes >= fixed + (size_t)n_slices * nb && h->file_bytes <= fixed + tallies * 17 * n_slices;
         want = sane ? (size_t)h->file_bytes : 0;
     }
     h->sane = sane, h->want = want;
@@ -390,12 +405,12 @@ static int read_header(rbuf *r, size_t len, lss_header *h, char *err, size_t err
 {
     memset(h, 0, sizeof *h);
     uint32_t version = h->version = get_u32(r);
-    if (version != LSQT_LSS_VERSION && version != 5) {
-        snprintf(err, errcap, "LSS version %u, this lsqt-cl reads versions 5 and %u", version, LSQT_LSS_VERSION);
+    if (version < 5 || version > LSQT_LSS_VERSION) {
+        snprintf(err, errcap, "LSS version %u, this lsqt-cl reads versions 5 to %u", version, LSQT_LSS_VERSION);
         return -1;
     }
     const int packed = h->packed = version >= 6;
-    const size_t header = h->header = packed ? LSS_HEADER_BYTES : LSS_HEADER_V5;
+    const size_t header = h->header = version >= 7 ? LSS_HEADER_V7 : packed ? LSS_HEADER_V6 : LSS_HEADER_V5;
     if (len < header + 4) {
         snprintf(err, errcap, "truncated at byte %zu (inside the %zu-byte header)", len, header);
         return -1;
@@ -412,6 +427,8 @@ static int read_header(rbuf *r, size_t len, lss_header *h, char *err, size_t err
     h->file_bytes = packed ? get_u64(r) : 0;
     h->grid_ni = packed ? get_u32(r) : 0;
     h->grid_nphi = packed ? get_u32(r) : 0;
+    h->n_bands = version >= 7 ? get_u32(r) : 1;
+    h->named = version >= 7 ? get_u32(r) : 0;
     announced_size(h);
     return 0;
 }
@@ -491,8 +508,22 @@ static int read_state(rbuf *r, const lss_header *h, lsqt_state *st, char *err, s
     }
     memcpy(text, take(r, tl), tl);
     text[tl] = '\0';
-    int rc = lsqt_state_init(st, text, h->hash, h->seed, (int)h->n_slices, (int)h->n_wi, (int)h->transmits);
+    double *wl = h->named ? malloc((size_t)h->n_bands * sizeof *wl) : NULL;
+    int bad_wl = 0;
+    for (uint32_t b = 0; wl && b < h->n_bands; b++) {
+        wl[b] = get_f64(r);
+        bad_wl |= !(wl[b] > 0 && wl[b] <= 1e6) || (b && !(wl[b] > wl[b - 1]));
+    }
+    int rc = (h->named && !wl) ? -1
+                               : lsqt_state_init_bands(st, text, h->hash, h->seed, (int)h->n_slices, (int)h->n_wi,
+                                                       (int)h->transmits, (int)h->n_bands, wl);
     free(text);
+    free(wl);
+    if (!rc && bad_wl) {
+        lsqt_state_free(st);
+        snprintf(err, errcap, "corrupt LSS file (band wavelengths not increasing positive numbers)");
+        return -1;
+    }
     if (rc) {
         snprintf(err, errcap, "out of memory");
         return -1;
@@ -546,11 +577,14 @@ static int read_slices(rbuf *r, const lss_header *h, lsqt_state *st, char *err, 
         if (get_u64(r) != h->paths) r->bad = 1;
         for (size_t k = 0; k < nw; k++)
             for (size_t c = 0; c < 3; c++) st->wi[(s * nw + k) * 4 + c] = get_f32(r);
-        const tally_run t = slice_tallies(st, s);
-        if (h->packed) get_tallies(r, &t);
-        else
-            for (int p = 0; p < 3; p++)
-                for (size_t i = 0; i < t.n[p]; i++) t.part[p][i] = get_u128(r);
+        for (int b = 0; b < st->n_bands; b++) {
+            const lsqt_state band = lsqt_state_band(st, b);
+            const tally_run t = slice_tallies(&band, s);
+            if (h->packed) get_tallies(r, &t);
+            else
+                for (int p = 0; p < 3; p++)
+                    for (size_t i = 0; i < t.n[p]; i++) t.part[p][i] = get_u128(r);
+        }
     }
     if (r->at != r->n) r->bad = 1; /* packed tallies shorter than the size announced */
     if (r->bad) {

@@ -1,6 +1,7 @@
 #include "lsqt/report.h"
 
 #include <math.h>
+#include <stddef.h>
 
 #include "lsqt/util.h"
 
@@ -12,21 +13,35 @@ static const char *err_text(double v, char *buf, size_t cap)
     return buf;
 }
 
+/* "band 2 (550 nm)" / "band 2 (G)" / "band 2" */
+static const char *band_text(const lsqt_state *st, int b, char *buf, size_t cap)
+{
+    if (st->wavelengths) snprintf(buf, cap, "band %d (%g nm)", b + 1, st->wavelengths[b]);
+    else if (st->n_bands == 3) snprintf(buf, cap, "band %d (%c)", b + 1, "RGB"[b]);
+    else snprintf(buf, cap, "band %d", b + 1);
+    return buf;
+}
+
 void lsqt_report_summary(FILE *f, const lsqt_state *st, const lsqt_slice_est *est,
                          const lsqt_run_info *ri)
 {
     fprintf(f, "device: %s%s\n", ri->device, st->use_double ? " (double)" : "");
     fprintf(f, "paths: %llu added per slice (%llu per slice in all) in %.3g s: %.4g paths/s\n",
             ri->paths_added, (unsigned long long)st->paths, ri->seconds, ri->paths_per_second);
-    fprintf(f, "%5s %9s  %-21s %-21s %-10s %s\n", "slice", "theta_o", "R +- 1 s.e.", "T +- 1 s.e.",
-            "delta_T", "max rel err");
+    const int nbands = st->n_bands > 1 ? st->n_bands : 1;
     unsigned long long cut = 0;
     int nonfinite = 0, no_err = 0, n_below = 0;
-    for (int s = 0; s < st->n_slices; s++) {
-        const lsqt_slice_est *e = &est[s];
+    for (int i = 0; i < nbands * st->n_slices; i++) {
+        const int s = i % st->n_slices;
+        char bt[64];
+        if (s == 0 && nbands > 1) fprintf(f, "%s:\n", band_text(st, i / st->n_slices, bt, sizeof bt));
+        if (s == 0)
+            fprintf(f, "%5s %9s  %-21s %-21s %-10s %s\n", "slice", "theta_o", "R +- 1 s.e.", "T +- 1 s.e.",
+                    "delta_T", "max rel err");
+        const lsqt_slice_est *e = &est[i];
         char er[32], et[32], em[32];
         const int below = (st->slice_flags[s] & LSQT_SLICE_BELOW) != 0;
-        n_below += below;
+        n_below += below && i < st->n_slices;
         fprintf(f, "%5d %8.3fd  %.6f +- %-9s %.6f +- %-9s %-10.4g %s%s\n", s, e->theta_o * 180.0 / LSQT_PI,
                 e->R.mean, err_text(e->R.err, er, sizeof er), e->T.mean, err_text(e->T.err, et, sizeof et),
                 e->delta_T.mean, isnan(e->max_rel_err) ? "n/a" : (snprintf(em, sizeof em, "%.3g", e->max_rel_err), em),
@@ -35,7 +50,7 @@ void lsqt_report_summary(FILE *f, const lsqt_state *st, const lsqt_slice_est *es
         cut += e->cut;
         nonfinite += e->n_nonfinite;
     }
-    for (int s = 0; s < st->n_slices; s++)
+    for (int s = 0; s < nbands * st->n_slices; s++)
         if (est[s].delta_T.mean > 0) {
             fprintf(f, "note: unscattered light (delta_T) is a forward delta; it is in T and LSS, not in RAW\n");
             break;
@@ -75,28 +90,66 @@ static void json_est(FILE *f, const char *name, lsqt_est v)
     json_num(f, v.err);
 }
 
+void lsqt_json_bands(FILE *f, const lsqt_state *st)
+{
+    fprintf(f, ",\n \"bands\": %d, \"wavelengths\": ", st->n_bands > 1 ? st->n_bands : 1);
+    if (!st->wavelengths) fprintf(f, "null");
+    for (int b = 0; st->wavelengths && b < st->n_bands; b++) fprintf(f, "%s%.17g", b ? ", " : "[", st->wavelengths[b]);
+    if (st->wavelengths) fprintf(f, "]");
+}
+
 void lsqt_json_slice(FILE *f, const lsqt_state *st, const lsqt_slice_est *e, int s, int detail)
 {
     lsqt_json_slice_fields(f, st, e, s, detail);
     fprintf(f, "}");
 }
 
+/* ", NAME": a number, or with bands a list of one per band (e[b * stride]); which: 0 mean,
+ * 1 err of the lsqt_est at byte offset off; 2 max_rel_err. */
+static void json_band_list(FILE *f, const char *name, const lsqt_slice_est *e, int nbands, size_t stride,
+                           size_t off, int which)
+{
+    fprintf(f, ", \"%s\": %s", name, nbands > 1 ? "[" : "");
+    for (int b = 0; b < nbands; b++) {
+        const lsqt_slice_est *x = e + (size_t)b * stride;
+        const lsqt_est *v = (const lsqt_est *)(const void *)((const char *)x + off);
+        if (b) fprintf(f, ", ");
+        json_num(f, which == 2 ? x->max_rel_err : which ? v->err : v->mean);
+    }
+    if (nbands > 1) fprintf(f, "]");
+}
+
 void lsqt_json_slice_fields(FILE *f, const lsqt_state *st, const lsqt_slice_est *e, int s, int detail)
 {
+    /* with bands, e[b * n_slices] is band b's estimate of this slice */
+    const int nb = st->n_bands > 1 ? st->n_bands : 1;
+    const size_t ns = (size_t)st->n_slices;
     fprintf(f, "{\"theta_o\": %.17g, \"paths\": %llu", e->theta_o, (unsigned long long)e->paths);
-    json_est(f, "R", e->R);
-    json_est(f, "T", e->T);
-    json_est(f, "delta_T", e->delta_T);
-    fprintf(f, ", \"max_rel_err\": ");
-    json_num(f, e->max_rel_err);
-    if (detail) fprintf(f, ", \"n_nonfinite\": %d", e->n_nonfinite);
-    fprintf(f, ", \"cut_paths\": %llu", (unsigned long long)e->cut);
+    if (nb == 1) {
+        json_est(f, "R", e->R);
+        json_est(f, "T", e->T);
+        json_est(f, "delta_T", e->delta_T);
+    } else {
+        static const char *const names[] = {"R", "R_err", "T", "T_err", "delta_T", "delta_T_err"};
+        const size_t offs[] = {offsetof(lsqt_slice_est, R), offsetof(lsqt_slice_est, T),
+                               offsetof(lsqt_slice_est, delta_T)};
+        for (int i = 0; i < 6; i++) json_band_list(f, names[i], e, nb, ns, offs[i / 2], i % 2);
+    }
+    json_band_list(f, "max_rel_err", e, nb, ns, 0, 2);
+    lsqt_slice_est sum = *e; /* the counters of every band's walks */
+    for (int b = 1; b < nb; b++) {
+        const lsqt_slice_est *x = e + (size_t)b * ns;
+        sum.n_nonfinite += x->n_nonfinite, sum.cut += x->cut, sum.layer_events += x->layer_events;
+        sum.medium_events += x->medium_events, sum.nee_evaluations += x->nee_evaluations;
+    }
+    if (detail) fprintf(f, ", \"n_nonfinite\": %d", sum.n_nonfinite);
+    fprintf(f, ", \"cut_paths\": %llu", (unsigned long long)sum.cut);
     if (detail) {
         fprintf(f, ", \"layer_events_per_path\": ");
-        json_num(f, e->layer_events);
+        json_num(f, sum.layer_events);
         fprintf(f, ", \"medium_events_per_path\": ");
-        json_num(f, e->medium_events);
-        fprintf(f, ", \"nee_evaluations\": %.17g", e->nee_evaluations);
+        json_num(f, sum.medium_events);
+        fprintf(f, ", \"nee_evaluations\": %.17g", sum.nee_evaluations);
     }
     fprintf(f, ", \"from_below\": %s", st->slice_flags[s] & LSQT_SLICE_BELOW ? "true" : "false");
 }
@@ -134,6 +187,7 @@ int lsqt_report_json(const char *path, const lsqt_state *st, const lsqt_slice_es
     json_num(f, ev / sec);
     fprintf(f, ", \"nee_evaluations\": %.17g, \"nee_evaluations_per_second\": ", w->nee_evaluations);
     json_num(f, w->nee_evaluations / sec);
+    lsqt_json_bands(f, st);
     fprintf(f, ",\n \"slices\": [");
     for (int s = 0; s < st->n_slices; s++) {
         fprintf(f, "%s\n  ", s ? "," : "");

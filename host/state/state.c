@@ -4,25 +4,57 @@
 #include <stdlib.h>
 #include <string.h>
 
-size_t lsqt_state_nee_count(const lsqt_state *st)
+static size_t bands_of(const lsqt_state *st) { return st->n_bands > 1 ? (size_t)st->n_bands : 1; }
+
+/* One band's counts. */
+static size_t nee_per_band(const lsqt_state *st) { return (size_t)st->n_slices * LSQT_BATCHES * (size_t)st->n_wi; }
+static size_t scalars_per_band(const lsqt_state *st) { return (size_t)st->n_slices * LSQT_BATCHES * LSQT_T_COUNT; }
+static size_t hist_per_band(const lsqt_state *st) { return (size_t)st->n_slices * LSQT_BATCHES * LSQT_HIST_BINS; }
+
+size_t lsqt_state_nee_count(const lsqt_state *st) { return bands_of(st) * nee_per_band(st); }
+size_t lsqt_state_scalar_count(const lsqt_state *st) { return bands_of(st) * scalars_per_band(st); }
+size_t lsqt_state_hist_count(const lsqt_state *st) { return bands_of(st) * hist_per_band(st); }
+
+lsqt_state lsqt_state_band(const lsqt_state *st, int b)
 {
-    return (size_t)st->n_slices * LSQT_BATCHES * (size_t)st->n_wi;
+    lsqt_state v = *st;
+    v.n_bands = 1;
+    v.wavelengths = NULL;
+    v.nee = st->nee + (size_t)b * nee_per_band(st);
+    v.scalars = st->scalars + (size_t)b * scalars_per_band(st);
+    v.hist = st->hist + (size_t)b * hist_per_band(st);
+    return v;
 }
 
-size_t lsqt_state_scalar_count(const lsqt_state *st)
+void lsqt_state_copy_slice_tallies(lsqt_state *dst, int ds, const lsqt_state *src, int ss)
 {
-    return (size_t)st->n_slices * LSQT_BATCHES * LSQT_T_COUNT;
-}
-
-size_t lsqt_state_hist_count(const lsqt_state *st)
-{
-    return (size_t)st->n_slices * LSQT_BATCHES * LSQT_HIST_BINS;
+    const size_t B = LSQT_BATCHES, nw = (size_t)src->n_wi;
+    for (size_t b = 0; b < bands_of(src); b++) {
+        lsqt_state d = lsqt_state_band(dst, (int)b), s = lsqt_state_band(src, (int)b);
+        memcpy(d.nee + (size_t)ds * B * nw, s.nee + (size_t)ss * B * nw, B * nw * sizeof *s.nee);
+        memcpy(d.scalars + (size_t)ds * B * LSQT_T_COUNT, s.scalars + (size_t)ss * B * LSQT_T_COUNT,
+               B * LSQT_T_COUNT * sizeof *s.scalars);
+        memcpy(d.hist + (size_t)ds * B * LSQT_HIST_BINS, s.hist + (size_t)ss * B * LSQT_HIST_BINS,
+               B * LSQT_HIST_BINS * sizeof *s.hist);
+    }
 }
 
 int lsqt_state_init(lsqt_state *st, const char *canonical, uint64_t hash, uint64_t seed,
                     int n_slices, int n_wi, int transmits)
 {
+    return lsqt_state_init_bands(st, canonical, hash, seed, n_slices, n_wi, transmits, 1, NULL);
+}
+
+int lsqt_state_init_bands(lsqt_state *st, const char *canonical, uint64_t hash, uint64_t seed, int n_slices,
+                          int n_wi, int transmits, int n_bands, const double *wl)
+{
     memset(st, 0, sizeof *st);
+    st->n_bands = n_bands > 1 ? n_bands : 1;
+    if (wl && st->n_bands > 1) {
+        st->wavelengths = malloc((size_t)st->n_bands * sizeof *wl);
+        if (!st->wavelengths) return -1;
+        memcpy(st->wavelengths, wl, (size_t)st->n_bands * sizeof *wl);
+    }
     st->hash = hash;
     st->seed = seed;
     st->n_slices = n_slices;
@@ -53,6 +85,7 @@ void lsqt_state_free(lsqt_state *st)
     free(st->hist);
     free(st->ranges);
     free(st->slice_flags);
+    free(st->wavelengths);
     memset(st, 0, sizeof *st);
 }
 
@@ -155,6 +188,9 @@ const char *lsqt_state_differs(const lsqt_state *a, const lsqt_state *b)
 {
     if (a->hash != b->hash || strcmp(a->canonical, b->canonical) != 0) return "assembly";
     if (a->seed != b->seed) return "seed";
+    if (a->n_bands != b->n_bands || (a->wavelengths != NULL) != (b->wavelengths != NULL) ||
+        (a->wavelengths && memcmp(a->wavelengths, b->wavelengths, (size_t)a->n_bands * sizeof *a->wavelengths)))
+        return "bands";
     if (a->use_double != b->use_double) return "precision";
     if (a->stage != b->stage) return "stage (an RRSS pilot shard and a run's state)";
     if (a->n_slices != b->n_slices || a->n_wi != b->n_wi || a->transmits != b->transmits)

@@ -44,7 +44,7 @@ int lsqt_tally_flags_error(uint32_t flags, char *err, size_t errcap)
 lsqt_work lsqt_work_totals(const lsqt_state *st)
 {
     lsqt_work w = {(double)st->paths * st->n_slices, 0.0, 0.0, 0.0};
-    for (size_t i = 0; i < (size_t)st->n_slices * LSQT_BATCHES; i++) {
+    for (size_t i = 0; i < lsqt_state_scalar_count(st) / LSQT_T_COUNT; i++) { /* every band's work */
         const lsqt_u128 *sc = st->scalars + i * LSQT_T_COUNT;
         w.layer_events += lsqt_u128_to_double(sc[LSQT_T_LAYER_EVENTS]);
         w.medium_events += lsqt_u128_to_double(sc[LSQT_T_MEDIUM_EVENTS]);
@@ -53,10 +53,9 @@ lsqt_work lsqt_work_totals(const lsqt_state *st)
     return w;
 }
 
-lsqt_slice_est *lsqt_estimates(const lsqt_state *st)
+/* Band view's slice estimates into out[0 .. n_slices), their f in fblock. */
+static void band_estimates(const lsqt_state *st, lsqt_slice_est *out, lsqt_est *fblock)
 {
-    lsqt_slice_est *out = calloc((size_t)st->n_slices, sizeof *out);
-    if (!out) return NULL;
     const size_t nw = (size_t)st->n_wi;
     uint64_t nb[LSQT_BATCHES];
     lsqt_state_batch_counts(st, nb);
@@ -76,11 +75,7 @@ lsqt_slice_est *lsqt_estimates(const lsqt_state *st)
             e->nee_evaluations += lsqt_u128_to_double(x[LSQT_T_NEE_VERTICES]) * (double)nw;
         }
         if (st->paths) e->layer_events /= (double)st->paths, e->medium_events /= (double)st->paths;
-        e->f = calloc(nw, sizeof *e->f);
-        if (!e->f) {
-            lsqt_estimates_free(out, st->n_slices);
-            return NULL;
-        }
+        e->f = fblock + (size_t)s * nw;
         const lsqt_u128 *nee = st->nee + (size_t)s * LSQT_BATCHES * nw;
         for (size_t k = 0; k < nw; k++) {
             lsqt_est c = lsqt_batch_estimate_n(nee + k, nw, nb, LSQT_FIX_SCALE);
@@ -97,14 +92,31 @@ lsqt_slice_est *lsqt_estimates(const lsqt_state *st)
             }
         }
     }
+}
+
+lsqt_slice_est *lsqt_estimates(const lsqt_state *st)
+{
+    const size_t nb = st->n_bands > 1 ? (size_t)st->n_bands : 1, ns = (size_t)st->n_slices;
+    lsqt_slice_est *out = calloc(nb * ns + 1, sizeof *out);
+    /* one block holds every f; out[0].f is its start (lsqt_estimates_free) */
+    lsqt_est *f = calloc(nb * ns * (size_t)st->n_wi + 1, sizeof *f);
+    if (!out || !f) {
+        free(out);
+        free(f);
+        return NULL;
+    }
+    out[0].f = f;
+    for (size_t b = 0; b < nb; b++) {
+        const lsqt_state view = lsqt_state_band(st, (int)b);
+        band_estimates(&view, out + b * ns, f + b * ns * (size_t)st->n_wi);
+    }
     return out;
 }
 
 void lsqt_estimates_free(lsqt_slice_est *e, int n_slices)
 {
+    (void)n_slices;
     if (!e) return;
-    for (int s = 0; s < n_slices; s++) {
-        free(e[s].f);
-    }
+    free(e[0].f);
     free(e);
 }

@@ -39,6 +39,12 @@ typedef struct lsqt_assembly {
     lsqt_layer *layers;    /* n_layers, top to bottom */
     lsqt_medium *media;    /* n_layers + 1, top to bottom */
     int n_pruned_layers;   /* layers removed as unreachable */
+    /* A run with bands (docs/guide.md, "Colour and spectra"): n_bands > 1, and band[b] is
+     * band b's one-band assembly (band[0]'s values are the ones above). Every band has the
+     * same layers, models and geometry; only the numbers differ. One band: 0 and NULL. */
+    int n_bands;
+    struct lsqt_assembly *band;
+    double *wavelengths;   /* n_bands nm, or NULL: unnamed bands (three are R, G, B) */
 } lsqt_assembly;
 
 /* Diagnostics. The parser never prints: it fills this, the caller decides. */
@@ -64,10 +70,29 @@ struct lsqt_bands;
 int lsqt_parse_band(const char *text, size_t len, const char *name, struct lsqt_bands *bands, int band,
                     lsqt_assembly *out, lsqt_diag *diag);
 
+/* The bands: wavelengths wl (n_wl of them, nm, increasing; 0 when --wavelengths is not
+ * given, and the first comma list then sets the band count), relative @FILE tables read
+ * from dir. One band gives a one-band assembly, as lsqt_parse; more give every band's
+ * assembly (n_bands, band[]), each parsed and checked with lsqt_parse_band, pruned where
+ * every band is stopped. Notes are band 1's. Returns 0 or 2 (diag). */
+int lsqt_parse_bands(const char *text, size_t len, const char *name, const double *wl, int n_wl,
+                     const char *dir, lsqt_assembly *out, lsqt_diag *diag);
+
+/* Joins n one-band assemblies of the same stack (moved into out->band; not freed) and a
+ * copy of wl (NULL: unnamed) into one with bands. Returns 0, or 2 out of memory (each
+ * untouched). */
+int lsqt_assembly_join(lsqt_assembly *each, int n, const double *wl, lsqt_assembly *out);
+
+/* The number of bands (1 for a one-band assembly), and band b's assembly (A itself then). */
+int lsqt_assembly_bands(const lsqt_assembly *a);
+const lsqt_assembly *lsqt_assembly_band(const lsqt_assembly *a, int b);
+
 void lsqt_assembly_free(lsqt_assembly *a);
 
 /* Canonical text of the assembly: one line per medium/layer, seed model names, every
- * key written with %.17g, so that equal assemblies give equal text. Returns the length
+ * key written with %.17g, so that equal assemblies give equal text. With bands, a first
+ * line "# bands N: W1,W2,... nm" (or "# bands N") and a comma list wherever the bands'
+ * values differ, which lsqt_parse_bands reads back. Returns the length
  * it needs (excluding NUL); writes at most cap bytes including the NUL. */
 size_t lsqt_assembly_canonical(const lsqt_assembly *a, char *buf, size_t cap);
 
@@ -78,7 +103,7 @@ uint64_t lsqt_assembly_hash(const lsqt_assembly *a);
  * Returns the length needed, like lsqt_assembly_canonical. */
 size_t lsqt_assembly_build_options(const lsqt_assembly *a, char *buf, size_t cap);
 
-/* 1 when light can reach the bottom medium (some transmission possible). */
+/* 1 when light can reach the bottom medium (some transmission possible) in some band. */
 int lsqt_assembly_transmits(const lsqt_assembly *a);
 
 /* 1 unless the layer transmits nothing (Lambertian or microsurface Lambertian with

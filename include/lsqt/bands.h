@@ -38,14 +38,23 @@ void lsqt_band_table_free(lsqt_band_table *t);
  * a relative @FILE is read from. Tables read once are kept (tables, n_tables), so a parse
  * per band reads each file once; lsqt_bands_free releases them. */
 typedef struct lsqt_bands {
-    int n;
+    int n;              /* 0: not known yet (no --wavelengths): the first list sets it */
     const double *wl;
     const char *dir;
     int n_tables;
     char **table_paths;
     lsqt_band_table *tables;
+    int count_line;     /* the line of the list that set n (0: --wavelengths did) */
 } lsqt_bands;
 
 void lsqt_bands_free(lsqt_bands *b);
+
+/* Band b's label in file names: "550nm" (wavelengths; %.10g), "R", "G", "B" (three
+ * unnamed bands), else the index "0", "1", ... Returns buf. */
+const char *lsqt_band_label(int n_bands, const double *wl, int b, char *buf, size_t cap);
+
+/* PATH with ".LABEL" before its final ".raw" (or at its end): panel.lsqt.raw ->
+ * panel.lsqt.550nm.raw. */
+void lsqt_band_path(const char *path, const char *label, char *dst, size_t cap);
 
 #endif

@@ -46,6 +46,7 @@ typedef struct lsqt_cli {
     int wo_given, wi_given, rx_given, rp_given; /* -wo, -wi, -rx, -rp were given */
     int grid_no, grid_ni, grid_nphi; /* --grid NO,NI,NPHI (grid_no 0: no grid; directions.h) */
     int grid_rgl;             /* the grid is --rgl-grid NT,NU: grid_no NT, grid_ni NU, grid_nphi 0 */
+    const char *wavelengths;  /* --wavelengths LIST (NULL: none; lsqt/bands.h reads it) */
 } lsqt_cli;
 
 /* Returns 0, or 2 with err naming the flag and what it expects. */

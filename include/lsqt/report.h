@@ -30,8 +30,12 @@ int lsqt_report_json(const char *path, const lsqt_state *st, const lsqt_slice_es
 /* JSON pieces shared by the run's and lsqt-cl info's JSON: a number (null when not
  * finite), and slice s's object (detail: non-finite count and work counters too). */
 void lsqt_json_num(FILE *f, double v);
+/* ",\n "bands": N, "wavelengths": [...] or null" */
+void lsqt_json_bands(FILE *f, const lsqt_state *st);
 void lsqt_json_slice(FILE *f, const lsqt_state *st, const lsqt_slice_est *e, int s, int detail);
-/* The same object's fields without its closing brace (more fields may follow). */
+/* The same object's fields without its closing brace (more fields may follow). With bands,
+ * e is est + s of lsqt_estimates (e[b * n_slices] is band b's) and R, T, delta_T, their
+ * errors and max_rel_err are lists of one value per band. */
 void lsqt_json_slice_fields(FILE *f, const lsqt_state *st, const lsqt_slice_est *e, int s, int detail);
 
 #ifdef __cplusplus

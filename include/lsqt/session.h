@@ -30,7 +30,12 @@ typedef struct lsqt_session {
     int slice_group;   /* launch slices per simulated slice (1; rx for the RRSS pilot) */
     int vw;            /* directions per vector in the next-event loops (LSQT_VW; pads n_wi) */
     int use_double;
-    size_t n_nee, n_scalars, n_hist; /* tally counts (lsqt_u128 each) */
+    size_t n_nee, n_scalars, n_hist; /* tally counts (lsqt_u128 each), this band's */
+    /* A run with bands: this session is band 0's, and bands[b - 1] band b's, each with its
+     * own tables and tallies and one program between them; a launch runs every band over
+     * the same paths (the same random numbers). */
+    int n_bands;
+    struct lsqt_session *bands;
 } lsqt_session;
 
 /* The OpenCL build options of A's program for n_wi directions per slice in groups of

@@ -39,6 +39,9 @@ typedef struct lsqt_state {
     uint32_t grid_ni, grid_nphi; /* LSQT_DIRS_GRID: the grid's NI and NPHI; LSQT_DIRS_RGL: NU and 0
                                   * (directions.h; 0 otherwise) */
     uint32_t lss_version;   /* the LSS format version it was read from (0: not read from a file) */
+    int n_bands;            /* wavelength bands (1: one; lsqt_assembly's bands); the tallies
+                             * are band after band, each block laid out as a one-band state's */
+    double *wavelengths;    /* n_bands nm, or NULL (one band, or unnamed bands) */
 } lsqt_state;
 
 enum { LSQT_DIRS_SPREAD = 0, LSQT_DIRS_RRSS = 1, LSQT_DIRS_FILE = 2, LSQT_DIRS_GRID = 3, LSQT_DIRS_RGL = 4 };
@@ -48,12 +51,20 @@ enum { LSQT_DIRS_SPREAD = 0, LSQT_DIRS_RRSS = 1, LSQT_DIRS_FILE = 2, LSQT_DIRS_G
 enum { LSQT_STAGE_RUN = 0, LSQT_STAGE_PILOT = 1 };
 enum { LSQT_SLICE_BELOW = 1u }; /* light enters from the bottom medium */
 
-/* Allocates zeroed tallies for the given shape; copies canonical. Returns 0 or -1. */
+/* Allocates zeroed tallies for the given shape, one band; copies canonical. Returns 0 or -1. */
 int lsqt_state_init(lsqt_state *st, const char *canonical, uint64_t hash, uint64_t seed,
                     int n_slices, int n_wi, int transmits);
+/* The same with n_bands bands (wl: their wavelengths, copied, or NULL). */
+int lsqt_state_init_bands(lsqt_state *st, const char *canonical, uint64_t hash, uint64_t seed, int n_slices,
+                          int n_wi, int transmits, int n_bands, const double *wl);
+/* Band b of ST as a one-band state: the same fields, its tallies pointing into ST's (not
+ * to be freed; valid while ST is). */
+lsqt_state lsqt_state_band(const lsqt_state *st, int b);
+/* Slice ss's tallies of SRC, in every band, into slice ds of DST (same bands, n_wi). */
+void lsqt_state_copy_slice_tallies(lsqt_state *dst, int ds, const lsqt_state *src, int ss);
 void lsqt_state_free(lsqt_state *st);
 
-/* Tally counts (each one lsqt_u128). */
+/* Tally counts (each one lsqt_u128), all bands together. */
 size_t lsqt_state_nee_count(const lsqt_state *st);
 size_t lsqt_state_scalar_count(const lsqt_state *st);
 size_t lsqt_state_hist_count(const lsqt_state *st);

@@ -40,7 +40,8 @@ typedef struct lsqt_work {
 } lsqt_work;
 lsqt_work lsqt_work_totals(const lsqt_state *st);
 
-/* Estimates of every slice (array of st->n_slices, free with lsqt_estimates_free). */
+/* Estimates of every slice, band after band (n_bands x n_slices; est[b * n_slices + s]),
+ * freed with lsqt_estimates_free. */
 lsqt_slice_est *lsqt_estimates(const lsqt_state *st);
 void lsqt_estimates_free(lsqt_slice_est *e, int n_slices);
 
