@@ -11,6 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "lsqt/bands.h"
 #include "lsqt/lss.h"
 #include "lsqt/report.h"
 #include "lsqt/tally.h"
@@ -149,6 +150,12 @@ static void print_text(FILE *f, const char *path, const lsqt_state *st, const ls
                 (unsigned long long)st->pilot_paths, (unsigned long long)st->span_end);
     else fprintf(f, "stage: run\n");
     fprintf(f, "paths: %llu per slice\n", (unsigned long long)st->paths);
+    const int nb = st->n_bands > 1 ? st->n_bands : 1;
+    if (nb > 1) {
+        fprintf(f, "bands: %d", nb);
+        for (int b = 0; st->wavelengths && b < nb; b++) fprintf(f, "%s%.10g", b ? ", " : " at ", st->wavelengths[b]);
+        fprintf(f, "%s\n", st->wavelengths ? " nm" : nb == 3 ? " (R, G, B)" : " (unnamed)");
+    }
     if (st->flags) fprintf(f, "flags: 0x%x (%s)\n", st->flags, flags);
     else fprintf(f, "flags: none\n");
     fprintf(f, "ranges: ");
@@ -167,13 +174,19 @@ static void print_text(FILE *f, const char *path, const lsqt_state *st, const ls
                 st->slice_flags[s] & LSQT_SLICE_BELOW ? " (from below)" : "", e->theta_o * 180.0 / LSQT_PI,
                 exact(e->theta_o, b), (unsigned long long)e->paths);
         char u[32];
-        fprintf(f, "  R       %s +- %s\n", exact(e->R.mean, b), err_str(e->R.err, u));
-        fprintf(f, "  T       %s +- %s\n", exact(e->T.mean, b), err_str(e->T.err, u));
-        fprintf(f, "  delta_T %s +- %s\n", exact(e->delta_T.mean, b), err_str(e->delta_T.err, u));
-        fprintf(f, "  max rel err %s, non-finite %d, paths cut %llu\n", err_str(e->max_rel_err, u), e->n_nonfinite,
-                (unsigned long long)e->cut);
-        fprintf(f, "  events per path: layers %.6g, media %.6g; next-event evaluations %.17g\n", e->layer_events,
-                e->medium_events, e->nee_evaluations);
+        for (int k = 0; k < nb; k++) { /* band k's estimates of slice s: est[k * n_slices + s] */
+            const lsqt_slice_est *x = e + (size_t)k * (size_t)st->n_slices;
+            char lab[48];
+            if (nb > 1) fprintf(f, "  band %s\n", lsqt_band_label(nb, st->wavelengths, k, lab, sizeof lab));
+            const char *ind = nb > 1 ? "  " : "";
+            fprintf(f, "%s  R       %s +- %s\n", ind, exact(x->R.mean, b), err_str(x->R.err, u));
+            fprintf(f, "%s  T       %s +- %s\n", ind, exact(x->T.mean, b), err_str(x->T.err, u));
+            fprintf(f, "%s  delta_T %s +- %s\n", ind, exact(x->delta_T.mean, b), err_str(x->delta_T.err, u));
+            fprintf(f, "%s  max rel err %s, non-finite %d, paths cut %llu\n", ind, err_str(x->max_rel_err, u),
+                    x->n_nonfinite, (unsigned long long)x->cut);
+            fprintf(f, "%s  events per path: layers %.6g, media %.6g; next-event evaluations %.17g\n", ind,
+                    x->layer_events, x->medium_events, x->nee_evaluations);
+        }
     }
 }
 
@@ -206,6 +219,7 @@ static int write_json(const char *out, const char *path, const lsqt_state *st, c
     info_ranges(f, st, 1);
     fprintf(f, ", \"span_end\": %llu, \"stage\": \"%s\"", (unsigned long long)st->span_end,
             st->stage == LSQT_STAGE_PILOT ? "rrss-pilot" : "run");
+    lsqt_json_bands(f, st);
     fprintf(f, ",\n \"assembly\": ");
     json_str(f, st->canonical);
     fprintf(f, ",\n \"slices\": [");
@@ -219,10 +233,18 @@ static int write_json(const char *out, const char *path, const lsqt_state *st, c
         fprintf(f, ",\n   \"bsdf\": [");
         for (int k = 0; k < st->n_wi; k++) {
             const float *w = st->wi + ((size_t)s * (size_t)st->n_wi + (size_t)k) * 4;
-            fprintf(f, "%s[%.9g, %.9g, %.9g, ", k ? ", " : "", w[0], w[1], w[2]);
-            json_num(f, est[s].f[k].mean);
-            fprintf(f, ", ");
-            json_num(f, est[s].f[k].err);
+            fprintf(f, "%s[%.9g, %.9g, %.9g", k ? ", " : "", w[0], w[1], w[2]);
+            /* with bands: [x, y, z, [value per band], [error per band]] */
+            const int nb = st->n_bands > 1 ? st->n_bands : 1;
+            for (int part = 0; part < 2; part++) {
+                fprintf(f, ", %s", nb > 1 ? "[" : "");
+                for (int b = 0; b < nb; b++) {
+                    const lsqt_est *v = &est[(size_t)b * (size_t)st->n_slices + (size_t)s].f[k];
+                    if (b) fprintf(f, ", ");
+                    json_num(f, part ? v->err : v->mean);
+                }
+                if (nb > 1) fprintf(f, "]");
+            }
             fprintf(f, "]");
         }
         fprintf(f, "]}");
