@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "lsqt/bands.h"
+#include "lsqt/colour.h"
 #include "lsqt/lss.h"
 #include "lsqt/report.h"
 #include "lsqt/tally.h"

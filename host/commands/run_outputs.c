@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "lsqt/bands.h"
+#include "lsqt/colour.h"
 #include "lsqt/below.h"
 #include "lsqt/lss.h"
 #include "lsqt/raw.h"

@@ -182,14 +182,6 @@ void lsqt_bands_free(lsqt_bands *b)
     b->n_tables = 0, b->table_paths = NULL, b->tables = NULL;
 }
 
-const char *lsqt_band_label(int n_bands, const double *wl, int b, char *buf, size_t cap)
-{
-    if (wl) snprintf(buf, cap, "%.10gnm", wl[b]);
-    else if (n_bands == 3) snprintf(buf, cap, "%c", "RGB"[b]);
-    else snprintf(buf, cap, "%d", b);
-    return buf;
-}
-
 void lsqt_band_path(const char *path, const char *label, char *dst, size_t cap)
 {
     size_t n = strlen(path);

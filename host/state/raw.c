@@ -1,5 +1,6 @@
 #include "lsqt/raw.h"
 #include "lsqt/bands.h"
+#include "lsqt/colour.h"
 
 #include <math.h>
 #include <stdio.h>

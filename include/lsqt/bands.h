@@ -49,11 +49,7 @@ typedef struct lsqt_bands {
 
 void lsqt_bands_free(lsqt_bands *b);
 
-/* Band b's label in file names: "550nm" (wavelengths; %.10g), "R", "G", "B" (three
- * unnamed bands), else the index "0", "1", ... Returns buf. */
-const char *lsqt_band_label(int n_bands, const double *wl, int b, char *buf, size_t cap);
-
-/* PATH with ".LABEL" before its final ".raw" (or at its end): panel.lsqt.raw ->
+/* PATH with ".LABEL" (lsqt_band_label, lsqt/colour.h) before its final ".raw" (or at its end): panel.lsqt.raw ->
  * panel.lsqt.550nm.raw. */
 void lsqt_band_path(const char *path, const char *label, char *dst, size_t cap);
 
