@@ -211,7 +211,9 @@ static int add_inputs(merge_job *j, uint64_t *all)
     lsqt_state *st = j->st;
     const lsqt_state *f = &st[0];
     lsqt_state *sum = &j->sum;
-    if (lsqt_state_init(sum, f->canonical, f->hash, f->seed, f->n_slices, f->n_wi, f->transmits)) return 1;
+    if (lsqt_state_init_bands(sum, f->canonical, f->hash, f->seed, f->n_slices, f->n_wi, f->transmits, f->n_bands,
+                              f->wavelengths))
+        return 1;
     sum->use_double = f->use_double, sum->dir_method = f->dir_method, sum->rx = f->rx;
     sum->pilot_paths = f->pilot_paths, sum->stage = f->stage;
     sum->grid_ni = f->grid_ni, sum->grid_nphi = f->grid_nphi;

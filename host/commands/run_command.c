@@ -254,6 +254,9 @@ int run_command(const lsqt_cli *c)
     float *wi_dirs = NULL;
     int n_wi_dirs = 0, n_mirrored = 0;
     rc = check_directions(c, &a);
+    if (!rc && lsqt_assembly_bands(&a) > 1 && c->output && strcmp(c->output, "-") == 0)
+        rc = fail(2, "-o -: a run with bands writes one RAW per band, named from the RAW name, and stdout is one "
+                     "stream: give -o a file name%s%s", "", "");
     if (!rc) rc = read_wi_file(c, &a, &wi_dirs, &n_wi_dirs, &n_mirrored);
     outputs out;
     if (!rc && (rc = run_plan_outputs(c, from_stdin, lsqt_assembly_transmits(&a), 0, &out, err, sizeof err)))

@@ -1007,6 +1007,22 @@ static int survey_bands(const char *text, size_t len, const char *name, lsqt_ban
     return 0;
 }
 
+/* Every band must be the same stack (layers, models); only numbers differ. The survey
+ * makes it so (shared pruning and phase models); this says so if it ever did not. */
+static int same_stack(const lsqt_assembly *a0, const lsqt_assembly *ab, parser *P, int band)
+{
+    int same = a0->n_layers == ab->n_layers;
+    for (int i = 0; same && i < a0->n_layers; i++)
+        same = a0->layers[i].kind == ab->layers[i].kind;
+    for (int m = 0; same && m <= a0->n_layers; m++)
+        same = a0->media[m].phase.kind == ab->media[m].phase.kind;
+    if (same)
+        return 0;
+    P->band = band;
+    return fail(P, 0, NULL, "the bands make different stacks (an internal error)", "the same layers and models in "
+                "every band");
+}
+
 int lsqt_parse_bands(const char *text, size_t len, const char *name, const double *wl, int n_wl,
                      const char *dir, lsqt_assembly *out, lsqt_diag *diag)
 {
@@ -1045,6 +1061,8 @@ int lsqt_parse_bands(const char *text, size_t len, const char *name, const doubl
         rc = parse_into(&P, text, len, name, &each[done], done ? &scratch : diag);
         if (rc && done && diag)
             *diag = scratch;
+        if (!rc && done)
+            rc = same_stack(&each[0], &each[done], &P, done);
     }
     free(keep);
     lsqt_bands_free(&bands);

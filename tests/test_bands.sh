@@ -1,0 +1,161 @@
+#!/usr/bin/env bash
+# Runs with bands (docs/guide.md, "Colour and spectra"): a band of a run with bands equals
+# the one-band run of that band's values byte for byte (the bands share the paths' random
+# numbers; --wi-spread, so that the directions do not depend on the other bands), for
+# lists (R, G, B), for tables read at --wavelengths, across a continued LSS, shards and a
+# merge, and from below; the outputs' names (NAME.550nm.raw, NAME.R.raw), the JSON's lists,
+# the worst band stopping --target-error; a one-band run still writes LSS version 6; and
+# every bad input (exit 2, nothing written). The examples with bands run here.
+# usage: test_bands.sh LSQT_CL EXAMPLES_DIR
+# shellcheck source=cli_lib.sh
+source "$(dirname "${BASH_SOURCE[0]}")/cli_lib.sh"
+cli_args BIN EX -- "$@"
+cli_workdir
+
+# band.py IN B OUT [WL]: IN's band B as a one-band file, worked out here on its own: a
+# KEY=a,b,c token becomes KEY=<element B>, KEY=@FILE the table row at WL (it must be a
+# row, so that no interpolation is involved).
+cat > band.py <<'PY'
+import os, re, sys
+src, b, out = sys.argv[1], int(sys.argv[2]), sys.argv[3]
+wl = float(sys.argv[4]) if len(sys.argv) > 4 else None
+def row(path):
+    for line in open(os.path.join(os.path.dirname(src) or ".", path)):
+        f = line.split("#")[0].replace(",", " ").split()
+        if len(f) == 2 and float(f[0]) == wl: return f[1]
+    sys.exit("no row at %g in %s" % (wl, path))
+def one(m):
+    key, val = m.group(1), m.group(2)
+    if val.startswith("@"): return key + "=" + row(val[1:])
+    if "," in val: return key + "=" + val.split(",")[b]
+    return m.group(0)
+with open(out, "w") as o:
+    for line in open(src):
+        code, _, _ = line.partition("#")
+        o.write(re.sub(r"(\w+)=(\S+)", one, code).rstrip() + "\n")
+PY
+
+S="-p 3000 -wo 4 -wi 16 --wi-spread -q"
+# same_band NAME FILE LABEL B [WL] [FLAGS]: FILE's RAW of band LABEL equals the one-band run.
+same_band() {
+  local name=$1 file=$2 label=$3 b=$4 wl=${5:-} flags=${6:-}
+  python3 band.py "$file" "$b" "one-$b.lsqt" $wl || { bad "$name: band.py"; return; }
+  "$BIN" one-$b.lsqt $S $flags -R || { bad "$name: one-band run"; return; }
+  if cmp -s "one-$b.lsqt.raw" "${file}.${label}.raw"; then ok; else bad "$name: band $label differs from its one-band run"; fi
+}
+
+# Lists: three bands without wavelengths are R, G, B; albedo 0.98 beside 0 (mus=0 in one
+# band keeps the phase model, the others scatter).
+cat > rgb.lsqt <<'L'
+Medium
+Layer z=1 NullBsdf
+Medium mus=1.96,1.2,0 mua=0.04,0.3,0.5 HenyeyGreensteinPhase g=0.6,0.3,0.9
+Layer z=0 LambertianBsdf fR=0.7,0.3,0.1
+Medium
+L
+expect 0 "wrote rgb.lsqt.{R,...,B}.raw, rgb.lsqt.lss" -- "$BIN" rgb.lsqt ${S% -q} --json rgb.json
+for b in 0 1 2; do same_band "rgb" rgb.lsqt "$(echo R G B | cut -d' ' -f$((b + 1)))" $b; done
+expect 0 "format: LSS version 7" -- "$BIN" info rgb.lsqt.lss
+expect 0 "bands: 3 (R, G, B)" -- "$BIN" info rgb.lsqt.lss
+# JSON: R per slice is a list of three, and band 2's R (no scattering: fR e^{-2 tau / mu}...)
+# is the one-band run's
+python3 - rgb.json one-1.lsqt <<'PY' && ok || bad "rgb JSON"
+import json, sys
+d = json.load(open(sys.argv[1]))
+assert d["bands"] == 3 and d["wavelengths"] is None, (d["bands"], d["wavelengths"])
+s = d["slices"][0]
+assert len(s["R"]) == 3 and len(s["R_err"]) == 3 and len(s["max_rel_err"]) == 3, s
+assert s["R"][0] > s["R"][1] > s["R"][2] > 0, s["R"]
+PY
+"$BIN" one-1.lsqt $S -R --json one.json
+python3 - rgb.json one.json <<'PY' && ok || bad "band 1's JSON R is not the one-band run's"
+import json, sys
+a, b = json.load(open(sys.argv[1])), json.load(open(sys.argv[2]))
+for x, y in zip(a["slices"], b["slices"]):
+    assert x["R"][1] == y["R"] and x["R_err"][1] == y["R_err"] and x["T"][1] == y["T"], (x, y)
+assert b["bands"] == 1 and b["wavelengths"] is None
+PY
+# A one-band run is today's: LSS version 6.
+expect 0 "format: LSS version 6" -- "$BIN" info one-1.lsqt.lss
+
+# Continued: -p 3000 then 6000 more equals 9000 at once, in every band.
+"$BIN" rgb.lsqt -p 9000 -wo 4 -wi 16 --wi-spread -q -R --lss all.lss -o all.raw
+"$BIN" rgb.lsqt -p 6000 -wo 4 -wi 16 --wi-spread -q
+for l in R G B; do
+  if cmp -s "rgb.lsqt.$l.raw" "all.$l.raw"; then ok; else bad "continued band $l differs"; fi
+done
+if cmp -s rgb.lsqt.lss all.lss; then ok; else bad "continued LSS differs from the run at once"; fi
+# Reruns are byte-identical.
+"$BIN" rgb.lsqt -p 9000 -wo 4 -wi 16 --wi-spread -q -R --lss again.lss -o again.raw
+if cmp -s again.lss all.lss && cmp -s again.G.raw all.G.raw; then ok; else bad "a rerun differs"; fi
+# Shards and a merge give the run at once.
+"$BIN" rgb.lsqt -p 9000 -wo 4 -wi 16 --wi-spread -q -R --lss sh.lss -p 0 2>/dev/null
+rm -f sh.lss
+for k in 0 1 2; do "$BIN" rgb.lsqt -p 9000 -wo 4 -wi 16 --wi-spread -q --lss sh.lss --shard $k/3 || bad "shard $k"; done
+expect 0 "" -- "$BIN" merge merged.lss sh.shard-0-of-3.lss sh.shard-1-of-3.lss sh.shard-2-of-3.lss -o merged.raw
+if cmp -s merged.lss all.lss && cmp -s merged.B.raw all.B.raw; then ok; else bad "merged shards differ from the run at once"; fi
+
+# A layer opaque in one band only is kept (pruning is where every band is stopped): band 1
+# sees the floor through it, band 0 does not, each as its own run.
+printf 'Medium\nLayer z=1 LambertianBsdf fR=0.3 fT=0,0.5\nMedium eta=1.3\nLayer z=0 LambertianBsdf fR=0.8\nMedium\n' > op.lsqt
+expect 0 "" -- "$BIN" op.lsqt $S
+same_band "opaque in one band" op.lsqt 0 0
+same_band "opaque in one band" op.lsqt 1 1
+
+# Tables at --wavelengths (rows of the tables, so band.py needs no interpolation), and
+# light from below.
+mkdir -p t
+printf '# made-up paint\n400 0.10\n500 0.30\n600 0.60\n700 0.90\n' > t/fr.txt
+printf '400,0.5\n700,0.05\n' > t/ft.txt
+printf 'Medium\nLayer z=0 LambertianBsdf fR=@t/fr.txt fT=@t/ft.txt\nMedium\n' > tab.lsqt
+expect 0 "wrote tab.lsqt.{400nm,700nm}.raw" -- "$BIN" tab.lsqt ${S% -q} --wavelengths 400:700:300
+same_band "table" tab.lsqt 400nm 0 400
+same_band "table" tab.lsqt 700nm 1 700
+expect 0 "" -- "$BIN" tab.lsqt $S -R --wavelengths 400,700 --from-below
+python3 band.py tab.lsqt 0 below-0.lsqt 400
+"$BIN" below-0.lsqt $S -R --from-below
+if cmp -s below-0.lsqt.below.raw tab.lsqt.below.400nm.raw; then ok; else bad "from below: band 400nm differs"; fi
+
+# --target-error stops when the worst band reaches it.
+"$BIN" rgb.lsqt -wo 4 -wi 16 --wi-spread -q -R --lss te.lss -o te.raw --target-error 0.05 -p 2e6 --json te.json
+python3 - te.json <<'PY' && ok || bad "target error: not every band reached it"
+import json, sys
+d = json.load(open(sys.argv[1]))
+assert d["stopped_by"] == "the target error (--target-error)", d["stopped_by"]
+worst = max(max(s["max_rel_err"]) for s in d["slices"])
+assert worst <= 0.05, worst
+PY
+
+# Bad input: exit 2 with file, line, token and band; nothing written.
+bad_input() {
+  local text=$1 flags=$2 says=$3
+  printf "$text" > bad.lsqt
+  expect 2 "$says" -- "$BIN" bad.lsqt -p 1000 $flags
+  if ls bad.lsqt.* >/dev/null 2>&1; then bad "[$text $flags] wrote output"; rm -f bad.lsqt.*; fi
+}
+bad_input 'Medium\nLayer z=0 LambertianBsdf fR=0.1,0.2 fT=0.1,0.2,0.3\nMedium\n' "" \
+  "bad.lsqt:2: error: band 1: lists of different lengths at 'fT=0.1,0.2,0.3'; expected 2 comma-separated values, as the list on line 2"
+bad_input 'Medium\nLayer z=0 LambertianBsdf fR=0.1,0.2\nMedium\n' "--wavelengths 450,550,650" \
+  "bad.lsqt:2: error: band 1 (450 nm): wrong number of values at 'fR=0.1,0.2'; expected 3 comma-separated values"
+bad_input 'Medium\nLayer z=0 LambertianBsdf fR=@t/fr.txt\nMedium\n' "" "a table without wavelengths at 'fR=@t/fr.txt'"
+bad_input 'Medium\nLayer z=0 LambertianBsdf fR=@nosuch.txt\nMedium\n' "--wavelengths 500" "unreadable table at 'fR=@nosuch.txt'"
+printf '400 0.1\n300 0.2\n' > t/down.txt
+bad_input 'Medium\nLayer z=0 LambertianBsdf fR=@t/down.txt\nMedium\n' "--wavelengths 350" "t/down.txt:2:"
+bad_input 'Medium\nLayer z=0 LambertianBsdf fR=@t/fr.txt\nMedium\n' "--wavelengths 450,750" \
+  "band 2 (750 nm): wavelength outside the table at 'fR=@t/fr.txt'; expected a table that covers 750 nm (it covers 400 to 700 nm)"
+printf '400 0.5\n1300 0.95\n' > t/wide.txt
+bad_input 'Medium\nLayer z=0 LambertianBsdf fR=@t/wide.txt fT=0.1\nMedium\n' "--wavelengths 400,700,1250" \
+  "bad.lsqt:2: error: band 3 (1250 nm): fR + fT = 1.025 exceeds 1 at 'fT=0.1'"
+bad_input 'Medium\nLayer z=0 LambertianBsdf fR=0.5,0.8 fT=0.2,0.3\nMedium\n' "" \
+  "bad.lsqt:2: error: band 2: fR + fT = 1.1 exceeds 1"
+bad_input 'Medium\nLayer z=0,1 LambertianBsdf\nMedium\n' "" "z as a value per band"
+bad_input 'Medium\nLayer z=0 LambertianBsdf\nMedium\n' "--wavelengths 550,450" "--wavelengths: "
+bad_input 'Medium\nLayer z=0 LambertianBsdf fR=0.1,0.2\nMedium\n' "-o -" "one RAW per band"
+
+# The examples with bands.
+cp "$EX/paint-rgb.lsqt" . && cp -r "$EX/tables" .
+expect 0 "band 3 (B):" -- "$BIN" paint-rgb.lsqt -p 2000 -wo 4 -wi 16
+cp "$EX/gold-coat.lsqt" .
+expect 0 "band 3 (700 nm):" -- "$BIN" gold-coat.lsqt -p 1000 -wo 4 -wi 16 --wavelengths 500:700:100
+expect 2 "a table without wavelengths" -- "$BIN" gold-coat.lsqt -p 1000 -R
+finish test_bands.sh
