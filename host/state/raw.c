@@ -16,7 +16,9 @@ int lsqt_raw_write(const char *path, const lsqt_state *st, const lsqt_slice_est 
     if (lsqt_out_open(&af, path, err, errcap)) return -1;
     FILE *f = af.f;
     int spherical = mode == LSQT_RAW_ALL && st->transmits;
-    fprintf(f, "RAWB%c10A Layered-SQT\n1 0.5\n%d", spherical ? 'S' : 'H', st->n_slices);
+    /* one band; its wavelength in um when the run has them (0.5, as the original tool writes, else) */
+    if (st->wavelengths) fprintf(f, "RAWB%c10A Layered-SQT\n1 %.9g\n%d", spherical ? 'S' : 'H', st->wavelengths[0] / 1000.0, st->n_slices);
+    else fprintf(f, "RAWB%c10A Layered-SQT\n1 0.5\n%d", spherical ? 'S' : 'H', st->n_slices);
     for (int s = 0; s < st->n_slices; s++) fprintf(f, " %.9g", st->theta_o[s]);
     fprintf(f, "\n");
     for (int s = 0; s < st->n_slices; s++) {

@@ -19,7 +19,7 @@ lsqt_state lsqt_state_band(const lsqt_state *st, int b)
 {
     lsqt_state v = *st;
     v.n_bands = 1;
-    v.wavelengths = NULL;
+    v.wavelengths = st->wavelengths ? st->wavelengths + b : NULL; /* its own, for its RAW's header */
     v.nee = st->nee + (size_t)b * nee_per_band(st);
     v.scalars = st->scalars + (size_t)b * scalars_per_band(st);
     v.hist = st->hist + (size_t)b * hist_per_band(st);

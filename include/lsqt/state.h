@@ -57,8 +57,8 @@ int lsqt_state_init(lsqt_state *st, const char *canonical, uint64_t hash, uint64
 /* The same with n_bands bands (wl: their wavelengths, copied, or NULL). */
 int lsqt_state_init_bands(lsqt_state *st, const char *canonical, uint64_t hash, uint64_t seed, int n_slices,
                           int n_wi, int transmits, int n_bands, const double *wl);
-/* Band b of ST as a one-band state: the same fields, its tallies pointing into ST's (not
- * to be freed; valid while ST is). */
+/* Band b of ST as a one-band state: the same fields, its tallies (and its wavelength, if
+ * any) pointing into ST's (not to be freed; valid while ST is). */
 lsqt_state lsqt_state_band(const lsqt_state *st, int b);
 /* Slice ss's tallies of SRC, in every band, into slice ds of DST (same bands, n_wi). */
 void lsqt_state_copy_slice_tallies(lsqt_state *dst, int ds, const lsqt_state *src, int ss);
