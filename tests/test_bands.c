@@ -159,10 +159,52 @@ static void parse_per_band(void)
     rmdir(dir);
 }
 
+/* Canonical text of a run with bands: a list wherever the bands differ (iter_count's too,
+ * from auto per band), the '# bands' line, and it reads back to the same text; the band
+ * count from the first list, and the shared decisions (pruning where every band stops, a
+ * phase model kept where some band scatters). */
+static void bands_canonical(void)
+{
+    const char *text = "Medium\nLayer z=1 NullBsdf\nMedium mus=1,0 mua=0.5 HenyeyGreensteinPhase g=0.5\n"
+                       "Layer z=0 MicrosurfaceLambertian alpha=0.05,0.9 fR=0.5 fT=0,0.2\nMedium eta=1.2\n"
+                       "Layer z=-1 LambertianBsdf fR=0.3\nMedium\n";
+    lsqt_assembly a, b;
+    lsqt_diag d;
+    CHECK(lsqt_parse_bands(text, strlen(text), "t", NULL, 0, ".", &a, &d) == 0 && a.n_bands == 2 &&
+              a.wavelengths == NULL && a.n_layers == 3, "%s", d.error);
+    if (a.n_bands != 2) return;
+    /* band 1: mus 0 keeps HG (band 0 scatters); the floor is kept (band 1 sees through) */
+    CHECK(a.band[1].media[1].phase.kind == LSQT_PHASE_HG && a.band[1].media[1].mus == 0 &&
+              a.band[0].media[1].mus == 1 && a.band[0].n_layers == 3 && a.band[0].layers[1].iter_count == 1 &&
+              a.band[1].layers[1].iter_count == 6, "band values");
+    char buf[2048];
+    size_t n = lsqt_assembly_canonical(&a, buf, sizeof buf);
+    CHECK(n < sizeof buf && strncmp(buf, "# bands 2\n", 10) == 0 && strstr(buf, " mus=1,0 ") &&
+              strstr(buf, " iter_count=1,6 ") && strstr(buf, " fT=0,0.20000000000000001 ") &&
+              strstr(buf, " mua=0.5 "), "%s", buf);
+    CHECK(lsqt_parse_bands(buf, n, "canonical", NULL, 0, ".", &b, &d) == 0, "reads back: %s", d.error);
+    char buf2[2048];
+    CHECK(lsqt_assembly_canonical(&b, buf2, sizeof buf2) == n && memcmp(buf, buf2, n) == 0 &&
+              lsqt_assembly_hash(&a) == lsqt_assembly_hash(&b), "round trip: %s", buf2);
+    lsqt_assembly_free(&b);
+    lsqt_assembly_free(&a);
+    /* a layer opaque in every band still prunes what lies below it */
+    const char *opaque = "Medium\nLayer z=0 LambertianBsdf fR=0.2,0.3\nMedium eta=1.5\nLayer z=-1 LambertianBsdf\nMedium\n";
+    CHECK(lsqt_parse_bands(opaque, strlen(opaque), "t", NULL, 0, ".", &a, &d) == 0 && a.n_layers == 1 &&
+              a.band[1].n_layers == 1 && a.n_pruned_layers == 1, "%s", d.error);
+    lsqt_assembly_free(&a);
+    /* a whole-number key takes a list, not a table */
+    const double wl[] = {500, 600};
+    const char *itab = "Medium\nLayer z=0 MicrosurfaceLambertian iter_count=@x.txt\nMedium\n";
+    CHECK(lsqt_parse_bands(itab, strlen(itab), "t", wl, 2, ".", &a, &d) == 2 &&
+              strstr(d.error, "a table for a whole number at 'iter_count=@x.txt'"), "%s", d.error);
+}
+
 int main(void)
 {
     wavelengths();
     tables();
     parse_per_band();
+    bands_canonical();
     return check_finish("test_bands");
 }

@@ -512,6 +512,8 @@ static int band_value(parser *P, const lsqt_key *k, span tok, span text, double 
         return fail(P, P->line, &tok, "z as a value per band", "one number: z is geometry, the same in every band");
     const char *why;
     if (text.p[0] == '@') {
+        if (k->type != LSQT_NUM)
+            return fail(P, P->line, &tok, "a table for a whole number", "a number or a comma list of whole numbers");
         if (!P->bands || !P->bands->wl)
             return fail(P, P->line, &tok, "a table without wavelengths",
                         "a number or a comma list (KEY=@FILE needs --wavelengths: the table is read at them)");
@@ -583,7 +585,7 @@ static int read_key(parser *P, line_state *ls, span tok, const char *eq)
         return fail(P, P->line, &tok, "repeated key", "%s at most once (already given as '%s')",
                     k->name, show(*given, shown));
     double v = 0;
-    if (k->type == LSQT_NUM && text.n && (text.p[0] == '@' || memchr(text.p, ',', text.n))) {
+    if (k->type != LSQT_CHOICE && text.n && (text.p[0] == '@' || memchr(text.p, ',', text.n))) {
         if (band_value(P, k, tok, text, &v))
             return 2;
     } else {
