@@ -45,16 +45,19 @@ static void usage(FILE *f, const char *prog)
             "(Dupuy and Jakob 2018), the one Mitsuba 3's measured BSDF reads (field rgb: its RGB\n"
             "variants; --rgl-spectral: fields wavelengths and spectra, its spectral variants and\n"
             "pbrt-v4): the reflection from above, f cos(theta) at the grid's nodes, with the\n"
-            "standard errors in an extra field `stderr`; transmission, the slices from below\n"
-            "and colour (one band, in every channel) are not in it.\n"
+            "standard errors in an extra field `stderr`; transmission and the slices from\n"
+            "below are not in it. Colour: one band in every channel (spectra: at 360 and\n"
+            "830 nm); bands R, G, B as rgb (not --rgl-spectral); bands with wavelengths as\n"
+            "linear sRGB (CIE 1931, D65) or, --rgl-spectral, at the run's wavelengths.\n"
             "\n"
             "  -o, --output OUT      the file (a regular file, written atomically)\n"
             "      --rgl             an RGL tensor file (OUT.bsdf) with an rgb field\n"
-            "      --rgl-spectral    an RGL tensor file with wavelengths and spectra fields\n"
+            "      --rgl-spectral    an RGL tensor file with wavelengths and spectra fields (the\n"
+            "                        run's wavelengths; one band: 360 and 830 nm)\n"
             "  -q, --quiet           print errors only\n"
             "  -h, --help            this text\n"
             "Exit status: 0 success, 1 the output could not be written, 2 bad flags or an LSS\n"
-            "that cannot be exported (unreadable, not on a grid).\n",
+            "that cannot be exported (unreadable, not on a grid; bands an RGL file cannot hold).\n",
             prog, prog);
 }
 
@@ -358,7 +361,7 @@ static int export_rgl(const char *prog, const char *input, const char *out, cons
     int *slices = malloc(sizeof(int) * (size_t)st->n_slices), rc = 0;
     if (!slices) return lsqt_prog_error(prog, 1, "out of memory");
     const int nt = lsqt_rgl_slices(st, input, slices, msg, sizeof msg);
-    if (nt < 0) {
+    if (nt < 0 || lsqt_rgl_bands(st, input, spectral, msg, sizeof msg)) {
         free(slices);
         return lsqt_prog_error(prog, 2, msg);
     }
@@ -372,9 +375,15 @@ static int export_rgl(const char *prog, const char *input, const char *out, cons
     } else if (lsqt_out_commit_named(&o, msg, sizeof msg)) {
         rc = lsqt_prog_error(prog, 1, msg);
     } else if (!quiet) {
+        char what[96] = "";
+        if (st->n_bands > 1 && spectral)
+            snprintf(what, sizeof what, "spectral: %d wavelengths, %g to %g nm", st->n_bands, st->wavelengths[0],
+                     st->wavelengths[st->n_bands - 1]);
+        else if (st->n_bands > 1)
+            snprintf(what, sizeof what, "rgb: %s", st->wavelengths ? "linear sRGB of the spectrum" : "R, G, B");
         printf("wrote %s: RGL tensor file (%s), reflection from above at %d theta_i x %u x %u half vectors, %llu paths "
-               "per slice\n", out, spectral ? "spectral: wavelengths, spectra" : "rgb", nt, st->grid_ni, st->grid_ni,
-               (unsigned long long)st->paths);
+               "per slice\n", out, what[0] ? what : spectral ? "spectral: wavelengths, spectra" : "rgb", nt,
+               st->grid_ni, st->grid_ni, (unsigned long long)st->paths);
     }
     if (est) lsqt_estimates_free(est, st->n_slices);
     free(slices);
