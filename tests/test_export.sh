@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
 # lsqt-cl export: grid LSS files (the tutorial's Rough and Substr, a transmitting stack
-# with --from-below) as NetCDF, read back with xarray as a Python user would (and
-# as Eradiate's tabulated BSDF checks it: dimension names, coordinates on linspace(0, 1, N)
-# and 2 pi k / NPHI, units). Every value and standard error of brdf, btdf and their _below
-# twins equals `lsqt-cl info --json --bsdf` at the direction the coordinates name (found
-# by geometry, not by the exporter's index arithmetic), and R, T, delta_T per theta_o
-# equal info's. A non-grid LSS, a wrong output name or kind, and output over input are
+# with --from-below, runs with bands: R, G, B and two wavelengths) as NetCDF, read back
+# with xarray as a Python user would (and as Eradiate's tabulated BSDF checks it:
+# dimension names, coordinates on linspace(0, 1, N) and 2 pi k / NPHI, units). Every
+# value and standard error of brdf, btdf and their _below twins equals `lsqt-cl info
+# --json --bsdf` at the direction the coordinates name (found by geometry, not by the
+# exporter's index arithmetic), and R, T, delta_T per theta_o equal info's, band by band
+# (channel k is band k; its labels and wavelength coordinate are the run's). A non-grid LSS, a wrong output name or kind, and output over input are
 # errors (exit 2) that write nothing. Skipped (77) only where no Python has xarray and
 # netCDF4 (tools/setup.sh installs Debian's).
 # usage: test_export.sh LSQT_CL EXAMPLES_DIR
@@ -29,7 +30,9 @@ cp "$EX/tutorial/Rough.lsqt" R.lsqt
 cp "$EX/tutorial/Substr.lsqt" S.lsqt
 printf 'Medium\nLayer z=0 LambertianBsdf fR=0.3 fT=0.5\nMedium eta=1.3 mus=2 mua=0.1 HenyeyGreensteinPhase g=0.5\nLayer z=-0.5 LambertianBsdf fR=0.2 fT=0.4\nMedium\n' > t.lsqt
 
-# check.py NC INFO_JSON NO NI NPHI: the NetCDF against info --json --bsdf.
+# check.py NC INFO_JSON NO NI NPHI: the NetCDF against info --json --bsdf. With bands
+# (info's "bands" > 1) every value of band k (info's lists) is channel k's, the channel
+# dimension leads, and its labels and wavelengths are the run's; one band has none.
 cat > check.py <<'PY'
 import json, math, sys
 import numpy as np
@@ -38,8 +41,24 @@ nc, info_path, no, ni, nphi = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sy
 d = xr.open_dataset(nc)
 info = json.load(open(info_path))
 p = []
-# what Eradiate's tabulated BSDF requires of its dataset
-if set(d["brdf"].dims) != {"cos_theta_o", "phi_d", "cos_theta_i"}: p.append("brdf dims %s" % (d["brdf"].dims,))
+nb, wl = info.get("bands", 1), info.get("wavelengths")
+if nb > 1:
+    labels = ["%.10gnm" % w for w in wl] if wl else ["R", "G", "B"] if nb == 3 else [str(k) for k in range(nb)]
+    if d.sizes.get("channel") != nb: p.append("channel dimension %s, %d bands" % (d.sizes.get("channel"), nb))
+    if list(d["channel"].values) != labels: p.append("channel labels %s, expected %s" % (d["channel"].values, labels))
+    for v in d.data_vars:
+        if d[v].dims[0] != "channel": p.append("%s dims %s: channel not first" % (v, d[v].dims))
+    if wl is None and "wavelength" in d.variables: p.append("a wavelength coordinate without wavelengths")
+    if wl is not None and ("wavelength" not in d["brdf"].coords or d["wavelength"].dtype != np.float64
+                           or list(d["wavelength"].values) != wl or d["wavelength"].attrs.get("units") != "nm"):
+        p.append("wavelength coordinate %s, expected %s nm" % (d["wavelength"].values if "wavelength" in d else None, wl))
+elif "channel" in d.dims or "wavelength" in d.variables:
+    p.append("one band with a channel dimension or wavelengths")
+bands = range(nb)
+def band(x, k): return x[k] if nb > 1 else x  # info's value of band k
+def chan(a, k): return a.isel(channel=k) if nb > 1 else a  # the NetCDF's
+# what Eradiate's tabulated BSDF requires of its dataset (per band)
+if set(chan(d["brdf"], 0).dims) != {"cos_theta_o", "phi_d", "cos_theta_i"}: p.append("brdf dims %s" % (d["brdf"].dims,))
 for name, want in (("cos_theta_o", np.linspace(0, 1, no)), ("cos_theta_i", np.linspace(0, 1, ni)),
                    ("phi_d", np.linspace(0, 2 * np.pi, nphi, endpoint=False))):
     if d[name].size != want.size or not np.allclose(d[name].values, want, rtol=0, atol=1e-12):
@@ -74,15 +93,19 @@ for side, suffix in ((False, ""), (True, "_below")):
                     hit = [b for b in s["bsdf"] if abs(b[0] - x) < 2e-6 and abs(b[1] - y) < 2e-6 and abs(b[2] - z) < 2e-6]
                     if len(hit) < 1:
                         p.append("%s: no direction (%g %g %g) in info" % (var, x, y, z)); continue
-                    got = (float(f.sel(cos_theta_o=co, cos_theta_i=ci, phi_d=ph)), float(e.sel(cos_theta_o=co, cos_theta_i=ci, phi_d=ph)))
-                    for g, w in zip(got, hit[0][3:5]):
-                        if (w is None) != math.isnan(g) or (w is not None and abs(g - w) > 1e-8 * abs(w)):
-                            p.append("%s%s at cos_o %g cos_i %g phi %g: %r, info %r" % (var, suffix, co, ci, ph, got, hit[0][3:5]))
-                    checked += 1
-        for k in ("R", "T", "delta_T"):
-            got = [float(v) for v in d[k + suffix].values]
-            want = [by_cos[round(node(float(co)), 9)][k] for co in d["cos_theta_o"].values]
-            if any(abs(a - b) > 1e-8 * abs(b) for a, b in zip(got, want)): p.append("%s%s %s, info %s" % (k, suffix, got, want))
+                    for k in bands:
+                        got = (float(chan(f, k).sel(cos_theta_o=co, cos_theta_i=ci, phi_d=ph)),
+                               float(chan(e, k).sel(cos_theta_o=co, cos_theta_i=ci, phi_d=ph)))
+                        want = [band(x, k) for x in hit[0][3:5]]
+                        for g, w in zip(got, want):
+                            if (w is None) != math.isnan(g) or (w is not None and abs(g - w) > 1e-8 * abs(w)):
+                                p.append("%s%s band %d at cos_o %g cos_i %g phi %g: %r, info %r" % (var, suffix, k, co, ci, ph, got, want))
+                        checked += 1
+        for q in ("R", "T", "delta_T"):
+            for k in bands:
+                got = [float(v) for v in chan(d[q + suffix], k).values]
+                want = [band(by_cos[round(node(float(co)), 9)][q], k) for co in d["cos_theta_o"].values]
+                if any(abs(a - b) > 1e-8 * abs(b) for a, b in zip(got, want)): p.append("%s%s band %d %s, info %s" % (q, suffix, k, got, want))
 if checked == 0: p.append("nothing compared")
 if p: sys.exit("\n".join(p[:12]))
 print("compared %d values" % checked)
@@ -102,6 +125,26 @@ PY
 "$PY" check.py t.nc t.json 3 3 6 > out.txt 2>&1 && ok || bad "transmitting NetCDF: $(cat out.txt)"
 "$PY" -c 'import xarray as xr, sys; d = xr.open_dataset(sys.argv[1]); sys.exit(not all(v in d for v in ("btdf", "btdf_below", "brdf_below", "T_below")))' t.nc \
   && ok || bad "transmitting NetCDF lacks btdf or the _below variables"
+
+# Bands: three unnamed ones (R, G, B: the example paint), and two with wavelengths on the
+# transmitting stack with its slices from below; every channel is its band's.
+cp "$EX/paint-rgb.lsqt" P.lsqt
+"$BIN" -q -p 600 --grid 3,3,4 P.lsqt && expect 0 "wrote P.nc: brdf over (channel 3: R to B, cos_theta_i 3" -- \
+  "$BIN" export P.lsqt.lss -o P.nc
+"$BIN" info P.lsqt.lss --json P.json --bsdf > /dev/null
+"$PY" check.py P.nc P.json 3 3 4 > out.txt 2>&1 && ok || bad "RGB NetCDF: $(cat out.txt)"
+"$PY" -c 'import xarray as xr, sys; d = xr.open_dataset(sys.argv[1]); r = d.R.sel(channel="R", cos_theta_o=1.0)
+sys.exit(not (r > d.R.sel(channel="G", cos_theta_o=1.0) > d.R.sel(channel="B", cos_theta_o=1.0)))' P.nc \
+  && ok || bad "the red paint's R is not largest in red"
+sed 's/fR=0.3 fT=0.5/fR=0.3,0.6 fT=0.5,0.2/' t.lsqt > tw.lsqt
+"$BIN" -q -p 600 --grid 3,3,6 --from-below --wavelengths 450,650 tw.lsqt && "$BIN" export -q tw.lsqt.lss -o tw.nc \
+  && ok || bad "wavelengths: run and export"
+"$BIN" info tw.lsqt.lss --json tw.json --bsdf > /dev/null
+"$PY" check.py tw.nc tw.json 3 3 6 > out.txt 2>&1 && ok || bad "NetCDF with wavelengths: $(cat out.txt)"
+"$PY" -c 'import xarray as xr, sys; d = xr.open_dataset(sys.argv[1])
+sys.exit(not (list(d.btdf_below.dims) == ["channel", "cos_theta_i", "phi_d", "cos_theta_o"]
+              and float(d.brdf.sel(channel="650nm").wavelength) == 650.0))' tw.nc \
+  && ok || bad "wavelengths: btdf_below's dimensions or sel(channel=\"650nm\")"
 
 # Errors: nothing written, an existing file kept.
 "$BIN" -q -p 300 -wo 4 -wi 16 --wi-spread --lss s.lss -o s.raw R.lsqt

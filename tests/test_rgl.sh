@@ -14,7 +14,12 @@
 #     v, u), sum over the three axes of max |second difference| / 8 over the cell's
 #     corners (the bound h^2 |f''| / 8 of linear interpolation, f'' from the tensor);
 #  3. Mitsuba's importance sampling of the luminance table is unbiased: the albedo it
-#     estimates equals the one from uniform hemisphere sampling of eval (z < 4).
+#     estimates equals the one from uniform hemisphere sampling of eval (z < 4);
+#  4. runs with bands (the example paint, R, G, B; the example gold at seven wavelengths):
+#     rgb holds R, G, B, or the linear sRGB of each node's spectrum (recomputed from
+#     Mitsuba's CIE tables, not lsqt-cl's), spectra the bands at the run's wavelengths,
+#     stderr each band's error, and Mitsuba's eval returns them; what a file cannot hold
+#     (--rgl-spectral without wavelengths, two unnamed bands) is refused, exit 2.
 # Mitsuba comes from the venv LSQT_CLIENT_VENV (default BUILD/client-venv) or
 # BUILD/validate-venv when one has it, else it is installed into the first (pip install
 # mitsuba numpy); the test is skipped (77) only where that cannot be done.
@@ -45,16 +50,13 @@ cp "$EX/tutorial/Substr.lsqt" S.lsqt
 # 16 incident directions (theta, phi in degrees) spread over the hemisphere, off the nodes.
 for t in 8 27 43 61; do for p in 17 71 133 166; do echo "$((t + p % 5)) $p"; done; done > dirs.txt
 
-cat > check.py <<'PY'
-import json, math, struct, sys
+# tensor.py: an independent reader of the tensor file format (check.py, bands.py).
+cat > tensor.py <<'PY'
+import struct, sys
 import numpy as np
-import mitsuba as mi
 
-tensor, tensor_s, info_path, wi_path, nt, nu = sys.argv[1:5] + [int(a) for a in sys.argv[5:7]]
-p = []
-
-def read_tensor(path):
-    """An independent reader of the tensor file format: name -> numpy array."""
+def read_tensor(path, p):
+    """The fields of the file at path: name -> numpy array; problems appended to p."""
     b = open(path, "rb").read()
     if b[:12] != b"tensor_file\0": sys.exit("%s: no tensor_file header" % path)
     n = struct.unpack_from("<I", b, 14)[0]
@@ -67,8 +69,18 @@ def read_tensor(path):
         if off % 8: p.append("%s: field %s not 8-byte aligned" % (path, name))
         out[name] = np.frombuffer(b, dtype, int(np.prod(shape)), off).reshape(shape)
     return out
+PY
 
-tf = read_tensor(tensor)
+cat > check.py <<'PY'
+import json, math, sys
+import numpy as np
+import mitsuba as mi
+from tensor import read_tensor
+
+tensor, tensor_s, info_path, wi_path, nt, nu = sys.argv[1:5] + [int(a) for a in sys.argv[5:7]]
+p = []
+
+tf = read_tensor(tensor, p)
 theta_nodes = [math.pi / 2 * k / (nt - 1) for k in range(nt)]
 theta_nodes[-1] = math.acos(0.001)  # the horizon, simulated there
 if not np.allclose(tf["theta_i"], theta_nodes, rtol=0, atol=1e-6): p.append("theta_i %s" % tf["theta_i"])
@@ -203,6 +215,120 @@ one() {
 }
 one Rough R.lsqt 20000
 one Substr S.lsqt 20000
+
+# bands.py RGB_TENSOR SPECTRAL_TENSOR|- INFO_JSON NT NU: a run with bands. At every node the
+# rgb field holds R, G, B as they are (unnamed bands), or the linear sRGB of the node's
+# spectrum, recomputed here from Mitsuba's own CIE 1931 and D65 tables (the spectrum
+# linear between the bands, its end values held; the white corrected to grey); spectra
+# holds each band at the run's wavelengths; stderr each band's error; the values from info
+# (f times the cosine of the incident direction). Then Mitsuba's eval at the nodes: rgb
+# (scalar_rgb) and, at four of the bands' wavelengths, the spectra (scalar_spectral).
+cat > bands.py <<'PY'
+import json, math, sys
+import numpy as np
+import mitsuba as mi
+from tensor import read_tensor
+
+rgb_path, spec_path, info_path, nt, nu = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4]), int(sys.argv[5])
+p = []
+info = json.load(open(info_path))
+nb, wl = info["bands"], info["wavelengths"]
+tf = read_tensor(rgb_path, p)
+ts = read_tensor(spec_path, p) if spec_path != "-" else None
+mi.set_variant("scalar_spectral")
+L = np.arange(360.0, 831.0)
+E = np.array([float(mi.cie_d65(float(x))) for x in L])
+CMF = np.array([[float(c) for c in mi.cie1931_xyz(float(x))] for x in L])
+W = (E[:, None] * CMF).sum(0)
+def srgb(x): return np.array([float(c) for c in mi.xyz_to_srgb(mi.Color3f(*x))])
+WHITE = srgb(W / W[1])
+def colour(v):  # a spectrum at wl as linear sRGB, independently of lsqt-cl's colour.c
+    return srgb(((np.interp(L, wl, v) * E)[:, None] * CMF).sum(0) / W[1]) / WHITE
+
+if tf["rgb"].shape != (1, nt, 3, nu, nu): p.append("rgb shape %s" % (tf["rgb"].shape,))
+if tf["stderr"].shape != (1, nt, nb, nu, nu): p.append("stderr shape %s" % (tf["stderr"].shape,))
+if ts is not None:
+    if list(ts["wavelengths"]) != [np.float32(w) for w in wl]: p.append("wavelengths %s, run %s" % (ts["wavelengths"], wl))
+    if ts["spectra"].shape != (1, nt, nb, nu, nu): p.append("spectra shape %s" % (ts["spectra"].shape,))
+if not (np.isfinite(tf["luminance"]).all() and (tf["luminance"] > 0).all()): p.append("luminance not positive")
+slices = [s for s in info["slices"] if not s["from_below"]]
+nodes = []  # (k, j, l, wi, wo, values per band)
+for k, s in enumerate(slices):
+    th = s["theta_o"]
+    for j in range(nu):
+        for l in range(nu):
+            u, v = l / (nu - 1), j / (nu - 1)
+            tm, pm = u * u * math.pi / 2, (2 * v - 1) * math.pi
+            m = np.array([math.sin(tm) * math.cos(pm), math.sin(tm) * math.sin(pm), math.cos(tm)])
+            wi = np.array([math.sin(th), 0.0, math.cos(th)])
+            wo = 2 * wi.dot(m) * m - wi
+            if wi.dot(m) <= 0 or wo[2] < 1e-4: continue
+            hit = [h for h in s["bsdf"] if abs(h[0] - wo[0]) < 2e-6 and abs(h[1] - abs(wo[1])) < 2e-6 and abs(h[2] - wo[2]) < 2e-6]
+            if not hit: p.append("slice %d node (%d, %d) not simulated" % (k, j, l)); continue
+            want = np.array(hit[0][3]) * hit[0][2]
+            got = tf["rgb"][0, k, :, j, l].astype(float)
+            ref = want if wl is None else colour(want)
+            if np.abs(got - ref).max() > (1e-6 if wl is None else 1e-3) * np.abs(ref).max() + 1e-9:
+                p.append("rgb slice %d node (%d, %d): %s, expected %s" % (k, j, l, got, ref))
+            for b in range(nb):
+                e, se = hit[0][4][b], float(tf["stderr"][0, k, b, j, l])
+                if (e is None) != math.isnan(se) or (e is not None and abs(se - e * hit[0][2]) > 1e-6 * e * hit[0][2] + 1e-12):
+                    p.append("stderr slice %d node (%d, %d) band %d: %g, info %s" % (k, j, l, b, se, e))
+                if ts is not None and abs(ts["spectra"][0, k, b, j, l] - want[b]) > 1e-6 * abs(want[b]) + 1e-12:
+                    p.append("spectra slice %d node (%d, %d) band %d: %g, info %g" % (k, j, l, b, ts["spectra"][0, k, b, j, l], want[b]))
+            nodes.append((k, j, l, wi, wo, want, ref))
+if len(nodes) < nt * nu: p.append("only %d nodes" % len(nodes))
+print("bands: %d nodes, %d bands (%s): the file's values and errors, %d differ" % (len(nodes), nb, wl or "R, G, B", len(p)))
+
+def evals(variant, path, F, lam=None):  # Mitsuba's eval at every node against the file's own values F[k, c, j, l]
+    mi.set_variant(variant)
+    bsdf = mi.load_dict({"type": "measured", "filename": path})
+    bad, chans = 0, lam if lam is not None else [0, 1, 2]
+    for k, j, l, wi, wo, want, ref in nodes:
+        si = mi.SurfaceInteraction3f()
+        si.wi = mi.Vector3f(*wi) if wi[0] != 0 else mi.Vector3f(1e-20, wi[1], wi[2])
+        if lam is not None: si.wavelengths = [wl[b] for b in lam]
+        got = [float(x) for x in bsdf.eval(mi.BSDFContext(), si, mi.Vector3f(*wo))]
+        exp = ref if lam is None else [want[b] for b in lam]
+        # as check.py: Mitsuba's float32 (u, v) may land 1 % of the way to a neighbouring node
+        step = [max(abs(F[k2, c, j2, l2] - F[k, c, j, l]) for k2, j2, l2 in ((k - 1, j, l), (k + 1, j, l), (k, j - 1, l),
+                    (k, j + 1, l), (k, j, l - 1), (k, j, l + 1)) if 0 <= k2 < nt and 0 <= j2 < nu and 0 <= l2 < nu) for c in chans]
+        if any(abs(g - w) > 3e-5 * abs(w) + 0.01 * st + 1e-9 for g, w, st in zip(got, exp, step)):
+            bad += 1
+            if bad < 4: p.append("%s slice %d node (%d, %d): mitsuba %s, file %s" % (variant, k, j, l, got, list(exp)))
+    print("bands: Mitsuba %s at %d nodes, %d differ" % (variant, len(nodes), bad))
+evals("scalar_rgb", rgb_path, tf["rgb"][0].astype(float))
+if ts is not None:
+    lam = [wl.index(w) for w in wl if w in (400, 500, 600, 700)]
+    if len(lam) != 4: p.append("the test wants bands at 400, 500, 600, 700 nm")
+    else: evals("scalar_spectral", spec_path, ts["spectra"][0].astype(float), lam)
+if p: sys.exit("%d problems:\n" % len(p) + "\n".join(p[:8]))
+PY
+
+# Bands: the red paint (R, G, B) and gold under a coat at seven wavelengths.
+cp "$EX/paint-rgb.lsqt" P.lsqt
+cp "$EX/gold-coat.lsqt" G.lsqt
+cp -r "$EX/tables" .
+"$BIN" -q -p 2000 --rgl-grid 5,9 P.lsqt && "$BIN" info P.lsqt.lss --json P.json --bsdf > /dev/null && ok || bad "paint: run"
+expect 0 "wrote P.bsdf: RGL tensor file (rgb: R, G, B)" -- "$BIN" export P.lsqt.lss -o P.bsdf --rgl
+expect 2 "has 3 bands without wavelengths (R, G, B): --rgl-spectral writes a spectrum" -- \
+  "$BIN" export P.lsqt.lss -o Ps.bsdf --rgl-spectral
+[ ! -e Ps.bsdf ] && ok || bad "a refused --rgl-spectral wrote Ps.bsdf"
+"$PY" bands.py P.bsdf - P.json 5 9 > P.out 2>&1 && ok || bad "paint bands: $(cat P.out)"
+sed "s/^/  paint: /" P.out
+"$BIN" -q -p 2000 --rgl-grid 5,9 --wavelengths 400:700:50 G.lsqt 2>/dev/null &&
+  "$BIN" info G.lsqt.lss --json G.json --bsdf > /dev/null && ok || bad "gold: run"
+expect 0 "wrote G.bsdf: RGL tensor file (rgb: linear sRGB of the spectrum)" -- "$BIN" export G.lsqt.lss -o G.bsdf --rgl
+expect 0 "wrote Gs.bsdf: RGL tensor file (spectral: 7 wavelengths, 400 to 700 nm)" -- \
+  "$BIN" export G.lsqt.lss -o Gs.bsdf --rgl-spectral
+"$PY" bands.py G.bsdf Gs.bsdf G.json 5 9 > G.out 2>&1 && ok || bad "gold bands: $(cat G.out)"
+sed "s/^/  gold: /" G.out
+# two unnamed bands have no colour
+printf 'Medium\nLayer z=0 LambertianBsdf fR=0.5,0.2\nMedium\n' > two.lsqt
+"$BIN" -q -p 300 --rgl-grid 3,5 two.lsqt
+expect 2 "'two.lsqt.lss' has 2 bands without wavelengths: --rgl writes colour from three" -- \
+  "$BIN" export two.lsqt.lss -o two.bsdf --rgl
+[ ! -e two.bsdf ] && ok || bad "a refused --rgl wrote two.bsdf"
 
 # A refused export keeps an existing file (the refusals themselves: test_grid).
 "$BIN" -q -p 300 --grid 3,3,6 --lss g.lss -o g.raw R.lsqt

@@ -12,6 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "lsqt/colour.h"
 #include "lsqt/directions.h"
 #include "lsqt/export_rgl.h"
 #include "lsqt/lss.h"
@@ -36,20 +37,27 @@ static void usage(FILE *f, const char *prog)
             "the grid's: cos theta on linspace(0, 1, N) and phi_d on 2 pi k / NPHI (0: the\n"
             "incident direction on the outgoing one's side), the table Eradiate's mqdiffuse\n"
             "reads. Python: xarray.open_dataset(\"OUT.nc\")[\"brdf\"].\n"
+            "A run with bands (--wavelengths, or lists of values) puts a leading dimension\n"
+            "channel on every table and on R, T, delta_T: a string coordinate channel (\"550nm\",\n"
+            "or R, G, B) and, with wavelengths, a coordinate wavelength (nm) on it:\n"
+            "d.brdf.sel(channel=\"550nm\"). One band: no channel dimension.\n"
             "With --rgl, an LSS made with --rgl-grid NT,NU is written as an RGL tensor file\n"
             "(Dupuy and Jakob 2018), the one Mitsuba 3's measured BSDF reads (field rgb: its RGB\n"
             "variants; --rgl-spectral: fields wavelengths and spectra, its spectral variants and\n"
             "pbrt-v4): the reflection from above, f cos(theta) at the grid's nodes, with the\n"
-            "standard errors in an extra field `stderr`; transmission, the slices from below\n"
-            "and colour (one band, in every channel) are not in it.\n"
+            "standard errors in an extra field `stderr`; transmission and the slices from\n"
+            "below are not in it. Colour: one band in every channel (spectra: at 360 and\n"
+            "830 nm); bands R, G, B as rgb (not --rgl-spectral); bands with wavelengths as\n"
+            "linear sRGB (CIE 1931, D65) or, --rgl-spectral, at the run's wavelengths.\n"
             "\n"
             "  -o, --output OUT      the file (a regular file, written atomically)\n"
             "      --rgl             an RGL tensor file (OUT.bsdf) with an rgb field\n"
-            "      --rgl-spectral    an RGL tensor file with wavelengths and spectra fields\n"
+            "      --rgl-spectral    an RGL tensor file with wavelengths and spectra fields (the\n"
+            "                        run's wavelengths; one band: 360 and 830 nm)\n"
             "  -q, --quiet           print errors only\n"
             "  -h, --help            this text\n"
             "Exit status: 0 success, 1 the output could not be written, 2 bad flags or an LSS\n"
-            "that cannot be exported (unreadable, not on a grid).\n",
+            "that cannot be exported (unreadable, not on a grid; bands an RGL file cannot hold).\n",
             prog, prog);
 }
 
@@ -85,9 +93,10 @@ static int def_var(ncw *w, const char *name, int ndims, const int *dims, const c
 }
 
 /* The grid of a state: NO slices per side (the slices of each side in ascending theta_o,
- * slice s at cos node NO-1-s), NI polar nodes, NPHI azimuths, NA of them simulated. */
+ * slice s at cos node NO-1-s), NI polar nodes, NPHI azimuths, NA of them simulated; NB
+ * bands (1: no channel dimension, the file of a one-band run as it always was). */
 typedef struct grid {
-    int no, ni, nphi, na, below;
+    int no, ni, nphi, na, below, nb;
     int *side[2]; /* the state's slice index of each side's slice s */
 } grid;
 
@@ -113,19 +122,31 @@ static void fill_table(const grid *g, const lsqt_slice_est *est, int side, int h
 
 /* The NetCDF ids of one file's dimensions and variables. */
 typedef struct nc_vars {
-    int d_o, d_p, d_i;    /* dimensions: cos_theta_o, phi_d, cos_theta_i */
+    int d_o, d_p, d_i, d_c; /* dimensions: cos_theta_o, phi_d, cos_theta_i, channel (bands only) */
     int v_ci, v_p, v_co;  /* the axes */
+    int v_ch, v_wl;       /* bands: the channel labels, the wavelengths (-1: unnamed bands) */
     int v_f[2][2][2];     /* per side (from above; from below), hemisphere (R; T), value or error */
     int v_s[2][6];        /* per side: R, T, delta_T and their errors */
 } nc_vars;
 
 static const char *const scal[6] = {"R", "R_stderr", "T", "T_stderr", "delta_T", "delta_T_stderr"};
 
-/* The dimensions and the axes' variables. */
-static void define_axes(ncw *w, const grid *g, nc_vars *v)
+/* The dimensions and the axes' variables. With bands, `channel` comes first (the slowest
+ * axis: each band's table is contiguous, as in the LSS), labelled by a string coordinate
+ * ("550nm", "R"), with the wavelengths beside it when the run has them. */
+static void define_axes(ncw *w, const lsqt_state *st, const grid *g, nc_vars *v)
 {
-    v->d_o = -1, v->d_p = -1, v->d_i = -1;
-    nc_check(w, nc_def_dim(w->id, "cos_theta_i", (size_t)g->ni, &v->d_i), "cos_theta_i");
+    v->d_o = -1, v->d_p = -1, v->d_i = -1, v->d_c = -1, v->v_ch = -1, v->v_wl = -1;
+    if (g->nb > 1) {
+        nc_check(w, nc_def_dim(w->id, "channel", (size_t)g->nb, &v->d_c), "channel");
+        if (w->status == NC_NOERR) nc_check(w, nc_def_var(w->id, "channel", NC_STRING, 1, &v->d_c, &v->v_ch), "channel");
+        put_text(w, v->v_ch, "long_name", st->wavelengths ? "band (its wavelength)" : "band (R, G, B: colour channels)");
+        if (st->wavelengths) {
+            v->v_wl = def_var(w, "wavelength", 1, &v->d_c, "nm", "wavelength of the band");
+            put_text(w, v->v_wl, "standard_name", "radiation_wavelength");
+        }
+    }
+    if (w->status == NC_NOERR) nc_check(w, nc_def_dim(w->id, "cos_theta_i", (size_t)g->ni, &v->d_i), "cos_theta_i");
     if (w->status == NC_NOERR) nc_check(w, nc_def_dim(w->id, "phi_d", (size_t)g->nphi, &v->d_p), "phi_d");
     if (w->status == NC_NOERR) nc_check(w, nc_def_dim(w->id, "cos_theta_o", (size_t)g->no, &v->d_o), "cos_theta_o");
     v->v_ci = def_var(w, "cos_theta_i", 1, &v->d_i, "", "cosine of the incident zenith angle");
@@ -140,7 +161,8 @@ static void define_axes(ncw *w, const grid *g, nc_vars *v)
  * (reflection; transmission). */
 static void define_tables(ncw *w, const lsqt_state *st, const grid *g, nc_vars *v)
 {
-    const int dims3[3] = {v->d_i, v->d_p, v->d_o};
+    /* with bands every table and scalar leads with channel (dims + 1 without) */
+    const int bands = g->nb > 1, dims[4] = {v->d_c, v->d_i, v->d_p, v->d_o}, dims_s[2] = {v->d_c, v->d_o};
     static const char *const scal_long[6] = {
         "directional-hemispherical reflectance", "standard error of R", "directional-hemispherical transmittance",
         "standard error of T", "unscattered forward transmittance (a delta, not in btdf)", "standard error of delta_T"};
@@ -153,13 +175,15 @@ static void define_tables(ncw *w, const lsqt_state *st, const grid *g, nc_vars *
                 snprintf(name, sizeof name, "%s%s%s", h ? "btdf" : "brdf", e ? "_stderr" : "", suffix);
                 snprintf(long_name, sizeof long_name, "%s%s, not cosine-weighted%s", e ? "standard error of the " : "",
                          h ? "BTDF (transmission)" : "BRDF (reflection)", from);
-                v->v_f[side][h][e] = def_var(w, name, 3, dims3, "sr-1", long_name);
+                v->v_f[side][h][e] = def_var(w, name, 3 + bands, dims + !bands, "sr-1", long_name);
+                if (st->wavelengths) put_text(w, v->v_f[side][h][e], "coordinates", "wavelength");
             }
         for (int k = 0; k < 6; k++) {
             char name[48], long_name[200];
             snprintf(name, sizeof name, "%s%s", scal[k], suffix);
             snprintf(long_name, sizeof long_name, "%s%s", scal_long[k], from);
-            v->v_s[side][k] = def_var(w, name, 1, &v->d_o, "1", long_name);
+            v->v_s[side][k] = def_var(w, name, 1 + bands, dims_s + !bands, "1", long_name);
+            if (st->wavelengths) put_text(w, v->v_s[side][k], "coordinates", "wavelength");
         }
     }
 }
@@ -191,15 +215,18 @@ static void put_provenance(ncw *w, const char *input, const lsqt_state *st, cons
              "one standard error of the mean (batch means over 32 batches); NaN where the paths are too few");
 }
 
-/* Every variable's values. Returns 0, or -1 (out of memory; err filled). */
+/* Every variable's values (est: band after band, as lsqt_estimates gives them). Returns 0,
+ * or -1 (out of memory; err filled). */
 static int put_values(ncw *w, const lsqt_state *st, const lsqt_slice_est *est, const grid *g, const nc_vars *v,
                       char *err, size_t errcap)
 {
-    double *ax = malloc(sizeof(double) * (size_t)(g->ni > g->no ? (g->ni > g->nphi ? g->ni : g->nphi)
-                                                                 : (g->no > g->nphi ? g->no : g->nphi)));
-    double *tab = malloc(sizeof(double) * (size_t)g->ni * (size_t)g->nphi * (size_t)g->no);
-    if (!ax || !tab) {
-        free(ax), free(tab);
+    const size_t nb = (size_t)g->nb, table = (size_t)g->ni * (size_t)g->nphi * (size_t)g->no;
+    const size_t nax = (size_t)(g->ni > g->nphi ? g->ni : g->nphi), nsc = nb * (size_t)g->no;
+    double *ax = malloc(sizeof(double) * (nax > nsc ? nax : nsc));
+    double *tab = malloc(sizeof(double) * nb * table);
+    char **labels = calloc(nb, sizeof *labels), (*lab)[32] = malloc(sizeof *lab * nb);
+    if (!ax || !tab || !labels || !lab) {
+        free(ax), free(tab), free(labels), free(lab);
         snprintf(err, errcap, "out of memory");
         return -1;
     }
@@ -210,39 +237,49 @@ static int put_values(ncw *w, const lsqt_state *st, const lsqt_slice_est *est, c
     if (w->status == NC_NOERR) nc_check(w, nc_put_var_double(w->id, v->v_p, ax), "phi_d values");
     for (int k = 0; k < g->no; k++) ax[k] = (double)k / (g->no - 1);
     if (w->status == NC_NOERR) nc_check(w, nc_put_var_double(w->id, v->v_co, ax), "cos_theta_o values");
+    if (nb > 1) {
+        for (size_t b = 0; b < nb; b++) labels[b] = (char *)lsqt_band_label(g->nb, st->wavelengths, (int)b, lab[b], sizeof lab[b]);
+        if (w->status == NC_NOERR) nc_check(w, nc_put_var_string(w->id, v->v_ch, (const char **)labels), "channel values");
+        if (v->v_wl >= 0 && w->status == NC_NOERR)
+            nc_check(w, nc_put_var_double(w->id, v->v_wl, st->wavelengths), "wavelength values");
+    }
+    const size_t ns = (size_t)st->n_slices;
     for (int side = 0; side < (g->below ? 2 : 1); side++) {
         for (int h = 0; h < (st->transmits ? 2 : 1); h++)
             for (int e = 0; e < 2; e++) {
-                fill_table(g, est, side, h, e, tab);
+                for (size_t b = 0; b < nb; b++) fill_table(g, est + b * ns, side, h, e, tab + b * table);
                 if (w->status == NC_NOERR)
                     nc_check(w, nc_put_var_double(w->id, v->v_f[side][h][e], tab), "table values");
             }
         for (int k = 0; k < 6; k++) {
-            for (int ko = 0; ko < g->no; ko++) {
-                const lsqt_slice_est *s = &est[g->side[side][g->no - 1 - ko]];
-                const lsqt_est *q = k < 2 ? &s->R : k < 4 ? &s->T : &s->delta_T;
-                ax[ko] = k % 2 ? q->err : q->mean;
-            }
+            for (size_t b = 0; b < nb; b++)
+                for (int ko = 0; ko < g->no; ko++) {
+                    const lsqt_slice_est *s = &est[b * ns + (size_t)g->side[side][g->no - 1 - ko]];
+                    const lsqt_est *q = k < 2 ? &s->R : k < 4 ? &s->T : &s->delta_T;
+                    ax[b * (size_t)g->no + (size_t)ko] = k % 2 ? q->err : q->mean;
+                }
             if (w->status == NC_NOERR) nc_check(w, nc_put_var_double(w->id, v->v_s[side][k], ax), scal[k]);
         }
     }
-    free(ax), free(tab);
+    free(ax), free(tab), free(labels), free(lab);
     return 0;
 }
 
 /* Reads back what was written (a writer may miss a full disk): every dimension there. */
 static int read_back(const char *tmp, const grid *g, char *err, size_t errcap)
 {
-    int id, nd = 0;
-    size_t len_o = 0;
+    int id, nd = 0, dim_c = -1;
+    size_t len_o = 0, len_c = 0;
     if (nc_open(tmp, NC_NOWRITE, &id) != NC_NOERR) {
         snprintf(err, errcap, "'%s' cannot be read back as NetCDF after writing it", tmp);
         return -1;
     }
     int dim_o = -1;
-    const int bad = nc_inq_ndims(id, &nd) != NC_NOERR || nd != 3 ||
+    const int bad = nc_inq_ndims(id, &nd) != NC_NOERR || nd != 3 + (g->nb > 1) ||
                     nc_inq_dimid(id, "cos_theta_o", &dim_o) != NC_NOERR ||
-                    nc_inq_dimlen(id, dim_o, &len_o) != NC_NOERR || len_o != (size_t)g->no;
+                    nc_inq_dimlen(id, dim_o, &len_o) != NC_NOERR || len_o != (size_t)g->no ||
+                    (g->nb > 1 && (nc_inq_dimid(id, "channel", &dim_c) != NC_NOERR ||
+                                   nc_inq_dimlen(id, dim_c, &len_c) != NC_NOERR || len_c != (size_t)g->nb));
     nc_close(id);
     if (bad) {
         snprintf(err, errcap, "'%s' does not read back as written", tmp);
@@ -261,7 +298,7 @@ static int write_nc(const char *tmp, const char *input, const lsqt_state *st, co
         return -1;
     }
     nc_vars v;
-    define_axes(&w, g, &v);
+    define_axes(&w, st, g, &v);
     define_tables(&w, st, g, &v);
     put_provenance(&w, input, st, g);
     if (w.status == NC_NOERR) nc_check(&w, nc_enddef(w.id), "enddef");
@@ -295,6 +332,7 @@ static int find_grid(const lsqt_state *st, const char *input, grid *g, char *err
         return -1;
     }
     g->ni = (int)st->grid_ni, g->nphi = (int)st->grid_nphi, g->na = g->nphi / 2 + 1;
+    g->nb = st->n_bands > 1 ? st->n_bands : 1;
     int n[2] = {0, 0};
     for (int s = 0; s < st->n_slices; s++) n[(st->slice_flags[s] & LSQT_SLICE_BELOW) != 0]++;
     g->no = n[0], g->below = n[1] > 0;
@@ -323,7 +361,7 @@ static int export_rgl(const char *prog, const char *input, const char *out, cons
     int *slices = malloc(sizeof(int) * (size_t)st->n_slices), rc = 0;
     if (!slices) return lsqt_prog_error(prog, 1, "out of memory");
     const int nt = lsqt_rgl_slices(st, input, slices, msg, sizeof msg);
-    if (nt < 0) {
+    if (nt < 0 || lsqt_rgl_bands(st, input, spectral, msg, sizeof msg)) {
         free(slices);
         return lsqt_prog_error(prog, 2, msg);
     }
@@ -337,9 +375,15 @@ static int export_rgl(const char *prog, const char *input, const char *out, cons
     } else if (lsqt_out_commit_named(&o, msg, sizeof msg)) {
         rc = lsqt_prog_error(prog, 1, msg);
     } else if (!quiet) {
+        char what[96] = "";
+        if (st->n_bands > 1 && spectral)
+            snprintf(what, sizeof what, "spectral: %d wavelengths, %g to %g nm", st->n_bands, st->wavelengths[0],
+                     st->wavelengths[st->n_bands - 1]);
+        else if (st->n_bands > 1)
+            snprintf(what, sizeof what, "rgb: %s", st->wavelengths ? "linear sRGB of the spectrum" : "R, G, B");
         printf("wrote %s: RGL tensor file (%s), reflection from above at %d theta_i x %u x %u half vectors, %llu paths "
-               "per slice\n", out, spectral ? "spectral: wavelengths, spectra" : "rgb", nt, st->grid_ni, st->grid_ni,
-               (unsigned long long)st->paths);
+               "per slice\n", out, what[0] ? what : spectral ? "spectral: wavelengths, spectra" : "rgb", nt,
+               st->grid_ni, st->grid_ni, (unsigned long long)st->paths);
     }
     if (est) lsqt_estimates_free(est, st->n_slices);
     free(slices);
@@ -434,8 +478,14 @@ static int export_nc(const char *prog, const char *input, const char *out, const
     } else if (lsqt_out_commit_named(&o, msg, sizeof msg)) {
         rc = lsqt_prog_error(prog, 1, msg);
     } else if (!quiet) {
-        printf("wrote %s: brdf%s over (cos_theta_i %d, phi_d %d, cos_theta_o %d)%s, %llu paths per slice\n", out,
-               st->transmits ? " and btdf" : "", g.ni, g.nphi, g.no, g.below ? " from above and from below" : "",
+        char chan[80] = "";
+        if (g.nb > 1) {
+            char l0[32], l1[32];
+            snprintf(chan, sizeof chan, "channel %d: %s to %s, ", g.nb, lsqt_band_label(g.nb, st->wavelengths, 0, l0, sizeof l0),
+                     lsqt_band_label(g.nb, st->wavelengths, g.nb - 1, l1, sizeof l1));
+        }
+        printf("wrote %s: brdf%s over (%scos_theta_i %d, phi_d %d, cos_theta_o %d)%s, %llu paths per slice\n", out,
+               st->transmits ? " and btdf" : "", chan, g.ni, g.nphi, g.no, g.below ? " from above and from below" : "",
                (unsigned long long)st->paths);
     }
     if (est) lsqt_estimates_free(est, st->n_slices);

@@ -15,8 +15,10 @@
  * warp's Jacobian, plus a floor so that no direction with a value has density 0.
  *
  * Kept: reflection from above, its standard errors (an extra field `stderr` that renderers
- * ignore). Lost: transmission and the slices from below (the format has no place for
- * them), and colour: lsqt-cl simulates one band, written to every channel. */
+ * ignore; per band with bands) and colour: one band in every channel, R, G, B bands as
+ * they are, a spectrum as linear sRGB (rgb) or at its own wavelengths (spectra; the
+ * readers interpolate between them and hold the end values). Lost: transmission and the
+ * slices from below (the format has no place for them). */
 #include "lsqt/export_rgl.h"
 
 #include <math.h>
@@ -24,6 +26,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "lsqt/colour.h"
 #include "lsqt/directions.h"
 #include "lsqt/util.h"
 
@@ -149,22 +152,63 @@ int lsqt_rgl_slices(const lsqt_state *st, const char *input, int *slices, char *
     return nt;
 }
 
+int lsqt_rgl_bands(const lsqt_state *st, const char *input, int spectral, char *err, size_t errcap)
+{
+    if (st->n_bands <= 1) return 0;
+    if (spectral && !st->wavelengths) {
+        snprintf(err, errcap, "'%s' has %d bands without wavelengths%s: --rgl-spectral writes a spectrum, which needs "
+                 "the run's wavelengths (--wavelengths)%s", input, st->n_bands, st->n_bands == 3 ? " (R, G, B)" : "",
+                 st->n_bands == 3 ? "; --rgl writes R, G, B as they are" : "");
+        return -1;
+    }
+    if (!spectral && !st->wavelengths && st->n_bands != 3) {
+        snprintf(err, errcap, "'%s' has %d bands without wavelengths: --rgl writes colour from three (R, G, B) or from "
+                 "a spectrum (a run with --wavelengths)", input, st->n_bands);
+        return -1;
+    }
+    return 0;
+}
+
+/* The colour of one node from its bands' values v (nb of them): rgb (linear sRGB) and Y, its
+ * luminance (the sampling density's weight). R, G, B are taken as they are, with the Rec.
+ * 709 luminance; a spectrum goes through CIE 1931 under D65 (colour.h); one band is grey. */
+static void node_colour(const lsqt_state *st, int nb, const double *v, double rgb[3], double *y)
+{
+    if (nb == 1) {
+        rgb[0] = rgb[1] = rgb[2] = *y = v[0];
+    } else if (!st->wavelengths) {
+        for (int c = 0; c < 3; c++) rgb[c] = v[c];
+        *y = 0.2126 * v[0] + 0.7152 * v[1] + 0.0722 * v[2];
+    } else {
+        double xyz[3] = {0, 0, 0};
+        if (lsqt_spectrum_to_srgb(nb, st->wavelengths, v, rgb)) rgb[0] = rgb[1] = rgb[2] = 0;
+        lsqt_spectrum_to_xyz(nb, st->wavelengths, v, xyz);
+        *y = xyz[1];
+    }
+}
+
 int lsqt_rgl_write(const char *path, const lsqt_state *st, const lsqt_slice_est *est,
                    const int *slices, int nt, int spectral, char *err, size_t errcap)
 {
-    const int nu = (int)st->grid_ni, nch = spectral ? 2 : 3;
-    const size_t plane = (size_t)nu * (size_t)nu, cells = (size_t)nt * plane;
+    if (lsqt_rgl_bands(st, "the state", spectral, err, errcap)) return -1;
+    /* nb bands; nch channels of the colour field: rgb 3, spectra the run's wavelengths (one
+     * band: 360 and 830 nm, the same value at both); nse bands in stderr */
+    const int nu = (int)st->grid_ni, nb = st->n_bands > 1 ? st->n_bands : 1;
+    const int nch = spectral ? (nb > 1 ? nb : 2) : 3;
+    const size_t plane = (size_t)nu * (size_t)nu, cells = (size_t)nt * plane, ns = (size_t)st->n_slices;
     float *theta = malloc(sizeof(float) * (size_t)nt), *vndf = malloc(sizeof(float) * 4 * (size_t)nt);
-    float *lum = malloc(sizeof(float) * cells), *sd = malloc(sizeof(float) * cells);
-    float *val = malloc(sizeof(float) * cells * (size_t)nch);
-    char *desc = malloc(strlen(st->canonical) + 512);
-    if (!theta || !vndf || !lum || !sd || !val || !desc) {
-        free(theta), free(vndf), free(lum), free(sd), free(val), free(desc);
+    float *lum = malloc(sizeof(float) * cells), *sd = malloc(sizeof(float) * cells * (size_t)nb);
+    float *val = malloc(sizeof(float) * cells * (size_t)nch), *wl = malloc(sizeof(float) * (size_t)nch);
+    double *v = malloc(sizeof(double) * 2 * (size_t)nb);
+    const size_t dcap = strlen(st->canonical) + 512 + 40 * (size_t)nb;
+    char *desc = malloc(dcap);
+    if (!theta || !vndf || !lum || !sd || !val || !wl || !v || !desc) {
+        free(theta), free(vndf), free(lum), free(sd), free(val), free(wl), free(v), free(desc);
         snprintf(err, errcap, "out of memory");
         return -1;
     }
+    double *s = v + nb; /* the errors beside the values */
     for (int k = 0; k < nt; k++) {
-        const lsqt_slice_est *e = &est[slices[k]];
         theta[k] = (float)st->theta_o[slices[k]];
         double lsum = 0;
         for (int j = 0; j < nu; j++)
@@ -172,33 +216,54 @@ int lsqt_rgl_write(const char *path, const lsqt_state *st, const lsqt_slice_est 
                 const size_t at = (size_t)k * plane + (size_t)j * nu + (size_t)l;
                 const int jj = j >= nu / 2 ? j : nu - 1 - j; /* the simulated mirror image */
                 const size_t d = (size_t)(jj - nu / 2) * nu + (size_t)l;
-                double w[3], v = 0, s = 0;
+                double w[3], rgb[3], y;
+                for (int b = 0; b < nb; b++) v[b] = 0, s[b] = 0;
                 if (lsqt_rgl_node(st->theta_o[slices[k]], nu, j, l, w)) {
                     const double cz = st->wi[((size_t)slices[k] * (size_t)st->n_wi + d) * 4 + 2];
-                    v = e->f[d].mean * cz, s = e->f[d].err * cz;
+                    for (int b = 0; b < nb; b++) {
+                        const lsqt_est *f = &est[(size_t)b * ns + (size_t)slices[k]].f[d];
+                        v[b] = f->mean * cz, s[b] = f->err * cz;
+                    }
                 }
+                node_colour(st, nb, v, rgb, &y);
                 /* the warp's Jacobian: d(omega_o) = 8 pi^2 u sin(theta_m) (wo.m) du dv */
                 const double u = (double)l / (nu - 1), tm = u * u * (LSQT_PI / 2);
                 const double wm = sin(st->theta_o[slices[k]]) * sin(tm) * cos((2.0 * j / (nu - 1) - 1.0) * LSQT_PI) +
                                   cos(st->theta_o[slices[k]]) * cos(tm);
-                lum[at] = (float)(v * 8 * LSQT_PI * LSQT_PI * u * sin(tm) * fmax(wm, 0.0));
+                /* (one band: its value as it is, the bytes a one-band file always had) */
+                lum[at] = (float)((nb > 1 ? fmax(y, 0.0) : y) * 8 * LSQT_PI * LSQT_PI * u * sin(tm) * fmax(wm, 0.0));
                 lsum += lum[at];
-                sd[at] = (float)s;
-                for (int c = 0; c < nch; c++) val[((size_t)k * nch + (size_t)c) * plane + (size_t)j * nu + (size_t)l] = (float)v;
+                for (int b = 0; b < nb; b++) sd[((size_t)k * nb + (size_t)b) * plane + (size_t)j * nu + (size_t)l] = (float)s[b];
+                for (int c = 0; c < nch; c++)
+                    val[((size_t)k * nch + (size_t)c) * plane + (size_t)j * nu + (size_t)l] =
+                        (float)(spectral ? v[nb > 1 ? c : 0] : rgb[c]);
             }
         /* The floor: 1 % of the mean density, so that sampling reaches every value. */
         const float floor_ = (float)(lsum > 0 ? 0.01 * lsum / (double)plane : 1.0);
         for (size_t i = 0; i < plane; i++) lum[(size_t)k * plane + i] += floor_;
     }
     for (int k = 0; k < 4 * nt; k++) vndf[k] = 1.0f;
-    snprintf(desc, strlen(st->canonical) + 512,
-             "lsqt-cl Monte Carlo BSDF (reflection from above, identity warp: values at --rgl-grid %d,%d); seed %llu, "
-             "%llu paths per slice; assembly:\n%s",
-             nt, nu, (unsigned long long)st->seed, (unsigned long long)st->paths, st->canonical);
+    size_t at = (size_t)snprintf(desc, dcap,
+                                 "lsqt-cl Monte Carlo BSDF (reflection from above, identity warp: values at --rgl-grid "
+                                 "%d,%d); seed %llu, %llu paths per slice; ", nt, nu, (unsigned long long)st->seed,
+                                 (unsigned long long)st->paths);
+    if (nb > 1) { /* what the colour came from, and stderr's bands */
+        at += (size_t)snprintf(desc + at, dcap - at, "%s from %d bands (stderr per band):",
+                               spectral ? "spectra" : "rgb", nb);
+        for (int b = 0; b < nb; b++) {
+            char lab[32];
+            at += (size_t)snprintf(desc + at, dcap - at, " %s", lsqt_band_label(nb, st->wavelengths, b, lab, sizeof lab));
+        }
+        at += (size_t)snprintf(desc + at, dcap - at, "; ");
+    }
+    snprintf(desc + at, dcap - at, "assembly:\n%s", st->canonical);
+    if (nb > 1 && spectral)
+        for (int c = 0; c < nch; c++) wl[c] = (float)st->wavelengths[c];
+    else if (spectral)
+        wl[0] = 360, wl[1] = 830;
     static const float ones[4] = {1, 1, 1, 1}, quarter[4] = {0.25f, 0.25f, 0.25f, 0.25f}, phi_i[1] = {0};
-    static const float wavelengths[2] = {360, 830};
     static const unsigned char jacobian[1] = {0};
-    const uint64_t NT = (uint64_t)nt, NU = (uint64_t)nu;
+    const uint64_t NT = (uint64_t)nt, NU = (uint64_t)nu, NCH = (uint64_t)nch;
     field f[MAX_FIELDS];
     int n = 0;
     f[n++] = (field){"description", T_UINT8, 1, {strlen(desc)}, desc};
@@ -209,14 +274,15 @@ int lsqt_rgl_write(const char *path, const lsqt_state *st, const lsqt_slice_est 
     f[n++] = (field){"vndf", T_FLOAT32, 4, {1, NT, 2, 2}, vndf};
     f[n++] = (field){"luminance", T_FLOAT32, 4, {1, NT, NU, NU}, lum};
     if (spectral) {
-        f[n++] = (field){"wavelengths", T_FLOAT32, 1, {2}, wavelengths};
-        f[n++] = (field){"spectra", T_FLOAT32, 5, {1, NT, 2, NU, NU}, val};
+        f[n++] = (field){"wavelengths", T_FLOAT32, 1, {NCH}, wl};
+        f[n++] = (field){"spectra", T_FLOAT32, 5, {1, NT, NCH, NU, NU}, val};
     } else {
         f[n++] = (field){"rgb", T_FLOAT32, 5, {1, NT, 3, NU, NU}, val};
     }
     f[n++] = (field){"jacobian", T_UINT8, 1, {1}, jacobian};
-    f[n++] = (field){"stderr", T_FLOAT32, 4, {1, NT, NU, NU}, sd};
+    if (nb > 1) f[n++] = (field){"stderr", T_FLOAT32, 5, {1, NT, (uint64_t)nb, NU, NU}, sd};
+    else f[n++] = (field){"stderr", T_FLOAT32, 4, {1, NT, NU, NU}, sd};
     const int rc = write_fields(path, f, n, err, errcap);
-    free(theta), free(vndf), free(lum), free(sd), free(val), free(desc);
+    free(theta), free(vndf), free(lum), free(sd), free(val), free(wl), free(v), free(desc);
     return rc;
 }
