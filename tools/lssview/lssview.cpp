@@ -455,6 +455,9 @@ int main(int argc, char **argv)
         die(2, "cannot write '%s': OpenImageIO has no writer for its extension (use .png, .exr, .hdr, .tif, ...)",
             o.out.c_str());
     if (lsqt_lss_read(o.in.c_str(), &st, err, sizeof err)) die(2, "%s", err);
+    if (st.n_bands > 1) /* colour previews of runs with bands are not written yet: never show one band silently */
+        die(2, "'%s' holds %s bands: lssview shows a one-band LSS only (lsqt-cl export writes every band)",
+            o.in.c_str(), std::to_string(st.n_bands).c_str());
     if (st.stage != LSQT_STAGE_RUN) {
         lsqt_state_free(&st);
         die(2, "%s: an RRSS pilot shard, not a run's state (merge the shards first)", o.in.c_str());
