@@ -488,10 +488,24 @@ static cl_int launch_records(lsqt_session *s, uint64_t begin, uint64_t end, int 
     return e;
 }
 
+/* The bands run one after another, so they lend each other band 0's record buffers (the
+ * GPU path's; up to 512 MB each) rather than holding one each. */
+static void swap_records(lsqt_session *a, lsqt_session *b)
+{
+    cl_mem rec = a->rec, off = a->rec_off;
+    size_t rc = a->rec_cap, oc = a->off_cap;
+    a->rec = b->rec, a->rec_off = b->rec_off, a->rec_cap = b->rec_cap, a->off_cap = b->off_cap;
+    b->rec = rec, b->rec_off = off, b->rec_cap = rc, b->off_cap = oc;
+}
+
 int lsqt_session_launch(lsqt_session *s, uint64_t begin, uint64_t end, char *err, size_t errcap)
 {
-    for (int b = 1; b < s->n_bands; b++)
-        if (lsqt_session_launch(&s->bands[b - 1], begin, end, err, errcap)) return 1;
+    for (int b = 1; b < s->n_bands; b++) {
+        swap_records(s, &s->bands[b - 1]);
+        const int rc = lsqt_session_launch(&s->bands[b - 1], begin, end, err, errcap);
+        swap_records(s, &s->bands[b - 1]);
+        if (rc) return 1;
+    }
     if (end <= begin) return 0;
     int no_memory = 0;
     cl_int e = s->records ? launch_records(s, begin, end, &no_memory) : run_chunks(s, s->walk, 6, begin, end);
