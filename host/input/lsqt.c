@@ -1028,6 +1028,8 @@ static int same_stack(const lsqt_assembly *a0, const lsqt_assembly *ab, parser *
 int lsqt_parse_bands(const char *text, size_t len, const char *name, const double *wl, int n_wl,
                      const char *dir, lsqt_assembly *out, lsqt_diag *diag)
 {
+    if (out)
+        memset(out, 0, sizeof *out); /* a failure leaves it empty */
     lsqt_bands bands;
     memset(&bands, 0, sizeof bands);
     bands.n = n_wl, bands.wl = wl, bands.dir = dir;
