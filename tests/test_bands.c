@@ -188,6 +188,20 @@ static void bands_canonical(void)
               lsqt_assembly_hash(&a) == lsqt_assembly_hash(&b), "round trip: %s", buf2);
     lsqt_assembly_free(&b);
     lsqt_assembly_free(&a);
+    /* bands alike still say how many they are: the first key is written as a list */
+    const char *alike = "Medium\nLayer z=0 LambertianBsdf fR=0.5,0.5\nMedium\n";
+    CHECK(lsqt_parse_bands(alike, strlen(alike), "t", NULL, 0, ".", &a, &d) == 0 && a.n_bands == 2, "%s", d.error);
+    n = lsqt_assembly_canonical(&a, buf, sizeof buf);
+    CHECK(strcmp(buf, "# bands 2\nMedium eta=1,1 mua=0 mus=0\nLayer z=0 LambertianBsdf fR=0.5 fT=0\nMedium eta=1 "
+                      "mua=0 mus=0\n") == 0, "%s", buf);
+    CHECK(lsqt_parse_bands(buf, n, "canonical", NULL, 0, ".", &b, &d) == 0 && b.n_bands == 2, "%s", d.error);
+    lsqt_assembly_free(&b);
+    lsqt_assembly_free(&a);
+    /* a failure in a later band leaves the assembly empty */
+    const char *late = "Medium\nLayer z=0 LambertianBsdf fR=0.5,0.5 fT=0.2,0.6\nMedium\n";
+    memset(&a, 0xff, sizeof a);
+    CHECK(lsqt_parse_bands(late, strlen(late), "t", NULL, 0, ".", &a, &d) == 2 && a.n_layers == 0 && !a.layers &&
+              !a.band && strstr(d.error, "band 2: fR + fT = 1.1 exceeds 1"), "%s", d.error);
     /* a layer opaque in every band still prunes what lies below it */
     const char *opaque = "Medium\nLayer z=0 LambertianBsdf fR=0.2,0.3\nMedium eta=1.5\nLayer z=-1 LambertianBsdf\nMedium\n";
     CHECK(lsqt_parse_bands(opaque, strlen(opaque), "t", NULL, 0, ".", &a, &d) == 0 && a.n_layers == 1 &&

@@ -88,12 +88,19 @@ static size_t canonical_bands(const lsqt_assembly *a, char *buf, size_t cap)
             lsqt_sb_printf(&sb, "%s%.17g", b ? "," : ": ", a->wavelengths[b]);
         lsqt_sb_printf(&sb, "%s\n", a->wavelengths ? " nm" : "");
     }
+    /* bands that are all alike still write one list (the first key), so that the text
+     * says how many bands there are and reads back to itself */
+    int alike = ok;
+    for (int b = 1; alike && b < n; b++)
+        alike = strcmp(text[b], text[0]) == 0;
     while (ok && *at[0]) {
         const size_t l0 = strcspn(at[0], " \n");
         int same = 1;
         for (int b = 1; b < n; b++)
             same &= strcspn(at[b], " \n") == l0 && memcmp(at[b], at[0], l0) == 0;
         const char *eq = memchr(at[0], '=', l0);
+        if (alike && eq)
+            same = alike = 0;
         const size_t key = eq ? (size_t)(eq - at[0]) + 1 : 0;
         lsqt_sb_printf(&sb, "%.*s", (int)(same || !eq ? l0 : key), at[0]);
         for (int b = 0; !same && eq && b < n; b++) {

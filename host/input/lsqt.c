@@ -980,8 +980,10 @@ static int survey_bands(const char *text, size_t len, const char *name, lsqt_ban
         memset(&P, 0, sizeof P);
         P.bands = bands, P.band = b, P.prune_at = -1, P.survey = 1;
         lsqt_assembly a;
-        if (parse_into(&P, text, len, name, &a, diag))
+        if (parse_into(&P, text, len, name, &a, diag)) {
+            free(opaque);
             return 2;
+        }
         if (n_layers < 0) {
             n_layers = a.n_layers;
             opaque = malloc((size_t)n_layers + 1);
