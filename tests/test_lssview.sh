@@ -10,9 +10,12 @@
 # its --error colour too, and differs from what the first slice would give; fR = 0 gives
 # a black sphere; a sharp rough dielectric coat (alpha 0.05) has its highlight where the
 # half vector of light and camera is the normal, within 2 pixels; --error on 4x the paths
-# (the same LSS continued) shows about half the relative error (within 15 %); the
-# defaults (IN.lss.png, 512x512 PNG), --image-dim and --image-mul; and truncated, damaged,
-# other-version and missing LSS files, bad flags: exit 2 with a message.
+# (the same LSS continued) shows about half the relative error (within 15 %); runs with
+# bands: R, G, B bands are the channels (each on its own cosine law), --channel K is band K
+# in grey (the pixels of a one-band run of the same values), a flat spectrum is grey and a
+# red one red all over; the defaults (IN.lss.png, 512x512 PNG), --image-dim and
+# --image-mul; and truncated, damaged, other-version and missing LSS files, bad flags, a
+# band that is not there: exit 2 with a message.
 # usage: test_lssview.sh LSQT_CL LSSVIEW IMAGE_DUMP EXAMPLES_DIR
 # shellcheck source=cli_lib.sh
 source "$(dirname "${BASH_SOURCE[0]}")/cli_lib.sh"
@@ -25,6 +28,8 @@ cli_workdir
 cat > check.py <<'PY'
 import json, math, random, struct, subprocess, sys
 mode, img = sys.argv[1], sys.argv[2]
+CH = 0  # the channel the cosine law is checked on: MODE@K checks channel K
+if "@" in mode: mode, CH = mode.split("@")[0], int(mode.split("@")[1])
 a = sys.argv[3:-1]  # the last one is image_dump
 if mode == "ratio":  # ratio A B WANT TOL: A / B within TOL (relative) of WANT
     ra = float(a[0]) / float(a[1])
@@ -81,11 +86,11 @@ if mode in ("cosine", "strict"):  # cosine THMAX FR L..., strict THMAX NMAG FR L
     samples = rnd.sample(covered, 20)
     worst = worst_rim = 0.0
     for (i, j) in samples:
-        v, w = pix(i, j)[0], want(i, j)
+        v, w = pix(i, j)[CH], want(i, j)
         if abs(v - w) > 0.01 * max(w, 1e-3 * fr / math.pi * Esum):
             bad.append("sample pixel (%d, %d): %.6g, cosine law %.6g" % (i, j, v, w))
     for (i, j) in covered:  # every pixel: no spike, no hole
-        v, w = pix(i, j)[0], want(i, j)
+        v, w = pix(i, j)[CH], want(i, j)
         d = abs(v - w) / max(w, 1e-3 * fr / math.pi * Esum)
         worst = max(worst, d)
         if (i, j) in rim: worst_rim = max(worst_rim, d)
@@ -191,6 +196,22 @@ elif mode == "scaled":  # scaled OTHER_IMAGE FACTOR: this image = FACTOR x OTHER
     for (i, j) in covered:
         k = (j * W + i) * C
         if abs(px[k] - f * po[k]) > 1e-5 * max(1.0, abs(px[k])): bad.append("pixel (%d, %d)" % (i, j)); break
+elif mode == "same":  # same OTHER_IMAGE: the same pixels
+    o = subprocess.run([sys.argv[-1], a[0]], capture_output=True, check=True).stdout
+    if o != subprocess.run([sys.argv[-1], img], capture_output=True, check=True).stdout: bad.append("differs from %s" % a[0])
+elif mode == "grey":  # every sphere pixel has R = G = B (to float rounding)
+    g = [p for p in covered if max(pix(*p)) - min(pix(*p)) > 1e-6 * max(pix(*p))]
+    if g: bad.append("%d of %d pixels not grey, e.g. %s: %s" % (len(g), len(covered), g[0], pix(*g[0])))
+    print("grey: %d pixels" % len(covered))
+elif mode == "red":  # red MIN: the lit pixels (R > MIN) have R > G > B; CHROMA: and one chromaticity
+    lit = [pix(*p) for p in covered if pix(*p)[0] > float(a[0])]
+    wrong = [q for q in lit if not q[0] > q[1] > q[2]]
+    if len(lit) < 0.3 * len(sphere): bad.append("only %d lit pixels" % len(lit))
+    if wrong: bad.append("%d of %d lit pixels not R > G > B, e.g. %s" % (len(wrong), len(lit), wrong[0]))
+    r = [q[0] / sum(q) for q in lit]
+    print("red: %d lit pixels, R > G > B in %d; r = R / (R + G + B) %.6g to %.6g" % (len(lit), len(lit) - len(wrong),
+                                                                                     min(r), max(r)))
+    if a[1:] and a[1] == "chroma" and max(r) - min(r) > 1e-5: bad.append("the colour varies over the sphere")
 elif mode == "size":  # size W H C
     if (W, H, C) != tuple(map(int, a[:3])): bad.append("size %dx%dx%d" % (W, H, C))
 for b in bad: print("FAIL:", b)
@@ -261,6 +282,59 @@ done
 expect 0 "" -- "$VIEW" -q --image-dim 256 C.lss -o Crim.exr --light 0.3,1,-0.5,1
 expect 0 "" -- "$VIEW" -q --image-dim 256 --error --error-max 0.2 C.lss -o Crim.err.exr --light 0.3,1,-0.5,1
 check held Crim.exr C.json 0.3 1 -0.5 1 Crim.err.exr 0.2
+
+# Bands. A red Lambertian in R, G, B (fR 0.7, 0.3, 0.1): each channel on the cosine law of
+# its own fR (the bands are the channels, as they are); the PNG's lit pixels R > G > B;
+# --channel 1 is grey and has exactly the pixels of a one-band run of fR 0.3 on the same
+# directions (--wi-spread). A flat spectrum (0.5 at 450, 550, 650 nm) is grey on the
+# cosine law of 0.5; a red one (0.1, 0.2, 0.8) has R > G > B and one chromaticity over the
+# sphere. --error shows the bands' luminance error, or one band's with --channel.
+printf 'Medium\nLayer z=0 LambertianBsdf fR=0.7,0.3,0.1\nMedium\n' > red.lsqt
+printf 'Medium\nLayer z=0 LambertianBsdf fR=0.3\nMedium\n' > g.lsqt
+printf 'Medium\nLayer z=0 LambertianBsdf fR=0.1,0.2,0.8\nMedium\n' > spec.lsqt
+printf 'Medium\nLayer z=0 LambertianBsdf fR=0.5\nMedium\n' > flat.lsqt
+"$BIN" -q -p 2000 -wo 8 -wi 80 --wi-spread --lss red.lss -o red.raw red.lsqt || bad "lsqt-cl red.lsqt"
+"$BIN" -q -p 2000 -wo 8 -wi 80 --wi-spread --lss g.lss -o g.raw g.lsqt || bad "lsqt-cl g.lsqt"
+"$BIN" -q -p 2000 -wo 8 --wavelengths 450,550,650 --lss flat.lss -o flat.raw flat.lsqt || bad "lsqt-cl flat.lsqt"
+"$BIN" -q -p 2000 -wo 8 --wavelengths 450,550,650 --lss spec.lss -o spec.raw spec.lsqt || bad "lsqt-cl spec.lsqt"
+"$BIN" info red.lss --json red.json > /dev/null || bad "lsqt-cl info red.lss"
+TR=$(thmax red.json)
+expect 0 "; colour from bands R, G, B" -- "$VIEW" --image-dim 256 red.lss -o red.exr --light -0.4,0.5,1,2
+check cosine@0 red.exr "$TR" 0.7 -0.4 0.5 1 2
+check cosine@1 red.exr "$TR" 0.3 -0.4 0.5 1 2
+check cosine@2 red.exr "$TR" 0.1 -0.4 0.5 1 2
+expect 0 "" -- "$VIEW" -q red.lss -o red.png
+check red red.png 0.2
+expect 0 "; band 1 (G) of 3 in grey (--channel)" -- "$VIEW" --image-dim 256 --channel 1 red.lss -o red1.exr
+expect 0 "" -- "$VIEW" -q --image-dim 256 g.lss -o g.exr
+check grey red1.exr
+check same red1.exr g.exr
+expect 0 "; colour from a spectrum at 3 wavelengths, 450 to 650 nm (linear sRGB)" -- \
+  "$VIEW" --image-dim 256 flat.lss -o flat.exr --light -0.4,0.5,1,2
+check grey flat.exr
+check cosine flat.exr "$(thmax <("$BIN" info flat.lss --json - 2>/dev/null))" 0.5 -0.4 0.5 1 2
+expect 0 "" -- "$VIEW" -q --image-dim 256 spec.lss -o spec.exr
+check red spec.exr 0.01 chroma
+cp "$EX/paint-rgb.lsqt" P.lsqt
+"$BIN" -q -p 3000 -wo 4 -wi 48 --lss P.lss -o P.raw P.lsqt || bad "lsqt-cl paint-rgb.lsqt"
+out=$("$VIEW" --error --image-dim 200 P.lss -o Perr.png 2>&1) && ok || bad "lssview --error on bands: $out"
+has "; bands R, G, B: the error of their luminance"
+has "relative error: median "
+out=$("$VIEW" --error --channel 2 --image-dim 200 P.lss -o Perr2.png 2>&1) && ok || bad "lssview --error --channel: $out"
+has "band 2 (B) of 3 in grey (--channel)"
+check size Perr2.png 240 200 3
+# refused: a band that is not there, a bad K, unnamed bands other than three without --channel
+expect 2 "--channel 3: 'red.lss' has 3 bands: K must be 0 to 2" -- "$VIEW" --channel 3 red.lss -o x.png
+expect 2 "--channel 1: 'L.lss' has one band: K must be 0" -- "$VIEW" --channel 1 L.lss -o x.png
+expect 2 "--channel: '1.5' is not a whole number" -- "$VIEW" --channel 1.5 red.lss -o x.png
+expect 2 "--channel: '-1' is not a number in [0," -- "$VIEW" --channel -1 red.lss -o x.png
+printf 'Medium\nLayer z=0 LambertianBsdf fR=0.5,0.2\nMedium\n' > two.lsqt
+"$BIN" -q -p 300 -wo 4 --lss two.lss -o two.raw two.lsqt || bad "lsqt-cl two.lsqt"
+expect 2 "'two.lss' has 2 bands without wavelengths, which make no colour: choose one with --channel K (0 to 1)" -- \
+  "$VIEW" two.lss -o x.png
+[ ! -e x.png ] && ok || bad "a refused preview wrote x.png"
+expect 0 "band 1 (1) of 2 in grey" -- "$VIEW" --channel 1 two.lss -o two1.png
+expect 0 "--channel K" -- "$VIEW" --help
 
 # --error: 4x the paths (the same directions: the LSS continued) halve the relative error
 "$BIN" -q -p 20000 -wo 6 -wi 48 --lss E.lss -o E.raw "$EX/slab.lsqt" || bad "lsqt-cl slab"

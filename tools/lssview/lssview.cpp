@@ -42,6 +42,13 @@
 // combined as fully correlated (err = the same weighted mean of the errors, summed over
 // lights like the values): an upper bound that scales as 1/sqrt(paths) like each error.
 // A held rim pixel gets the last slice's error, as it gets its values.
+// Bands (a run with --wavelengths or lists of values): every band is interpolated with
+// the same weights, and the pixel's colour is R, G, B as they are (three unnamed bands) or
+// the linear sRGB of its spectrum (colour.h: CIE 1931 under D65, a flat spectrum exactly
+// grey), each channel then tone mapped as one band's value is; --error shows the relative
+// error of the luminance Y = sum of y_b v_b (Rec. 709 weights, or Y of each band's unit
+// spectrum), the bands' errors combined as fully correlated like the directions'.
+// --channel K renders band K alone, exactly as a one-band LSS of its values.
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
@@ -56,6 +63,7 @@
 #include <OpenImageIO/imageio.h>
 #include <glm/glm.hpp>
 
+#include "lsqt/colour.h"
 #include "lsqt/lss.h"
 #include "lsqt/state.h"
 #include "lsqt/tally.h"
@@ -73,12 +81,13 @@ struct Light {
 
 struct Sample {
     glm::dvec3 d;
-    double f, e;
+    size_t row; // its values: f[row * nb + b], e[row * nb + b] (a mirror image shares them)
 };
 
 struct Slice {
     double theta, s;
     std::vector<Sample> pts; // upper hemisphere, both mirror images
+    std::vector<double> f, e; // per stored direction, nb bands each
 };
 
 struct Options {
@@ -90,6 +99,7 @@ struct Options {
     double max_gap_deg = 40.0;
     bool quiet = false;
     bool strict = false; // no held rim: θo beyond the last slice is uncovered
+    int channel = -1;    // --channel K: band K alone, in grey (-1: every band, in colour)
     std::vector<Light> lights;
 };
 
@@ -110,6 +120,9 @@ void usage(FILE *f)
                  "                       +z to the camera) of irradiance E; repeat it; replaces the default lights\n"
                  "                       (-1,1,1.2) E=2.5, (1,0.2,0.6) E=0.8, (0,1,-0.3) E=1.2\n"
                  "  --max-gap DEG        a direction with no estimate within DEG degrees is uncovered (40)\n"
+                 "  --channel K          a run with bands: band K alone (0-based), in grey; without it the\n"
+                 "                       bands make the colour: R, G, B as they are, a spectrum (--wavelengths)\n"
+                 "                       as linear sRGB (CIE 1931, D65), with --error the luminance's error\n"
                  "  --strict             the rim beyond the last slice's view angle is uncovered (magenta)\n"
                  "                       instead of held from the last slice\n"
                  "  -q, --quiet          no summary line\n"
@@ -195,6 +208,11 @@ Options parse_args(int argc, char **argv)
             if (!lights_given) o.lights.clear();
             lights_given = true;
             o.lights.push_back({d / len, c[3]});
+        } else if (a == "--channel") {
+            std::string v = need();
+            double k = parse_num("--channel", v.c_str(), 0, 1e6);
+            if (k != std::floor(k)) die(2, "--channel: '%s' is not a whole number", v.c_str());
+            o.channel = (int)k;
         } else if (a == "--strict") {
             o.strict = true;
         } else if (a == "-q" || a == "--quiet") {
@@ -219,11 +237,69 @@ Options parse_args(int argc, char **argv)
     return o;
 }
 
+// What the picture shows of a run's bands: nb of them from band b0 (one: grey), their
+// wavelengths (empty: R, G, B, or one band) and their weights y in the luminance Y (what
+// --error shows with bands), and a phrase for the summary line ("" for one band).
+struct Colour {
+    int b0 = 0, nb = 0; // nb 0: refused, err says why
+    std::vector<double> wl, y;
+    std::string what;
+};
+
+Colour colour_of(const lsqt_state &st, const Options &o, char *err, size_t cap)
+{
+    Colour c;
+    const int n = st.n_bands > 1 ? st.n_bands : 1;
+    char lab[32], buf[160];
+    if (o.channel >= n) {
+        if (n == 1) std::snprintf(err, cap, "--channel %d: '%s' has one band: K must be 0", o.channel, o.in.c_str());
+        else std::snprintf(err, cap, "--channel %d: '%s' has %d bands: K must be 0 to %d", o.channel, o.in.c_str(), n, n - 1);
+        return c;
+    }
+    c.nb = 1, c.y = {1.0};
+    if (n == 1) return c;
+    if (o.channel >= 0) {
+        c.b0 = o.channel;
+        std::snprintf(buf, sizeof buf, "band %d (%s) of %d in grey (--channel)", o.channel,
+                      lsqt_band_label(n, st.wavelengths, o.channel, lab, sizeof lab), n);
+        c.what = buf;
+        return c;
+    }
+    if (!st.wavelengths && n != 3) {
+        std::snprintf(err, cap, "'%s' has %d bands without wavelengths, which make no colour: choose one with --channel K "
+                      "(0 to %d)", o.in.c_str(), n, n - 1);
+        c.nb = 0;
+        return c;
+    }
+    c.nb = n;
+    if (!st.wavelengths) {
+        c.y = {0.2126, 0.7152, 0.0722}; // Rec. 709 (sRGB) luminance
+        c.what = o.error ? "bands R, G, B: the error of their luminance" : "colour from bands R, G, B";
+        return c;
+    }
+    c.wl.assign(st.wavelengths, st.wavelengths + n);
+    c.y.assign((size_t)n, 0.0);
+    std::vector<double> unit((size_t)n, 0.0);
+    for (int b = 0; b < n; b++) { // Y is linear in the spectrum: the weight of band b is Y of its unit spectrum
+        double xyz[3] = {0, 0, 0};
+        unit[(size_t)b] = 1;
+        lsqt_spectrum_to_xyz(n, c.wl.data(), unit.data(), xyz);
+        unit[(size_t)b] = 0;
+        c.y[(size_t)b] = xyz[1];
+    }
+    std::snprintf(buf, sizeof buf, "%s %d wavelengths, %g to %g nm%s", o.error ? "bands at" : "colour from a spectrum at", n,
+                  c.wl.front(), c.wl.back(), o.error ? ": the error of their luminance" : " (linear sRGB)");
+    c.what = buf;
+    return c;
+}
+
 // The slices from above, sorted by θo, each with its upper-hemisphere estimates and their
-// mirror images.
-std::vector<Slice> build_slices(const lsqt_state &st, const lsqt_slice_est *est)
+// mirror images: nb bands from band b0 on (est: band after band, lsqt_estimates). A
+// direction whose value is not finite in a band is left out (in every band).
+std::vector<Slice> build_slices(const lsqt_state &st, const lsqt_slice_est *est, int b0, int nb)
 {
     std::vector<Slice> out;
+    const size_t ns = (size_t)st.n_slices;
     for (int s = 0; s < st.n_slices; s++) {
         if (st.slice_flags && (st.slice_flags[s] & LSQT_SLICE_BELOW)) continue;
         Slice sl;
@@ -231,11 +307,18 @@ std::vector<Slice> build_slices(const lsqt_state &st, const lsqt_slice_est *est)
         sl.s = std::sin(sl.theta);
         for (int k = 0; k < st.n_wi; k++) {
             const float *w = st.wi + ((size_t)s * (size_t)st.n_wi + (size_t)k) * 4;
-            double f = est[s].f[k].mean, e = est[s].f[k].err;
-            if (!(w[2] > 0) || !std::isfinite(f)) continue;
+            bool finite = true;
+            for (int b = 0; b < nb; b++) finite = finite && std::isfinite(est[(size_t)(b0 + b) * ns + (size_t)s].f[k].mean);
+            if (!(w[2] > 0) || !finite) continue;
+            const size_t row = sl.f.size() / (size_t)nb;
+            for (int b = 0; b < nb; b++) {
+                const lsqt_est &q = est[(size_t)(b0 + b) * ns + (size_t)s].f[k];
+                sl.f.push_back(q.mean);
+                sl.e.push_back(q.err);
+            }
             glm::dvec3 d = glm::normalize(glm::dvec3(w[0], w[1], w[2]));
-            sl.pts.push_back({d, f, e});
-            if (d.y > 1e-7) sl.pts.push_back({glm::dvec3(d.x, -d.y, d.z), f, e});
+            sl.pts.push_back({d, row});
+            if (d.y > 1e-7) sl.pts.push_back({glm::dvec3(d.x, -d.y, d.z), row});
         }
         out.push_back(std::move(sl));
     }
@@ -244,13 +327,13 @@ std::vector<Slice> build_slices(const lsqt_state &st, const lsqt_slice_est *est)
 }
 
 struct Eval {
-    double f, e;
     bool ok;
     bool held = false; // θo beyond the last slice, the last slice's values held
 };
 
-// Scattered-data interpolation within one slice (see the top of the file).
-Eval eval_slice(const Slice &sl, const glm::dvec3 &q, double rmax_chord)
+// Scattered-data interpolation within one slice (see the top of the file): f and e, nb
+// bands each, with the same weights in every band. False where no estimate is near.
+bool eval_slice(const Slice &sl, const glm::dvec3 &q, double rmax_chord, int nb, double *f, double *e)
 {
     double dist[K_NEAR + 1];
     int idx[K_NEAR + 1];
@@ -271,17 +354,25 @@ Eval eval_slice(const Slice &sl, const glm::dvec3 &q, double rmax_chord)
     }
     double R2 = rmax_chord * rmax_chord;
     if (n == K_NEAR + 1 && dist[K_NEAR] < R2) R2 = dist[K_NEAR];
-    double sw = 0, sf = 0, se = 0;
-    for (int m = 0; m < n && m < K_NEAR; m++) {
+    double sw = 0, w[K_NEAR];
+    int m = 0;
+    for (; m < n && m < K_NEAR; m++) {
         if (dist[m] >= R2) break;
         double u = 1.0 - dist[m] / R2;
-        double w = u * u;
-        sw += w;
-        sf += w * sl.pts[(size_t)idx[m]].f;
-        se += w * sl.pts[(size_t)idx[m]].e;
+        w[m] = u * u;
+        sw += w[m];
     }
-    if (!(sw > 0)) return {0, 0, false};
-    return {sf / sw, se / sw, true};
+    if (!(sw > 0)) return false;
+    for (int b = 0; b < nb; b++) {
+        double sf = 0, se = 0;
+        for (int k = 0; k < m; k++) {
+            const size_t at = sl.pts[(size_t)idx[k]].row * (size_t)nb + (size_t)b;
+            sf += w[k] * sl.f[at];
+            se += w[k] * sl.e[at];
+        }
+        f[b] = sf / sw, e[b] = se / sw;
+    }
+    return true;
 }
 
 // wi (slice frame of θo) carried to the frame of a slice at sin θ_k = sk.
@@ -303,6 +394,7 @@ struct Renderer {
     const std::vector<Light> &lights;
     double rmax_chord;
     bool strict;
+    int nb; // bands in the slices' values
 
     // θo beyond the last slice, where the last slice is held (not with --strict)
     bool held(double theta_o) const { return !strict && !slices.empty() && theta_o > slices.back().theta; }
@@ -312,29 +404,33 @@ struct Renderer {
         return !slices.empty() && theta_o >= slices.front().theta && (theta_o <= slices.back().theta || held(theta_o));
     }
 
-    // f and its error at (θo, wi in the frame where wo = (sin θo, 0, cos θo)).
-    Eval f(double theta_o, const glm::dvec3 &wi) const
+    // f and its error (nb bands each) at (θo, wi in the frame where wo = (sin θo, 0, cos θo));
+    // tmp: 4 nb doubles of scratch. False where not covered.
+    bool f(double theta_o, const glm::dvec3 &wi, double *fv, double *ev, double *tmp) const
     {
-        if (!in_range(theta_o)) return {0, 0, false};
-        if (held(theta_o)) return eval_slice(slices.back(), wi, rmax_chord); // as it is, no warp
+        if (!in_range(theta_o)) return false;
+        if (held(theta_o)) return eval_slice(slices.back(), wi, rmax_chord, nb, fv, ev); // as it is, no warp
         size_t b = 0;
         while (b + 1 < slices.size() && slices[b + 1].theta < theta_o) b++;
         // slices[b].theta <= theta_o; the upper neighbour, if theta_o is not on slice b
         if (slices[b].theta == theta_o || b + 1 == slices.size()) {
-            if (slices[b].theta != theta_o) return {0, 0, false};
-            return eval_slice(slices[b], wi, rmax_chord);
+            if (slices[b].theta != theta_o) return false;
+            return eval_slice(slices[b], wi, rmax_chord, nb, fv, ev);
         }
         const Slice &A = slices[b], &B = slices[b + 1];
         double t = (theta_o - A.theta) / (B.theta - A.theta);
         double s = std::sin(theta_o);
-        Eval ea = eval_slice(A, warp(wi, s, A.s), rmax_chord);
-        Eval eb = eval_slice(B, warp(wi, s, B.s), rmax_chord);
-        if (!ea.ok || !eb.ok) return {0, 0, false};
-        return {(1 - t) * ea.f + t * eb.f, (1 - t) * ea.e + t * eb.e, true};
+        double *af = tmp, *ae = tmp + nb, *bf = tmp + 2 * nb, *be = tmp + 3 * nb;
+        if (!eval_slice(A, warp(wi, s, A.s), rmax_chord, nb, af, ae) ||
+            !eval_slice(B, warp(wi, s, B.s), rmax_chord, nb, bf, be))
+            return false;
+        for (int k = 0; k < nb; k++) fv[k] = (1 - t) * af[k] + t * bf[k], ev[k] = (1 - t) * ae[k] + t * be[k];
+        return true;
     }
 
-    // value and error of the pixel with normal n; ok false when uncovered.
-    Eval pixel(const glm::dvec3 &n) const
+    // value and error (nb bands each) of the pixel with normal n; ok false when uncovered.
+    // tmp: 6 nb doubles of scratch.
+    Eval pixel(const glm::dvec3 &n, double *v, double *e, double *tmp) const
     {
         const glm::dvec3 V(0, 0, 1);
         double cos_o = std::min(1.0, std::max(-1.0, n.z));
@@ -343,18 +439,20 @@ struct Renderer {
         double tl = glm::length(t);
         t = tl > 1e-12 ? t / tl : glm::normalize(glm::dvec3(1, 0, 0) - n.x * n);
         glm::dvec3 b = glm::cross(n, t);
-        double v = 0, e = 0;
+        double *fv = tmp, *fe = tmp + nb;
+        for (int k = 0; k < nb; k++) v[k] = 0, e[k] = 0;
         for (const Light &L : lights) {
             double ci = glm::dot(L.dir, n);
             if (ci <= 0 || L.E == 0) continue;
             glm::dvec3 wi(glm::dot(L.dir, t), glm::dot(L.dir, b), ci);
-            Eval fe = f(theta_o, wi);
-            if (!fe.ok) return {0, 0, false};
-            v += L.E * ci * fe.f;
-            e += L.E * ci * fe.e;
+            if (!f(theta_o, wi, fv, fe, tmp + 2 * nb)) return {false};
+            for (int k = 0; k < nb; k++) {
+                v[k] += L.E * ci * fv[k];
+                e[k] += L.E * ci * fe[k];
+            }
         }
-        if (!in_range(theta_o)) return {0, 0, false};
-        return {v, e, true, held(theta_o)};
+        if (!in_range(theta_o)) return {false};
+        return {true, held(theta_o)};
     }
 };
 
@@ -455,9 +553,6 @@ int main(int argc, char **argv)
         die(2, "cannot write '%s': OpenImageIO has no writer for its extension (use .png, .exr, .hdr, .tif, ...)",
             o.out.c_str());
     if (lsqt_lss_read(o.in.c_str(), &st, err, sizeof err)) die(2, "%s", err);
-    if (st.n_bands > 1) /* colour previews of runs with bands are not written yet: never show one band silently */
-        die(2, "'%s' holds %s bands: lssview shows a one-band LSS only (lsqt-cl export writes every band)",
-            o.in.c_str(), std::to_string(st.n_bands).c_str());
     if (st.stage != LSQT_STAGE_RUN) {
         lsqt_state_free(&st);
         die(2, "%s: an RRSS pilot shard, not a run's state (merge the shards first)", o.in.c_str());
@@ -465,6 +560,12 @@ int main(int argc, char **argv)
     if (st.paths == 0) {
         lsqt_state_free(&st);
         die(2, "%s: holds no paths", o.in.c_str());
+    }
+    // The bands: one in grey (one band, or --channel K), or all of them in colour.
+    const Colour cl = colour_of(st, o, err, sizeof err);
+    if (!cl.nb) {
+        lsqt_state_free(&st);
+        die(2, "%s", err);
     }
     lsqt_slice_est *est = lsqt_estimates(&st);
     if (!est) {
@@ -476,7 +577,7 @@ int main(int argc, char **argv)
         std::snprintf(msg, sizeof msg, "%llu", (unsigned long long)LSQT_MIN_ERR_PATHS);
         die(2, "%s holds too few paths per slice for error bars (at least %s are needed)", o.in.c_str(), msg);
     }
-    std::vector<Slice> slices = build_slices(st, est);
+    std::vector<Slice> slices = build_slices(st, est, cl.b0, cl.nb);
     lsqt_estimates_free(est, st.n_slices);
     lsqt_state_free(&st);
     if (slices.size() < 2 && !o.quiet)
@@ -484,26 +585,47 @@ int main(int argc, char **argv)
                      o.strict ? "" : " (held beyond it; --strict shows that magenta)");
 
     const double gap = o.max_gap_deg * M_PI / 180.0;
-    Renderer r{slices, o.lights, 2.0 * std::sin(std::min(gap, M_PI) / 2.0), o.strict};
+    const int nb = cl.nb;
+    Renderer r{slices, o.lights, 2.0 * std::sin(std::min(gap, M_PI) / 2.0), o.strict, nb};
     const int D = o.dim;
+    const bool linear = is_linear_format(o.out);
+    // val: the pixel's value (with bands, its luminance Y), rel: its relative error; the
+    // picture's pixels are written as they are rendered (no colour buffer of doubles)
     std::vector<double> val((size_t)D * D, 0.0), rel((size_t)D * D, 0.0);
     std::vector<unsigned char> kind((size_t)D * D, 0); // 0 outside, 1 value, 2 uncovered, 3 held value
+    std::vector<float> img;
+    if (!o.error) img.assign((size_t)D * D * 3, 0.0f);
     const double rad = SPHERE_FRAC * D;
     auto rows = [&](int j0, int j1) {
+        std::vector<double> buf((size_t)8 * (size_t)nb); // values, errors, the renderer's scratch
+        double *v = buf.data(), *e = v + nb, *tmp = v + 2 * nb;
         for (int j = j0; j < j1; j++)
             for (int i = 0; i < D; i++) {
                 double x = (i + 0.5 - D / 2.0) / rad, y = (D / 2.0 - j - 0.5) / rad;
                 double r2 = x * x + y * y;
                 if (r2 >= 1) continue;
                 size_t p = (size_t)j * (size_t)D + (size_t)i;
-                Eval e = r.pixel(glm::dvec3(x, y, std::sqrt(1 - r2)));
-                if (!e.ok) {
+                Eval ev = r.pixel(glm::dvec3(x, y, std::sqrt(1 - r2)), v, e, tmp);
+                if (!ev.ok) {
                     kind[p] = 2;
                     continue;
                 }
-                kind[p] = e.held ? 3 : 1;
-                val[p] = e.f;
-                rel[p] = e.f > 0 ? e.e / e.f : (e.e > 0 ? INFINITY : 0.0);
+                kind[p] = ev.held ? 3 : 1;
+                double f = v[0], fe = e[0];
+                if (nb > 1) { // bands: errors fully correlated between them too (an upper bound)
+                    f = fe = 0;
+                    for (int b = 0; b < nb; b++) f += cl.y[(size_t)b] * v[b], fe += cl.y[(size_t)b] * e[b];
+                }
+                val[p] = f;
+                rel[p] = f > 0 ? fe / f : (fe > 0 ? INFINITY : 0.0);
+                if (o.error) continue;
+                double rgb[3] = {v[0], v[0], v[0]};
+                if (cl.wl.empty() && nb == 3) rgb[1] = v[1], rgb[2] = v[2];
+                else if (nb > 1 && lsqt_spectrum_to_srgb(nb, cl.wl.data(), v, rgb)) rgb[0] = rgb[1] = rgb[2] = NAN;
+                for (int c = 0; c < 3; c++) {
+                    double m = rgb[c] * o.mul; // linear formats: linear sRGB, unclamped
+                    img[p * 3 + (size_t)c] = (float)(linear ? m : srgb(1.0 - std::exp(-std::max(0.0, m))));
+                }
             }
     };
     unsigned nt = std::max(1u, std::min(16u, std::thread::hardware_concurrency()));
@@ -514,23 +636,12 @@ int main(int argc, char **argv)
     size_t n_unc = (size_t)std::count(kind.begin(), kind.end(), (unsigned char)2);
     size_t n_held = (size_t)std::count(kind.begin(), kind.end(), (unsigned char)3);
     auto has_value = [&](size_t p) { return kind[p] == 1 || kind[p] == 3; };
-    const bool linear = is_linear_format(o.out);
     int W = D;
-    std::vector<float> img;
     double emax = o.error_max;
     std::vector<double> errs;
     if (!o.error) {
-        img.assign((size_t)D * D * 3, 0.0f);
-        for (size_t p = 0; p < val.size(); p++) {
-            float *px = &img[p * 3];
-            if (kind[p] == 2) {
-                px[0] = 1, px[1] = 0, px[2] = 1;
-            } else if (has_value(p)) {
-                double v = val[p] * o.mul;
-                float g = (float)(linear ? v : srgb(1.0 - std::exp(-std::max(0.0, v))));
-                px[0] = px[1] = px[2] = g;
-            }
-        }
+        for (size_t p = 0; p < val.size(); p++)
+            if (kind[p] == 2) img[p * 3] = 1, img[p * 3 + 1] = 0, img[p * 3 + 2] = 1;
     } else {
         for (size_t p = 0; p < val.size(); p++)
             if (has_value(p) && val[p] > 0 && std::isfinite(rel[p])) errs.push_back(rel[p]);
@@ -581,9 +692,8 @@ int main(int argc, char **argv)
     else if (o.strict)
         std::snprintf(rim, sizeof rim, "; --strict: rim beyond theta_o %.1f deg not covered", theta_max_deg);
     spec.attribute("ImageDescription",
-                   std::string(o.error ? "lssview --error: relative standard error, magenta: not covered"
-                                       : "lssview: BSDF sphere, magenta: not covered") +
-                       rim);
+                   std::string(o.error ? "lssview --error: relative standard error, " : "lssview: BSDF sphere, ") +
+                       (cl.what.empty() ? "" : cl.what + ", ") + "magenta: not covered" + rim);
     if (!out->open(name, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, img.data()) || !out->close()) {
         lsqt_out_abort(&w);
         die(1, "cannot write '%s': %s", o.out.c_str(), out->geterror().c_str());
@@ -615,6 +725,7 @@ int main(int argc, char **argv)
                         theta_max_deg, n_held, 100.0 * (double)n_held / (double)n_sphere);
         else if (o.strict && !slices.empty())
             std::printf(", the rim beyond θo %.1f° included (--strict)", theta_max_deg);
+        if (!cl.what.empty()) std::printf("; %s", cl.what.c_str());
         std::printf("\n");
         if (o.error) {
             std::sort(errs.begin(), errs.end());
