@@ -288,7 +288,8 @@ check held Crim.exr C.json 0.3 1 -0.5 1 Crim.err.exr 0.2
 # --channel 1 is grey and has exactly the pixels of a one-band run of fR 0.3 on the same
 # directions (--wi-spread). A flat spectrum (0.5 at 450, 550, 650 nm) is grey on the
 # cosine law of 0.5; a red one (0.1, 0.2, 0.8) has R > G > B and one chromaticity over the
-# sphere. --error shows the bands' luminance error, or one band's with --channel.
+# sphere. --error shows the bands' luminance error, or one band's with --channel. Small
+# images: the sanitizer suite runs all of this too.
 printf 'Medium\nLayer z=0 LambertianBsdf fR=0.7,0.3,0.1\nMedium\n' > red.lsqt
 printf 'Medium\nLayer z=0 LambertianBsdf fR=0.3\nMedium\n' > g.lsqt
 printf 'Medium\nLayer z=0 LambertianBsdf fR=0.1,0.2,0.8\nMedium\n' > spec.lsqt
@@ -299,30 +300,30 @@ printf 'Medium\nLayer z=0 LambertianBsdf fR=0.5\nMedium\n' > flat.lsqt
 "$BIN" -q -p 2000 -wo 8 --wavelengths 450,550,650 --lss spec.lss -o spec.raw spec.lsqt || bad "lsqt-cl spec.lsqt"
 "$BIN" info red.lss --json red.json > /dev/null || bad "lsqt-cl info red.lss"
 TR=$(thmax red.json)
-expect 0 "; colour from bands R, G, B" -- "$VIEW" --image-dim 256 red.lss -o red.exr --light -0.4,0.5,1,2
+expect 0 "; colour from bands R, G, B" -- "$VIEW" --image-dim 160 red.lss -o red.exr --light -0.4,0.5,1,2
 check cosine@0 red.exr "$TR" 0.7 -0.4 0.5 1 2
 check cosine@1 red.exr "$TR" 0.3 -0.4 0.5 1 2
 check cosine@2 red.exr "$TR" 0.1 -0.4 0.5 1 2
-expect 0 "" -- "$VIEW" -q red.lss -o red.png
+expect 0 "" -- "$VIEW" -q --image-dim 128 red.lss -o red.png
 check red red.png 0.2
-expect 0 "; band 1 (G) of 3 in grey (--channel)" -- "$VIEW" --image-dim 256 --channel 1 red.lss -o red1.exr
-expect 0 "" -- "$VIEW" -q --image-dim 256 g.lss -o g.exr
+expect 0 "; band 1 (G) of 3 in grey (--channel)" -- "$VIEW" --image-dim 160 --channel 1 red.lss -o red1.exr
+expect 0 "" -- "$VIEW" -q --image-dim 160 g.lss -o g.exr
 check grey red1.exr
 check same red1.exr g.exr
 expect 0 "; colour from a spectrum at 3 wavelengths, 450 to 650 nm (linear sRGB)" -- \
-  "$VIEW" --image-dim 256 flat.lss -o flat.exr --light -0.4,0.5,1,2
+  "$VIEW" --image-dim 160 flat.lss -o flat.exr --light -0.4,0.5,1,2
 check grey flat.exr
 check cosine flat.exr "$(thmax <("$BIN" info flat.lss --json - 2>/dev/null))" 0.5 -0.4 0.5 1 2
-expect 0 "" -- "$VIEW" -q --image-dim 256 spec.lss -o spec.exr
+expect 0 "" -- "$VIEW" -q --image-dim 160 spec.lss -o spec.exr
 check red spec.exr 0.01 chroma
-cp "$EX/paint-rgb.lsqt" P.lsqt
-"$BIN" -q -p 3000 -wo 4 -wi 48 --lss P.lss -o P.raw P.lsqt || bad "lsqt-cl paint-rgb.lsqt"
-out=$("$VIEW" --error --image-dim 200 P.lss -o Perr.png 2>&1) && ok || bad "lssview --error on bands: $out"
+sed 's/mus=1 /mus=1,2,0.5 /' "$EX/slab.lsqt" > P.lsqt  # the slab in R, G, B: errors that are not 0
+"$BIN" -q -p 3000 -wo 4 -wi 48 --lss P.lss -o P.raw P.lsqt || bad "lsqt-cl P.lsqt"
+out=$("$VIEW" --error --image-dim 128 P.lss -o Perr.png 2>&1) && ok || bad "lssview --error on bands: $out"
 has "; bands R, G, B: the error of their luminance"
 has "relative error: median "
-out=$("$VIEW" --error --channel 2 --image-dim 200 P.lss -o Perr2.png 2>&1) && ok || bad "lssview --error --channel: $out"
+out=$("$VIEW" --error --channel 2 --image-dim 128 P.lss -o Perr2.png 2>&1) && ok || bad "lssview --error --channel: $out"
 has "band 2 (B) of 3 in grey (--channel)"
-check size Perr2.png 240 200 3
+check size Perr2.png 168 128 3
 # refused: a band that is not there, a bad K, unnamed bands other than three without --channel
 expect 2 "--channel 3: 'red.lss' has 3 bands: K must be 0 to 2" -- "$VIEW" --channel 3 red.lss -o x.png
 expect 2 "--channel 1: 'L.lss' has one band: K must be 0" -- "$VIEW" --channel 1 L.lss -o x.png
@@ -333,7 +334,7 @@ printf 'Medium\nLayer z=0 LambertianBsdf fR=0.5,0.2\nMedium\n' > two.lsqt
 expect 2 "'two.lss' has 2 bands without wavelengths, which make no colour: choose one with --channel K (0 to 1)" -- \
   "$VIEW" two.lss -o x.png
 [ ! -e x.png ] && ok || bad "a refused preview wrote x.png"
-expect 0 "band 1 (1) of 2 in grey" -- "$VIEW" --channel 1 two.lss -o two1.png
+expect 0 "band 1 (1) of 2 in grey" -- "$VIEW" --image-dim 64 --channel 1 two.lss -o two1.png
 expect 0 "--channel K" -- "$VIEW" --help
 
 # --error: 4x the paths (the same directions: the LSS continued) halve the relative error

@@ -224,7 +224,8 @@ static int put_values(ncw *w, const lsqt_state *st, const lsqt_slice_est *est, c
     const size_t nax = (size_t)(g->ni > g->nphi ? g->ni : g->nphi), nsc = nb * (size_t)g->no;
     double *ax = malloc(sizeof(double) * (nax > nsc ? nax : nsc));
     double *tab = malloc(sizeof(double) * nb * table);
-    char **labels = calloc(nb, sizeof *labels), (*lab)[32] = malloc(sizeof *lab * nb);
+    const char **labels = calloc(nb, sizeof *labels);
+    char (*lab)[32] = malloc(sizeof *lab * nb);
     if (!ax || !tab || !labels || !lab) {
         free(ax), free(tab), free(labels), free(lab);
         snprintf(err, errcap, "out of memory");
@@ -238,8 +239,8 @@ static int put_values(ncw *w, const lsqt_state *st, const lsqt_slice_est *est, c
     for (int k = 0; k < g->no; k++) ax[k] = (double)k / (g->no - 1);
     if (w->status == NC_NOERR) nc_check(w, nc_put_var_double(w->id, v->v_co, ax), "cos_theta_o values");
     if (nb > 1) {
-        for (size_t b = 0; b < nb; b++) labels[b] = (char *)lsqt_band_label(g->nb, st->wavelengths, (int)b, lab[b], sizeof lab[b]);
-        if (w->status == NC_NOERR) nc_check(w, nc_put_var_string(w->id, v->v_ch, (const char **)labels), "channel values");
+        for (size_t b = 0; b < nb; b++) labels[b] = lsqt_band_label(g->nb, st->wavelengths, (int)b, lab[b], sizeof lab[b]);
+        if (w->status == NC_NOERR) nc_check(w, nc_put_var_string(w->id, v->v_ch, labels), "channel values");
         if (v->v_wl >= 0 && w->status == NC_NOERR)
             nc_check(w, nc_put_var_double(w->id, v->v_wl, st->wavelengths), "wavelength values");
     }
