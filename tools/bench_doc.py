@@ -252,15 +252,16 @@ Their sizes are those the targets are set at; `command` above runs each (`-R` st
 
 
 def kept_gpu_section(path=DOC):
-    """The page's "## GPUs" section, to the next "## " heading or the end: measured on a GPU
-    machine, which a CPU run of this command cannot measure again, so it is kept."""
+    """The page's "## GPUs" and "## Bands" sections, each to the next "## " heading or the
+    end: measured on a GPU machine, or by tools/bench_bands.py, which this command does not
+    run, so they are kept."""
     try:
         with open(path, encoding="utf-8") as f:
             text = f.read()
     except OSError:
         return ""
-    m = re.search(r"^## GPUs\n.*?(?=^## |\Z)", text, re.S | re.M)
-    return m.group(0).rstrip("\n") + "\n" if m else ""
+    found = [m.group(0).rstrip("\n") + "\n" for m in re.finditer(r"^## (?:GPUs|Bands)\n.*?(?=^## |\Z)", text, re.S | re.M)]
+    return "\n".join(found)
 
 
 def write_atomic(text, path=DOC):
