@@ -332,6 +332,50 @@ int main(void)
         lsqt_state_free(&g);
     }
 
+    /* Bands (version 7): every band's tallies and the wavelengths round-trip; bands without
+     * wavelengths too; wavelengths that do not increase (under a valid CRC) are refused;
+     * one band is still version 6. */
+    {
+        const double wl[3] = {450, 550.5, 650};
+        for (int named = 1; named >= 0; named--) {
+            lsqt_state m;
+            lsqt_state_init_bands(&m, "# bands 3\nMedium eta=1\n", 9, 3, 2, 16, 0, 3, named ? wl : NULL);
+            for (size_t i = 0; i < (size_t)2 * 16; i++) m.wi[4 * i + 2] = 1.0f;
+            for (size_t i = 0; i < lsqt_state_nee_count(&m); i++) m.nee[i].lo = 3 * i + 1;
+            for (size_t i = 0; i < lsqt_state_scalar_count(&m); i++) m.scalars[i].hi = i;
+            for (size_t i = 0; i < lsqt_state_hist_count(&m); i++) m.hist[i].lo = i % 7;
+            CHECK(lsqt_lss_write(path, &m, err, sizeof err) == 0, "%s", err);
+            const int rc = lsqt_lss_read(path, &b, err, sizeof err);
+            CHECK(rc == 0 && b.lss_version == 7 && b.n_bands == 3 && (named ? b.wavelengths != NULL : !b.wavelengths),
+                  "bands: %s", rc ? err : "header");
+            if (rc == 0) {
+                CHECK(!named || memcmp(b.wavelengths, wl, sizeof wl) == 0, "wavelengths differ");
+                CHECK(lsqt_state_nee_count(&b) == lsqt_state_nee_count(&m) &&
+                          memcmp(b.nee, m.nee, lsqt_state_nee_count(&m) * sizeof *m.nee) == 0 &&
+                          memcmp(b.scalars, m.scalars, lsqt_state_scalar_count(&m) * sizeof *m.scalars) == 0 &&
+                          memcmp(b.hist, m.hist, lsqt_state_hist_count(&m) * sizeof *m.hist) == 0,
+                      "the bands' tallies differ");
+                /* band 2 is the third block */
+                const lsqt_state v = lsqt_state_band(&b, 2);
+                CHECK(v.n_bands == 1 && v.nee == b.nee + 2 * (lsqt_state_nee_count(&b) / 3) &&
+                          (!named || v.wavelengths[0] == 650),
+                      "band view");
+                lsqt_state_free(&b);
+            }
+            if (named) {
+                m.wavelengths[2] = 500; /* 450, 550.5, 500 */
+                CHECK(lsqt_lss_write(path, &m, err, sizeof err) == 0, "%s", err);
+                CHECK(lsqt_lss_read(path, &b, err, sizeof err) != 0 && strstr(err, "band wavelengths not increasing"),
+                      "decreasing wavelengths accepted: '%s'", err);
+            }
+            lsqt_state_free(&m);
+        }
+        CHECK(lsqt_lss_write(path, &a, err, sizeof err) == 0 && lsqt_lss_read(path, &b, err, sizeof err) == 0 &&
+                  b.lss_version == 6 && b.n_bands == 1 && !b.wavelengths,
+              "one band: version %u", b.lss_version);
+        lsqt_state_free(&b);
+    }
+
     /* Version 5, written from its layout, is read to the same state (and says so). */
     size_t n5 = 0;
     unsigned char *f5 = v5_image(&a, &n5);
