@@ -26,6 +26,14 @@
 #define LSQT_ITEMS 1
 #endif
 
+/* Bands on one path (bands.cl): 1 in a one-band program, which compiles no band code. A
+ * block's work-item keeps per band its path's sums and its low words, and one more row
+ * of sums for a vertex's terms before they are spread (LSQT_SUM_ROWS). */
+#ifndef LSQT_NB
+#define LSQT_NB 1
+#endif
+#define LSQT_SUM_ROWS (LSQT_NB > 1 ? LSQT_NB + 1 : 1)
+
 /* A work-item's work counters, in the order of the LSQT_T_LAYER_EVENTS... tallies. */
 #define WORK_LAYER (LSQT_T_LAYER_EVENTS - LSQT_T_LAYER_EVENTS)
 #define WORK_MEDIUM (LSQT_T_MEDIUM_EVENTS - LSQT_T_LAYER_EVENTS)
@@ -38,8 +46,12 @@ typedef struct {
     __global const lsqt_dev_layer *layers;
     __global const real *wi;           /* this slice's directions: x[pad], y[pad], z[pad] */
     __global const real *tab;          /* this slice's direction tables (lsqt_prepare) */
-    __local real *sum;                 /* the current path's point estimates (CPU path) */
-    __local ulong *nee;                /* this work-item's point-estimate sums, low words (CPU path) */
+    __local real *sum;                 /* the current path's point estimates (CPU path; a band
+                                          block's: the current vertex's, bands.cl) */
+    __local real *bsum;                /* a band block's: each band's path sums, LSQT_NWI_PAD apart */
+    __global const real *bw;           /* a band block's table (LSQT_BAND_TAB_BAND), else unused */
+    __local ulong *nee;                /* this work-item's point-estimate sums, low words (CPU path;
+                                          a band block's: each band's, LSQT_NWI_PAD apart) */
     ulong *work;                       /* this work-item's work counters (LSQT_T_LAYER_EVENTS ...) */
     volatile __local acc_word *acc;    /* the work-group's scalar tallies, LSQT_ACC_WORDS each */
     __global ulong *nee_g;             /* the tallies of the chunk's batch (nee_word) */
@@ -47,6 +59,8 @@ typedef struct {
     int batch;
     volatile __global uint *flags;
     int nee_on;                        /* 0: no point estimates (the RRSS candidate walks) */
+    int hero;                          /* a band block's: the band whose flights the path draws */
+    uint *touched;                     /* a band block's: the bands the path has added to (bits) */
     __global real *exit_dir;           /* non-0: the path only writes its exit direction here */
     nee_out *out;                      /* the path's next-event records (GPU path) */
     int count_only;                    /* 1: count the records, tally nothing (GPU path) */
@@ -61,14 +75,16 @@ LSQT_INLINE __global ulong *nee_word(__global ulong *nee, uint v, int batch, int
     return nee + 2 * (((ulong)(v + b) * LSQT_BATCHES + (ulong)batch) * LSQT_GROUP_NWI + j);
 }
 
-/* Adds v to scalar tally k (LSQT_T_R ...). */
-LSQT_INLINE void acc_add(const walk_ctx *c, int k, real v)
+/* Adds v to scalar tally k (LSQT_T_R ...) of band b of a block (0 in a one-band program). */
+LSQT_INLINE void acc_add_band(const walk_ctx *c, int b, int k, real v)
 {
     if (v != R(0.0)) {
         fix1 q = to_fixed(v, c->flags);
-        local_add128(c->acc + LSQT_ACC_WORDS * k, q.lo, q.hi, c->flags);
+        local_add128(c->acc + LSQT_ACC_WORDS * (b * LSQT_T_COUNT + k), q.lo, q.hi, c->flags);
     }
 }
+
+LSQT_INLINE void acc_add(const walk_ctx *c, int k, real v) { acc_add_band(c, 0, k, v); }
 
 /* A slice's direction tables: for the media's transmittance, up[pad] = log2(e) / z where
  * z > 0, 0 where z < 0, and down[pad] = log2(e) / -z where z < 0, 0 where z > 0 (so a
@@ -232,11 +248,27 @@ LSQT_INLINE int nee_counting(const walk_ctx *c)
 /* At the path's end: its sums to the work-item's low words (then cleared). */
 LSQT_INLINE void nee_flush(const walk_ctx *c)
 {
+#if LSQT_NB > 1
+    const uint on = *c->touched;
+    *c->touched = 0;
+    for (int b = 0; b < LSQT_NB; b++) {
+        if (!(on >> b & 1u)) continue; /* its sums are 0 */
+        __local real *sum = c->bsum + b * LSQT_NWI_PAD;
+        __local ulong *lo = c->nee + b * LSQT_NWI_PAD;
+        __global ulong *g = c->nee_g + (size_t)b * c->scene->band_nee_words;
+        for (int k = 0; k < LSQT_NWI_PAD; k += LSQT_VW) {
+            realv v = VBLOCK(realv, sum, k);
+            VBLOCK(realv, sum, k) = (realv)(R(0.0));
+            VBLOCK(ulongv, lo, k) = nee_flush_block(v, VBLOCK(ulongv, lo, k), g, c->v, c->batch, k, c->flags);
+        }
+    }
+#else
     for (int k = 0; k < LSQT_NWI_PAD; k += LSQT_VW) {
         realv v = VBLOCK(realv, c->sum, k);
         VBLOCK(realv, c->sum, k) = (realv)(R(0.0));
         VBLOCK(ulongv, c->nee, k) = nee_flush_block(v, VBLOCK(ulongv, c->nee, k), c->nee_g, c->v, c->batch, k, c->flags);
     }
+#endif
 }
 #else
 /* A layer's or a medium's record: wo, and a medium's phase normal m and optical depths
@@ -370,15 +402,49 @@ LSQT_INLINE int roulette(real *w, rng_t *rng)
     return 1;
 }
 
+#if LSQT_NB > 1
+/* A band block's steps (bands.cl, which follows this file). */
+LSQT_INLINE int roulette_bands(real *wb, rng_t *rng);
+LSQT_INLINE int layer_vertex_bands(const walk_ctx *c, int li, real3 d, real *wb, real *rb, rng_t *rng, real3 *wi);
+LSQT_INLINE int flight_bands(const walk_ctx *c, int mi, real t, int collided, real *wb, real *rb);
+LSQT_NOINLINE_CPU void nee_medium_bands(const walk_ctx *c, int mi, real h, real3 d, const real *wb,
+                                        const phase_vtx *pv);
+#endif
+
+/* A path's exit: R or T, the unscattered part of T, and the exit histogram, each of
+ * band b (0 in a one-band program) with weight w. */
+LSQT_INLINE void tally_exit(const walk_ctx *c, int b, real3 d, int up, int scattered, real w, __global ulong *hist)
+{
+    acc_add_band(c, b, up ? LSQT_T_R : LSQT_T_T, w);
+    if (nee_counting(c)) return;
+    if (scattered) {
+        /* every block of a grouped session holds the same paths' exits */
+        fix1 q = to_fixed(w, c->flags);
+        const int bin = hist_bin(d, up), g = max(c->scene->slice_group, 1);
+        __global ulong *hb = hist + (size_t)b * c->scene->band_hist_words;
+        if (LSQT_NB == 1 || q.lo || q.hi) /* a block's bands without weight add nothing */
+            for (int j = 0; j < g; j++)
+                global_add128(hb + 2 * ((size_t)j * LSQT_BATCHES * LSQT_HIST_BINS + bin), q.lo, q.hi, c->flags);
+    } else {
+        acc_add_band(c, b, LSQT_T_DELTA_T, w);
+    }
+}
+
 LSQT_INLINE void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulong *hist)
 {
     const int n = c->scene->n_layers;
     real3 d = -wo;
     real w = R(1.0), h = R(0.0);
+#if LSQT_NB > 1
+    /* each band's weight, and its density of the path over the bands' mixture (bands.cl) */
+    real wb[LSQT_NB], rb[LSQT_NB];
+    for (int b = 0; b < LSQT_NB; b++) wb[b] = rb[b] = R(1.0);
+    (void)w;
+#endif
     int scattered = 0, at_layer = 1, layer = 0, medium = 0;
     for (int events = 0;; events++) {
         if (events >= LSQT_MAX_EVENTS) {
-            local_add128(c->acc + LSQT_ACC_WORDS * LSQT_T_CUT, 1, 0, c->flags);
+            for (int b = 0; b < LSQT_NB; b++) local_add128(c->acc + LSQT_ACC_WORDS * (b * LSQT_T_COUNT + LSQT_T_CUT), 1, 0, c->flags);
             return;
         }
         if (at_layer) {
@@ -386,9 +452,14 @@ LSQT_INLINE void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulon
             const int bounced = l->kind != LSQT_BSDF_NULL;
             if (bounced) {
                 real3 wi;
+#if LSQT_NB > 1
+                scattered = 1;
+                if (!layer_vertex_bands(c, layer, d, wb, rb, rng, &wi)) return;
+#else
                 w *= layer_vertex(c, layer, d, w, rng, &wi);
                 scattered = 1;
                 if (!(w > R(0.0))) return;
+#endif
                 d = wi;
             }
             at_layer = 0;
@@ -408,26 +479,51 @@ LSQT_INLINE void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulon
                     vstore4(scattered ? (real4)(d.x, d.y, d.z, R(1.0)) : (real4)(R(0.0)), 0, c->exit_dir);
                     return;
                 }
-                acc_add(c, up ? LSQT_T_R : LSQT_T_T, w);
-                if (nee_counting(c)) return;
-                if (scattered) {
-                    /* every block of a grouped session holds the same paths' exits */
-                    fix1 q = to_fixed(w, c->flags);
-                    const int bin = hist_bin(d, up), g = max(c->scene->slice_group, 1);
-                    for (int b = 0; b < g; b++)
-                        global_add128(hist + 2 * ((size_t)b * LSQT_BATCHES * LSQT_HIST_BINS + bin), q.lo, q.hi, c->flags);
-                } else {
-                    acc_add(c, LSQT_T_DELTA_T, w);
-                }
+#if LSQT_NB > 1
+                for (int b = 0; b < LSQT_NB; b++) tally_exit(c, b, d, up, scattered, wb[b], hist);
+#else
+                tally_exit(c, 0, d, up, scattered, w, hist);
+#endif
                 return;
             }
             /* Roulette only for paths that go on inside the stack: on one that leaves it
              * would add noise and save no work. */
+#if LSQT_NB > 1
+            if (bounced && !roulette_bands(wb, rng)) return;
+#else
             if (bounced && !roulette(&w, rng)) return;
+#endif
             continue;
         }
         /* Inside interior medium `medium` at height h, travelling along d. */
         __global const lsqt_dev_medium *m = &c->media[medium];
+#if LSQT_NB > 1
+        /* The hero band's flight, every band's weight by spectral MIS (bands.cl); a
+         * medium clear in every band is crossed as it is without bands. */
+        if (c->bw[medium] > R(0.0)) {
+            const real mt_h = c->bw[LSQT_BAND_MUT(n, c->hero, medium)];
+            const real s = mt_h > R(0.0) ? neg_log_unit(R(1.0) - rng_uniform(rng)) / mt_h : (real)INFINITY;
+            if (d.z < R(0.0) ? s * -d.z < h : s * d.z < m->thickness - h) {
+                h = clamp(h + s * d.z, R(0.0), (real)m->thickness);
+                if (!flight_bands(c, medium, s, 1, wb, rb)) return;
+                scattered = 1;
+                c->work[WORK_MEDIUM]++;
+                phase_vtx pv = phase_vertex(m, -d, rng);
+                nee_medium_bands(c, medium, h, d, wb, &pv);
+                real3 wi;
+                const real f = phase_sample(m, &pv, -d, rng, &wi);
+                if (!(f > R(0.0))) return;
+                for (int b = 0; b < LSQT_NB; b++) wb[b] *= f;
+                if (!roulette_bands(wb, rng)) return;
+                d = wi;
+                continue;
+            }
+            /* to the boundary ahead (a horizontal d never reaches one: it is clear in the
+             * hero's band, and crosses nothing) */
+            const real t = d.z < R(0.0) ? h / -d.z : d.z > R(0.0) ? (m->thickness - h) / d.z : R(0.0);
+            if (!flight_bands(c, medium, t, 0, wb, rb)) return;
+        }
+#else
         if (m->mut > R(0.0)) {
             real s = neg_log_unit(R(1.0) - rng_uniform(rng)) / (real)m->mut;
             /* s < the distance to the boundary ahead, without dividing by d.z (a
@@ -448,6 +544,7 @@ LSQT_INLINE void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulon
                 continue;
             }
         }
+#endif
         at_layer = 1;
         layer = d.z < R(0.0) ? medium : medium - 1;
     }
@@ -461,16 +558,21 @@ LSQT_INLINE void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulon
 __kernel void lsqt_exits(__constant lsqt_dev_scene *scene, __global const lsqt_dev_medium *media,
                          __global const lsqt_dev_layer *layers, __global const real *wo_dirs,
                          __global const real *wi_dirs, __global const real *tab, ulong path_begin, uint n,
-                         __global real *out, volatile __global uint *flags)
+                         __global real *out, volatile __global uint *flags, __global const real *bandw)
 {
-    __local acc_word acc[LSQT_ACC_WORDS * LSQT_T_COUNT]; /* the safety cap's count, unused */
+    __local acc_word acc[LSQT_ACC_WORDS * LSQT_T_COUNT * LSQT_NB]; /* the safety cap's count, unused */
     const uint i = (uint)get_global_id(0), slice = (uint)get_global_id(1);
     const uint v = slice * (uint)max(scene->slice_group, 1);
     /* no point estimates, so no sums (they would fill a CPU worker's stack: a work-group
      * of 256 at the pilot's 4 x 300 directions is 3.7 MB) */
     ulong work[WORK_N] = {0, 0, 0};
-    walk_ctx c = {scene, media, layers, wi_dirs + 3 * LSQT_NWI_PAD * slice, tab + (size_t)slice * LSQT_SLICE_TAB(scene->n_layers),
-                  0, 0, work, acc, 0, 0, 0, flags, 0, out + 4 * ((size_t)slice * n + i)};
+    walk_ctx c;
+    c.scene = scene, c.media = media, c.layers = layers, c.wi = wi_dirs + 3 * LSQT_NWI_PAD * slice;
+    c.tab = tab + (size_t)slice * LSQT_SLICE_TAB(scene->n_layers);
+    c.sum = 0, c.bsum = 0, c.bw = bandw, c.nee = 0, c.work = work, c.acc = acc, c.nee_g = 0, c.v = 0, c.batch = 0;
+    c.flags = flags, c.nee_on = 0, c.exit_dir = out + 4 * ((size_t)slice * n + i), c.out = 0, c.count_only = 0;
+    uint touched = 0;
+    c.hero = (int)((path_begin + i) % LSQT_NB), c.touched = &touched;
     if (i >= n) return;
     real3 wo = make_real3(wo_dirs[4 * v], wo_dirs[4 * v + 1], wo_dirs[4 * v + 2]);
     rng_t rng = rng_init(scene->seed_lo, scene->seed_hi, slice, path_begin + i, RNG_PURPOSE_CANDIDATES | scene->rng_side);
@@ -518,12 +620,12 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
                         ulong path_begin, ulong path_end, ulong chunk_first,
                         __global ulong *nee, __global ulong *scalars, __global ulong *hist,
                         volatile __global uint *flags, __global lsqt_nee_rec *rec, __global ulong *rec_off,
-                        int count_only)
+                        int count_only, __global const real *bandw)
 {
-    __local acc_word acc[LSQT_ACC_WORDS * LSQT_T_COUNT];
+    __local acc_word acc[LSQT_ACC_WORDS * LSQT_T_COUNT * LSQT_NB];
     const chunk_span s = chunk_of(chunk_first, path_begin, path_end);
 
-    for (int k = s.lid; k < LSQT_ACC_WORDS * LSQT_T_COUNT; k += s.lsz) acc[k] = 0;
+    for (int k = s.lid; k < LSQT_ACC_WORDS * LSQT_T_COUNT * LSQT_NB; k += s.lsz) acc[k] = 0;
     barrier(CLK_LOCAL_MEM_FENCE);
 
     ulong work[WORK_N] = {0, 0, 0};
@@ -532,8 +634,9 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
     c.scene = scene, c.media = media, c.layers = layers, c.wi = wi_dirs + 3 * LSQT_NWI_PAD * s.slice;
     c.tab = tab + (size_t)s.slice * LSQT_SLICE_TAB(scene->n_layers);
     c.work = work, c.acc = acc, c.nee_g = nee, c.v = v, c.batch = s.batch, c.flags = flags;
-    c.nee_on = 1, c.exit_dir = 0;
-    c.sum = 0, c.nee = 0;
+    uint touched = 0;
+    c.nee_on = 1, c.exit_dir = 0, c.hero = 0, c.touched = &touched;
+    c.sum = 0, c.bsum = 0, c.nee = 0, c.bw = bandw;
     real3 wo = make_real3(wo_dirs[4 * v], wo_dirs[4 * v + 1], wo_dirs[4 * v + 2]);
     __global ulong *hist_b = hist + 2 * ((ulong)v * LSQT_BATCHES + (ulong)s.batch) * LSQT_HIST_BINS;
     /* The chunk's paths, one body per code path. The CPU path's local memory can only be
@@ -558,42 +661,58 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
     const int lid = s.lid, lsz = s.lsz;
     __local acc_word acc_t[LSQT_ACC_WORDS * LSQT_ACC_TILE];
     /* The directions' sums of each of the group's LSQT_ITEMS work-items (declared as
-     * vectors, for aligned blocks: VBLOCK). */
-    __local ulongv nee_v[LSQT_ITEMS * (LSQT_NWI_PAD / LSQT_VW)];
-    __local realv sum_v[LSQT_ITEMS * (LSQT_NWI_PAD / LSQT_VW)];
-    __local ulong *nee_priv = (__local ulong *)(nee_v + lid * (LSQT_NWI_PAD / LSQT_VW));
-    __local real *path_sum = (__local real *)(sum_v + lid * (LSQT_NWI_PAD / LSQT_VW));
-    for (int k = 0; k < LSQT_NWI_PAD; k++) nee_priv[k] = 0, path_sum[k] = R(0.0);
+     * vectors, for aligned blocks: VBLOCK): LSQT_NB rows of low words, LSQT_SUM_ROWS of
+     * sums. */
+    __local ulongv nee_v[LSQT_ITEMS * LSQT_NB * (LSQT_NWI_PAD / LSQT_VW)];
+    __local realv sum_v[LSQT_ITEMS * LSQT_SUM_ROWS * (LSQT_NWI_PAD / LSQT_VW)];
+    __local ulong *nee_priv = (__local ulong *)(nee_v + lid * LSQT_NB * (LSQT_NWI_PAD / LSQT_VW));
+    __local real *path_sum = (__local real *)(sum_v + lid * LSQT_SUM_ROWS * (LSQT_NWI_PAD / LSQT_VW));
+    for (int k = 0; k < LSQT_NB * LSQT_NWI_PAD; k++) nee_priv[k] = 0;
+    for (int k = 0; k < LSQT_SUM_ROWS * LSQT_NWI_PAD; k++) path_sum[k] = R(0.0);
     c.sum = path_sum, c.nee = nee_priv, c.out = 0, c.count_only = 0;
+    c.bsum = path_sum + LSQT_NWI_PAD; /* a band block's: after the vertex's row */
     for (ulong p = s.begin + (ulong)lid; p < s.end; p += (ulong)lsz) {
+        c.hero = (int)(p % LSQT_NB); /* every band leads as many paths */
         rng_t rng = rng_init(scene->seed_lo, scene->seed_hi, s.slice, p, RNG_PURPOSE_WALK | scene->rng_side);
         run_path(&c, wo, &rng, hist_b);
         nee_flush(&c);
     }
-    /* The directions' sums, a tile at a time. */
-    for (int t0 = 0; t0 < LSQT_NWI; t0 += LSQT_ACC_TILE) {
-        const int tn = min(LSQT_ACC_TILE, LSQT_NWI - t0);
-        for (int k = lid; k < LSQT_ACC_WORDS * tn; k += lsz) acc_t[k] = 0;
-        barrier(CLK_LOCAL_MEM_FENCE);
-        for (int k = 0; k < tn; k++)
-            if (nee_priv[t0 + k]) local_add128(acc_t + LSQT_ACC_WORDS * k, nee_priv[t0 + k], 0, flags);
-        barrier(CLK_LOCAL_MEM_FENCE);
-        for (int k = lid; k < tn; k += lsz) {
-            fix1 a = acc_read(acc_t + LSQT_ACC_WORDS * k);
-            __global ulong *p = nee_word(nee, v, s.batch, t0 + k);
-            if (p) global_add128(p, a.lo, a.hi, flags);
+    /* The directions' sums, band by band (one in a one-band program), a tile at a time. */
+    for (int band = 0; band < LSQT_NB; band++) {
+        __local ulong *lo = nee_priv + band * LSQT_NWI_PAD;
+        __global ulong *nee_b = nee + (size_t)band * scene->band_nee_words;
+        for (int t0 = 0; t0 < LSQT_NWI; t0 += LSQT_ACC_TILE) {
+            const int tn = min(LSQT_ACC_TILE, LSQT_NWI - t0);
+            for (int k = lid; k < LSQT_ACC_WORDS * tn; k += lsz) acc_t[k] = 0;
+            barrier(CLK_LOCAL_MEM_FENCE);
+            for (int k = 0; k < tn; k++)
+                if (lo[t0 + k]) local_add128(acc_t + LSQT_ACC_WORDS * k, lo[t0 + k], 0, flags);
+            barrier(CLK_LOCAL_MEM_FENCE);
+            for (int k = lid; k < tn; k += lsz) {
+                fix1 a = acc_read(acc_t + LSQT_ACC_WORDS * k);
+                __global ulong *p = nee_word(nee_b, v, s.batch, t0 + k);
+                if (p) global_add128(p, a.lo, a.hi, flags);
+            }
+            barrier(CLK_LOCAL_MEM_FENCE);
         }
-        barrier(CLK_LOCAL_MEM_FENCE);
     }
 #endif
-    for (int k = 0; k < WORK_N; k++)
-        if (work[k]) local_add128(acc + LSQT_ACC_WORDS * (LSQT_T_LAYER_EVENTS + k), work[k], 0, flags);
+    /* The work counters are every band's. */
+    for (int band = 0; band < LSQT_NB; band++)
+        for (int k = 0; k < WORK_N; k++)
+            if (work[k]) local_add128(acc + LSQT_ACC_WORDS * (band * LSQT_T_COUNT + LSQT_T_LAYER_EVENTS + k), work[k], 0, flags);
     barrier(CLK_LOCAL_MEM_FENCE);
-    for (int k = s.lid; k < LSQT_T_COUNT; k += s.lsz) {
+    for (int k = s.lid; k < LSQT_T_COUNT * LSQT_NB; k += s.lsz) {
         fix1 a = acc_read(acc + LSQT_ACC_WORDS * k);
+#if LSQT_NB > 1
+        const int band = k / LSQT_T_COUNT, t = k % LSQT_T_COUNT;
+#else
+        const int band = 0, t = k;
+#endif
+        __global ulong *sc = scalars + (size_t)band * scene->band_scalar_words;
         for (uint b = 0; b < g; b++) {
             const ulong base = (ulong)(v + b) * LSQT_BATCHES + (ulong)s.batch;
-            global_add128(scalars + 2 * (base * LSQT_T_COUNT + k), a.lo, a.hi, flags);
+            global_add128(sc + 2 * (base * LSQT_T_COUNT + t), a.lo, a.hi, flags);
         }
     }
 }

@@ -1,11 +1,15 @@
 #!/usr/bin/env bash
-# Runs with bands (docs/guide.md, "Colour and spectra"): a band of a run with bands equals
-# the one-band run of that band's values byte for byte (the bands share the paths' random
-# numbers; --wi-spread, so that the directions do not depend on the other bands), for
-# lists (R, G, B), for tables read at --wavelengths, across a continued LSS, shards and a
-# merge, and from below; the outputs' names (NAME.550nm.raw, NAME.R.raw), the JSON's lists,
-# the worst band stopping --target-error; a one-band run still writes LSS version 6; and
-# every bad input (exit 2, nothing written). The examples with bands run here.
+# Runs with bands (docs/guide.md, "Colour and spectra"). With LSQT_BAND_BLOCK=1 (every
+# band on paths of its own) a band of a run with bands equals the one-band run of that
+# band's values byte for byte (the same random numbers; --wi-spread, so that the
+# directions do not depend on the other bands), for lists (R, G, B), for tables read at
+# --wavelengths, and from below. With the bands sharing their paths (the default; their
+# values are checked against an independent reference in test_band_blocks): which bands
+# share, each band within the error bars of its one-band run, and a continued LSS, shards,
+# a merge and a rerun byte for byte. The outputs' names (NAME.550nm.raw, NAME.R.raw), the
+# JSON's lists, the worst band stopping --target-error; a one-band run still writes LSS
+# version 6; and every bad input (exit 2, nothing written). The examples with bands run
+# here.
 # usage: test_bands.sh LSQT_CL EXAMPLES_DIR
 # shellcheck source=cli_lib.sh
 source "$(dirname "${BASH_SOURCE[0]}")/cli_lib.sh"
@@ -59,7 +63,7 @@ Medium mus=1.96,1.2,0 mua=0.04,0.3,0.5 HenyeyGreensteinPhase g=0.6,0.3,0.9
 Layer z=0 LambertianBsdf fR=0.7,0.3,0.1
 Medium
 L
-expect 0 "wrote rgb.lsqt.{R,...,B}.raw, rgb.lsqt.lss" -- "$BIN" rgb.lsqt ${S% -q} --json rgb.json
+expect 0 "wrote rgb.lsqt.{R,...,B}.raw, rgb.lsqt.lss" -- env LSQT_BAND_BLOCK=1 "$BIN" rgb.lsqt ${S% -q} --json rgb.json
 for b in 0 1 2; do same_band "rgb" rgb.lsqt "$(echo R G B | cut -d' ' -f$((b + 1)))" $b; done
 expect 0 "format: LSS version 7" -- "$BIN" info rgb.lsqt.lss
 expect 0 "bands: 3 (R, G, B)" -- "$BIN" info rgb.lsqt.lss
@@ -84,7 +88,29 @@ PY
 # A one-band run is today's: LSS version 6.
 expect 0 "format: LSS version 6" -- "$BIN" info one-1.lsqt.lss
 
+# Shared paths: bands 0 and 2 share (band 2 does not scatter, so its phase function does
+# not matter; the extinctions differ), band 1's phase function differs from band 0's.
+expect 0 "3 bands in 2 blocks of up to 2 sharing their paths" -- "$BIN" rgb.lsqt $S -R -v --lss sh3.lss -o sh3.raw
+expect 1 "" -- env LSQT_BAND_BLOCK=0 "$BIN" rgb.lsqt $S -R --lss sh3.lss -o sh3.raw
+# Each band of a block within the error bars of its one-band run (R and T of every slice:
+# |z| < 4.5, two independent runs: another seed).
+printf 'Medium\nLayer z=1 NullBsdf\nMedium mus=1.96,1.2,0.48 mua=0.04,0.4,0.72 HenyeyGreensteinPhase g=0.6\nLayer z=0 LambertianBsdf fR=0.7,0.4,0.1 fT=0,0.3,0.05\nMedium\n' > dust.lsqt
+expect 0 "3 bands in 1 block of up to 3" -- "$BIN" dust.lsqt -p 20000 -wo 4 -wi 16 --wi-spread -R -v --json dust-shared.json
+env LSQT_BAND_BLOCK=1 "$BIN" dust.lsqt -p 20000 -wo 4 -wi 16 --wi-spread -R -q --seed 7 --json dust-alone.json --lss alone.lss -o alone.raw
+python3 - dust-shared.json dust-alone.json <<'PY' && ok || bad "a shared band disagrees with its one-band run"
+import json, sys
+a, b = json.load(open(sys.argv[1])), json.load(open(sys.argv[2]))
+worst = 0
+for x, y in zip(a["slices"], b["slices"]):
+    for k in ("R", "T"):
+        for band in range(3):
+            e = (x[k + "_err"][band] ** 2 + y[k + "_err"][band] ** 2) ** 0.5
+            if e > 0: worst = max(worst, abs(x[k][band] - y[k][band]) / e)
+assert worst < 4.5, worst
+PY
+
 # Continued: -p 3000 then 6000 more equals 9000 at once, in every band.
+"$BIN" rgb.lsqt $S -R
 "$BIN" rgb.lsqt -p 9000 -wo 4 -wi 16 --wi-spread -q -R --lss all.lss -o all.raw
 "$BIN" rgb.lsqt -p 6000 -wo 4 -wi 16 --wi-spread -q
 for l in R G B; do
@@ -104,7 +130,7 @@ if cmp -s merged.lss all.lss && cmp -s merged.B.raw all.B.raw; then ok; else bad
 # A layer opaque in one band only is kept (pruning is where every band is stopped): band 1
 # sees the floor through it, band 0 does not, each as its own run.
 printf 'Medium\nLayer z=1 LambertianBsdf fR=0.3 fT=0,0.5\nMedium eta=1.3\nLayer z=0 LambertianBsdf fR=0.8\nMedium\n' > op.lsqt
-expect 0 "" -- "$BIN" op.lsqt $S
+expect 0 "" -- env LSQT_BAND_BLOCK=1 "$BIN" op.lsqt $S
 same_band "opaque in one band" op.lsqt 0 0
 same_band "opaque in one band" op.lsqt 1 1
 
@@ -114,10 +140,10 @@ mkdir -p t
 printf '# made-up paint\n400 0.10\n500 0.30\n600 0.60\n700 0.90\n' > t/fr.txt
 printf '400,0.5\n700,0.05\n' > t/ft.txt
 printf 'Medium\nLayer z=0 LambertianBsdf fR=@t/fr.txt fT=@t/ft.txt\nMedium\n' > tab.lsqt
-expect 0 "wrote tab.lsqt.{400nm,700nm}.raw" -- "$BIN" tab.lsqt ${S% -q} --wavelengths 400:700:300
+expect 0 "wrote tab.lsqt.{400nm,700nm}.raw" -- env LSQT_BAND_BLOCK=1 "$BIN" tab.lsqt ${S% -q} --wavelengths 400:700:300
 same_band "table" tab.lsqt 400nm 0 400
 same_band "table" tab.lsqt 700nm 1 700
-expect 0 "" -- "$BIN" tab.lsqt $S -R --wavelengths 400,700 --from-below
+expect 0 "" -- env LSQT_BAND_BLOCK=1 "$BIN" tab.lsqt $S -R --wavelengths 400,700 --from-below
 python3 band.py tab.lsqt 0 below-0.lsqt 400
 "$BIN" below-0.lsqt $S -R --from-below
 if cmp -s <(tail -n +3 below-0.lsqt.below.raw) <(tail -n +3 tab.lsqt.below.400nm.raw); then ok

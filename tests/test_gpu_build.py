@@ -176,7 +176,8 @@ def main():
     # NVIDIA's compiler refuses what -pedantic flags (variadic macros, say), so any such
     # warning fails here, in each precision and atomics variant, with every model built.
     every = " ".join("-DLSQT_HAS_%s=1" % m for m in sorted(model_names()))
-    for extra in ("", "-DLSQT_DOUBLE=1", "-DLSQT_NO_INT64_ATOMICS=1", "-DLSQT_NEE_RECORDS=1 -DLSQT_VW=4"):
+    for extra in ("", "-DLSQT_DOUBLE=1", "-DLSQT_NO_INT64_ATOMICS=1", "-DLSQT_NEE_RECORDS=1 -DLSQT_VW=4",
+                  "-DLSQT_NB=4", "-DLSQT_NB=16 -DLSQT_DOUBLE=1 -DLSQT_ITEMS=2"):
         p = subprocess.run(["clang-15", "-x", "cl", "-cl-std=CL1.2", "-Xclang", "-finclude-default-header",
                             "-fsyntax-only", "-pedantic", "-Werror", "-DLSQT_NWI=16", *every.split(), *extra.split(),
                             src], capture_output=True, text=True)

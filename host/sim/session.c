@@ -121,6 +121,7 @@ static cl_int set_kernel_args(lsqt_session *s)
     e |= clSetKernelArg(s->walk, 13, sizeof(cl_mem), &s->flags);
     e |= clSetKernelArg(s->walk, 14, sizeof(cl_mem), &s->flags);
     e |= clSetKernelArg(s->walk, 15, sizeof zero, &zero);
+    e |= clSetKernelArg(s->walk, 16, sizeof(cl_mem), &s->bandw);
     if (s->records) {
         for (cl_uint i = 0; i < 5; i++)
             e |= clSetKernelArg(s->estimate, i, sizeof(cl_mem), args[i == 3 ? 4 : i == 4 ? 5 : i]);
@@ -132,17 +133,40 @@ static cl_int set_kernel_args(lsqt_session *s)
     return e;
 }
 
+/* A block's tallies as its buffers hold them: each slot's band after band (zeros for a
+ * padding slot); with back, the other way, from the buffers' copy t into ST. */
+static void *block_tallies(const lsqt_session *s, const lsqt_state *st, int which, void *t, int back)
+{
+    const size_t n = which == 0 ? s->n_nee : which == 1 ? s->n_scalars : s->n_hist;
+    lsqt_u128 *all = back ? t : calloc((size_t)s->nb * n + 1, sizeof *all);
+    for (int j = 0; all && j < s->nb; j++) {
+        if (s->band_of[j] < 0) continue;
+        const lsqt_state v = lsqt_state_band(st, s->band_of[j]);
+        lsqt_u128 *band = which == 0 ? v.nee : which == 1 ? v.scalars : v.hist;
+        if (back) memcpy(band, all + (size_t)j * n, n * sizeof *all);
+        else memcpy(all + (size_t)j * n, band, n * sizeof *all);
+    }
+    return all;
+}
+
 /* The tables, the directions and the tallies go up; the direction tables (T, Lambda,
- * lgamma(1 + Lambda) per slice, layer and direction) are made on the device, once. */
-static int upload(lsqt_session *s, const lsqt_assembly *a, const lsqt_state *st, char *err, size_t errcap)
+ * lgamma(1 + Lambda) per slice, layer and direction) are made on the device, once. A
+ * block of bands has its own tables (band_blocks.h). */
+static int upload(lsqt_session *s, const lsqt_assembly *full, const lsqt_band_block *blk, const lsqt_state *st,
+                  char *err, size_t errcap)
 {
     lsqt_context *cx = s->cx;
+    const lsqt_assembly *a = lsqt_assembly_band(full, blk->band[0]);
     const int n = a->n_layers;
     lsqt_dev_scene scene;
     lsqt_dev_medium_d *media = calloc((size_t)n + 1, sizeof *media);
-    lsqt_dev_layer_d *layers = calloc((size_t)n, sizeof *layers);
+    lsqt_dev_layer_d *layers = calloc((size_t)n + 1, sizeof *layers);
     lsqt_dev_medium *media_f = calloc((size_t)n + 1, sizeof *media_f);
-    lsqt_dev_layer *layers_f = calloc((size_t)n, sizeof *layers_f);
+    lsqt_dev_layer *layers_f = calloc((size_t)n + 1, sizeof *layers_f);
+    const size_t n_bw = s->nb > 1 ? (size_t)LSQT_BAND_TAB_SIZE(n, s->nb) : 1;
+    double *bw = calloc(n_bw, sizeof *bw);
+    float *bw_f = calloc(n_bw, sizeof *bw_f);
+    void *tal[3] = {block_tallies(s, st, 0, NULL, 0), block_tallies(s, st, 1, NULL, 0), block_tallies(s, st, 2, NULL, 0)};
     /* Directions go to the device in the kernel's precision: double for --double. */
     const size_t pad = LSQT_PAD((size_t)st->n_wi, (size_t)s->vw), n_wo = (size_t)st->n_slices * 4;
     double *wo = calloc(n_wo, sizeof *wo);
@@ -151,12 +175,22 @@ static int upload(lsqt_session *s, const lsqt_assembly *a, const lsqt_state *st,
     void *wi_up = directions_of(st, s->slice_group, s->vw, &wi_bytes);
     int rc = 1;
     cl_int e = CL_SUCCESS;
-    if (!media || !layers || !media_f || !layers_f || !wo || !wo_f || !wi_up) {
+    if (!media || !layers || !media_f || !layers_f || !wo || !wo_f || !wi_up || !bw || !bw_f || !tal[0] || !tal[1] ||
+        !tal[2] || (s->nb > 1 && lsqt_band_block_tables(full, blk, &scene, media, layers, bw))) {
         snprintf(err, errcap, "out of memory");
         goto done;
     }
-    lsqt_device_tables(a, &scene, media, layers);
+    if (s->nb == 1) lsqt_device_tables(a, &scene, media, layers);
     lsqt_tables_to_float(media, media_f, n + 1, layers, layers_f, n);
+    for (size_t i = 0; i < n_bw; i++) bw_f[i] = (float)bw[i];
+    /* the strides between the block's bands' tallies (device_layout.h) */
+    if (2 * s->n_hist > UINT32_MAX || 2 * s->n_nee > UINT32_MAX || 2 * s->n_scalars > UINT32_MAX) {
+        snprintf(err, errcap, "too many directions and slices for a band block (LSQT_BAND_BLOCK=1 runs them)");
+        goto done;
+    }
+    scene.band_nee_words = (lsqt_u32)(2 * s->n_nee);
+    scene.band_scalar_words = (lsqt_u32)(2 * s->n_scalars);
+    scene.band_hist_words = (lsqt_u32)(2 * s->n_hist);
     /* The kernel reads the layout it was built for (see device_layout.h). */
     const void *media_up = st->use_double ? (const void *)media : (const void *)media_f;
     const void *layers_up = st->use_double ? (const void *)layers : (const void *)layers_f;
@@ -174,9 +208,11 @@ static int upload(lsqt_session *s, const lsqt_assembly *a, const lsqt_state *st,
     s->wi = make_buffer(cx, ro, wi_bytes, wi_up, &e);
     const size_t tab_size = (size_t)st->n_slices * ((size_t)n * LSQT_LAYER_TAB_ROWS + LSQT_MEDIA_TAB_ROWS) * pad * dir_size; /* LSQT_SLICE_TAB */
     s->tab = make_buffer(cx, rw, tab_size, NULL, &e);
-    s->nee = make_buffer(cx, rw, s->n_nee * sizeof *st->nee, st->nee, &e);
-    s->scalars = make_buffer(cx, rw, s->n_scalars * sizeof *st->scalars, st->scalars, &e);
-    s->hist = make_buffer(cx, rw, s->n_hist * sizeof *st->hist, st->hist, &e);
+    const size_t nb = (size_t)s->nb;
+    s->nee = make_buffer(cx, rw, nb * s->n_nee * sizeof *st->nee, tal[0], &e);
+    s->scalars = make_buffer(cx, rw, nb * s->n_scalars * sizeof *st->scalars, tal[1], &e);
+    s->hist = make_buffer(cx, rw, nb * s->n_hist * sizeof *st->hist, tal[2], &e);
+    s->bandw = make_buffer(cx, ro, n_bw * dir_size, st->use_double ? (void *)bw : (void *)bw_f, &e);
     s->flags = make_buffer(cx, rw, sizeof flags0, &flags0, &e);
     if (e != CL_SUCCESS) {
         snprintf(err, errcap, "cannot allocate device buffers: %s (%d)", lsqt_cl_error_name(e), (int)e);
@@ -200,6 +236,9 @@ done:
     free(wo);
     free(wo_f);
     free(wi_up);
+    free(bw);
+    free(bw_f);
+    for (int i = 0; i < 3; i++) free(tal[i]);
     return rc;
 }
 
@@ -289,22 +328,27 @@ static int make_kernels(lsqt_session *s, const lsqt_state *st, int gpu, char *er
     return 0;
 }
 
-/* One band's session: the program built (or PROG, another band's, shared), its kernels,
- * tables and tallies. */
-static int open_band(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st,
-                     int slice_group, const char *extra_options, size_t local_size, int verbose, cl_program prog,
-                     char *err, size_t errcap)
+/* One block's session (band_blocks.h; a one-band run's is one block of one band): the
+ * program built (or PROG, another block's of the same width, shared), its kernels, tables
+ * and tallies. A and ST are the run's (every band). */
+static int open_block(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st,
+                      const lsqt_band_block *blk, int slice_group, const char *extra_options, size_t local_size,
+                      int verbose, cl_program prog, char *err, size_t errcap)
 {
     memset(s, 0, sizeof *s);
     s->cx = cx;
     s->slice_group = slice_group > 0 ? slice_group : 1;
-    if (session_shape(s, a, st, err, errcap)) return 1;
+    s->nb = blk->nb;
+    memcpy(s->band_of, blk->band, sizeof s->band_of);
+    const lsqt_assembly *a0 = lsqt_assembly_band(a, blk->band[0]);
+    const lsqt_state v0 = lsqt_state_band(st, blk->band[0]);
+    if (session_shape(s, a0, &v0, err, errcap)) return 1;
     char opt[1024];
     const int gpu = gpu_path(cx, err, errcap);
     if (gpu < 0) return 1;
     s->vw = vector_width(gpu, err, errcap);
     if (!s->vw) return 1;
-    if (build_options(cx, a, st, s->slice_group, s->vw, gpu, opt, sizeof opt, err, errcap)) return 1;
+    if (build_options(cx, a0, &v0, s->slice_group, s->vw, gpu, opt, sizeof opt, err, errcap)) return 1;
     /* A CPU device runs a work-group's items one after another on one thread, so one
      * item does the chunk's 256 paths and the end-of-chunk sums (items x directions, a
      * locked add each) are made once: Slab 5 % and Substr 4 % less CPU than with 8 items
@@ -314,6 +358,8 @@ static int open_band(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, 
     size_t ls = local_size ? local_size : gpu ? 64 : 1, kmax = 0;
     if (!gpu && ls > 1 && strlen(opt) + 32 < sizeof opt)
         snprintf(opt + strlen(opt), sizeof opt - strlen(opt), " -DLSQT_ITEMS=%zu", ls);
+    if (s->nb > 1 && strlen(opt) + 32 < sizeof opt)
+        snprintf(opt + strlen(opt), sizeof opt - strlen(opt), " -DLSQT_NB=%d", s->nb);
     if (extra_options && strlen(opt) + strlen(extra_options) + 2 < sizeof opt) {
         strcat(opt, " ");
         strcat(opt, extra_options);
@@ -327,7 +373,7 @@ static int open_band(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, 
         free(log);
         return 1;
     }
-    if (make_kernels(s, st, gpu, err, errcap)) {
+    if (make_kernels(s, &v0, gpu, err, errcap)) {
         lsqt_session_close(s);
         return 1;
     }
@@ -338,11 +384,32 @@ static int open_band(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, 
         lsqt_session_close(s);
         return 1;
     }
-    if (upload(s, a, st, err, errcap)) {
+    if (upload(s, a, blk, st, err, errcap)) {
         lsqt_session_close(s);
         return 1;
     }
     return 0;
+}
+
+/* The widest band block this device and direction count allow: the CPU path keeps per
+ * band, per work-item and per direction a sum and a low word (12 bytes in float, 16 in
+ * double) in local memory (walk.cl). The GPU path runs one band per program. */
+static int block_width(lsqt_context *cx, const lsqt_state *st, int slice_group, size_t local_size, char *err,
+                       size_t errcap)
+{
+    int width = lsqt_band_block_width(err, errcap);
+    const int gpu = gpu_path(cx, err, errcap);
+    if (!width || gpu < 0) return 0;
+    if (gpu) return 1;
+    const int vw = vector_width(gpu, err, errcap);
+    if (!vw) return 0;
+    size_t nwi = slice_group > 1 ? (size_t)slice_group * LSQT_PAD((size_t)st->n_wi, (size_t)vw) : (size_t)st->n_wi;
+    const size_t pad = LSQT_PAD(nwi, (size_t)vw), items = local_size ? local_size : 1;
+    const size_t real_size = st->use_double ? 8 : 4, per_band = items * pad * (8 + real_size);
+    const size_t local = cx->dev.local_mem ? (size_t)cx->dev.local_mem : (size_t)32768, spare = 16384 + items * pad * real_size;
+    const size_t fit = local > spare && per_band ? (local - spare) / per_band : 1;
+    if ((size_t)width > fit) width = fit > 1 ? (int)fit : 1;
+    return width;
 }
 
 int lsqt_session_open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st,
@@ -354,28 +421,40 @@ int lsqt_session_open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_asse
         snprintf(err, errcap, "the assembly has %d bands and the state %d", nb, st->n_bands);
         return 1;
     }
-    const lsqt_state v0 = lsqt_state_band(st, 0);
-    if (open_band(s, cx, lsqt_assembly_band(a, 0), &v0, slice_group, extra_options, local_size, verbose, NULL, err,
-                  errcap))
-        return 1;
-    if (nb == 1) return 0;
-    /* Every band has the same models, so the same build options: one program serves all. */
-    s->bands = calloc((size_t)nb - 1, sizeof *s->bands);
-    if (!s->bands) {
-        snprintf(err, errcap, "out of memory");
-        lsqt_session_close(s);
-        return 1;
-    }
-    for (int b = 1; b < nb; b++) {
-        const lsqt_state vb = lsqt_state_band(st, b);
-        if (open_band(&s->bands[b - 1], cx, lsqt_assembly_band(a, b), &vb, slice_group, extra_options, local_size,
-                      verbose, s->prog, err, errcap)) {
-            lsqt_session_close(s);
+    lsqt_band_block one = {1, {0}}, *blocks = &one;
+    int n_blocks = 1;
+    if (nb > 1) {
+        const int width = block_width(cx, st, slice_group, local_size, err, errcap);
+        if (!width) return 1;
+        n_blocks = lsqt_band_blocks(a, width, &blocks);
+        if (n_blocks < 0) {
+            snprintf(err, errcap, "out of memory");
             return 1;
         }
-        s->n_bands = b + 1;
+        if (verbose)
+            fprintf(stderr, "%d bands in %d block%s of up to %d sharing their paths\n", nb, n_blocks,
+                    n_blocks == 1 ? "" : "s", blocks[0].nb);
     }
-    return 0;
+    int rc = open_block(s, cx, a, st, &blocks[0], slice_group, extra_options, local_size, verbose, NULL, err, errcap);
+    if (!rc && n_blocks > 1) {
+        s->blocks = calloc((size_t)n_blocks - 1, sizeof *s->blocks);
+        if (!s->blocks) {
+            snprintf(err, errcap, "out of memory");
+            rc = 1;
+        }
+    }
+    for (int i = 1; !rc && i < n_blocks; i++) {
+        /* blocks of one width share a program (the same models in every band) */
+        cl_program prog = NULL;
+        for (int j = 0; j < i && !prog; j++)
+            if (blocks[j].nb == blocks[i].nb) prog = j ? s->blocks[j - 1].prog : s->prog;
+        rc = open_block(&s->blocks[i - 1], cx, a, st, &blocks[i], slice_group, extra_options, local_size, verbose,
+                        prog, err, errcap);
+        if (!rc) s->n_blocks = i + 1;
+    }
+    if (blocks != &one) free(blocks);
+    if (rc && s->prog) lsqt_session_close(s);
+    return rc;
 }
 
 /* Enqueues kernel k over the chunks of paths [begin, end) of every simulated slice
@@ -500,10 +579,10 @@ static void swap_records(lsqt_session *a, lsqt_session *b)
 
 int lsqt_session_launch(lsqt_session *s, uint64_t begin, uint64_t end, char *err, size_t errcap)
 {
-    for (int b = 1; b < s->n_bands; b++) {
-        swap_records(s, &s->bands[b - 1]);
-        const int rc = lsqt_session_launch(&s->bands[b - 1], begin, end, err, errcap);
-        swap_records(s, &s->bands[b - 1]);
+    for (int b = 1; b < s->n_blocks; b++) {
+        swap_records(s, &s->blocks[b - 1]);
+        const int rc = lsqt_session_launch(&s->blocks[b - 1], begin, end, err, errcap);
+        swap_records(s, &s->blocks[b - 1]);
         if (rc) return 1;
     }
     if (end <= begin) return 0;
@@ -517,26 +596,34 @@ int lsqt_session_launch(lsqt_session *s, uint64_t begin, uint64_t end, char *err
     return 0;
 }
 
-static int read_band(lsqt_session *s, lsqt_state *st, char *err, size_t errcap);
+static int read_block(lsqt_session *s, lsqt_state *st, char *err, size_t errcap);
 
 int lsqt_session_read(lsqt_session *s, lsqt_state *st, char *err, size_t errcap)
 {
-    for (int b = 0; b < (s->n_bands > 1 ? s->n_bands : 1); b++) {
-        lsqt_state view = lsqt_state_band(st, b);
-        if (read_band(b ? &s->bands[b - 1] : s, &view, err, errcap)) return 1;
-        st->flags |= view.flags;
-    }
+    for (int b = 0; b < (s->n_blocks > 1 ? s->n_blocks : 1); b++)
+        if (read_block(b ? &s->blocks[b - 1] : s, st, err, errcap)) return 1;
     return 0;
 }
 
-static int read_band(lsqt_session *s, lsqt_state *st, char *err, size_t errcap)
+/* A block's tallies into its bands' parts of ST. */
+static int read_block(lsqt_session *s, lsqt_state *st, char *err, size_t errcap)
 {
     cl_command_queue q = s->cx->queue;
     cl_uint fl = 0;
-    cl_int e = clEnqueueReadBuffer(q, s->nee, CL_TRUE, 0, s->n_nee * sizeof *st->nee, st->nee, 0, NULL, NULL);
-    e |= clEnqueueReadBuffer(q, s->scalars, CL_TRUE, 0, s->n_scalars * sizeof *st->scalars, st->scalars, 0, NULL, NULL);
-    e |= clEnqueueReadBuffer(q, s->hist, CL_TRUE, 0, s->n_hist * sizeof *st->hist, st->hist, 0, NULL, NULL);
-    e |= clEnqueueReadBuffer(q, s->flags, CL_TRUE, 0, sizeof fl, &fl, 0, NULL, NULL);
+    const size_t nb = (size_t)s->nb, counts[3] = {s->n_nee, s->n_scalars, s->n_hist};
+    cl_mem bufs[3] = {s->nee, s->scalars, s->hist};
+    cl_int e = CL_SUCCESS;
+    for (int i = 0; i < 3 && e == CL_SUCCESS; i++) {
+        lsqt_u128 *t = malloc(nb * counts[i] * sizeof *t + 1);
+        if (!t) {
+            snprintf(err, errcap, "out of memory");
+            return 1;
+        }
+        e = clEnqueueReadBuffer(q, bufs[i], CL_TRUE, 0, nb * counts[i] * sizeof *t, t, 0, NULL, NULL);
+        if (e == CL_SUCCESS) block_tallies(s, st, i, t, 1);
+        free(t);
+    }
+    if (e == CL_SUCCESS) e = clEnqueueReadBuffer(q, s->flags, CL_TRUE, 0, sizeof fl, &fl, 0, NULL, NULL);
     if (e != CL_SUCCESS) {
         snprintf(err, errcap, "cannot read the tallies back: %s (%d)", lsqt_cl_error_name(e), (int)e);
         return 1;
@@ -547,8 +634,8 @@ static int read_band(lsqt_session *s, lsqt_state *st, char *err, size_t errcap)
 
 int lsqt_session_set_directions(lsqt_session *s, const lsqt_state *st, char *err, size_t errcap)
 {
-    for (int b = 1; b < s->n_bands; b++)
-        if (lsqt_session_set_directions(&s->bands[b - 1], st, err, errcap)) return 1;
+    for (int b = 1; b < s->n_blocks; b++)
+        if (lsqt_session_set_directions(&s->blocks[b - 1], st, err, errcap)) return 1;
     size_t bytes = 0;
     void *dirs = directions_of(st, s->slice_group, s->vw, &bytes);
     if (!dirs) {
@@ -585,6 +672,7 @@ int lsqt_session_exits(lsqt_session *s, uint64_t begin, uint32_t n, float *out, 
         e |= clSetKernelArg(s->exits, 7, sizeof nn, &nn);
         e |= clSetKernelArg(s->exits, 8, sizeof(cl_mem), &buf);
         e |= clSetKernelArg(s->exits, 9, sizeof(cl_mem), &s->flags);
+        e |= clSetKernelArg(s->exits, 10, sizeof(cl_mem), &s->bandw);
         size_t global[2] = {n, n_sim};
         if (e == CL_SUCCESS) e = clEnqueueNDRangeKernel(s->cx->queue, s->exits, 2, NULL, global, NULL, 0, NULL, NULL);
         if (e == CL_SUCCESS) e = clEnqueueReadBuffer(s->cx->queue, buf, CL_TRUE, 0, count * sz, host, 0, NULL, NULL);
@@ -606,10 +694,10 @@ int lsqt_session_exits(lsqt_session *s, uint64_t begin, uint32_t n, float *out, 
 
 void lsqt_session_close(lsqt_session *s)
 {
-    for (int b = 1; b < s->n_bands; b++) lsqt_session_close(&s->bands[b - 1]);
-    free(s->bands);
-    cl_mem *all[] = {&s->scene, &s->media, &s->layers, &s->wo, &s->wi, &s->tab,
-                     &s->nee, &s->scalars, &s->hist, &s->flags, &s->rec, &s->rec_off};
+    for (int b = 1; b < s->n_blocks; b++) lsqt_session_close(&s->blocks[b - 1]);
+    free(s->blocks);
+    cl_mem *all[] = {&s->scene, &s->media, &s->layers, &s->wo, &s->wi, &s->tab,  &s->nee,
+                     &s->scalars, &s->hist, &s->flags, &s->rec, &s->rec_off, &s->bandw};
     for (size_t i = 0; i < sizeof all / sizeof *all; i++)
         if (*all[i]) clReleaseMemObject(*all[i]);
     if (s->walk) clReleaseKernel(s->walk);

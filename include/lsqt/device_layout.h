@@ -118,7 +118,27 @@ typedef struct lsqt_dev_scene {
     lsqt_u32 rng_side;        /* OR'ed into every RNG purpose: 0, or LSQT_RNG_BELOW for a state
                                  of light entering from below, so its paths are not those of
                                  the slices from above */
+    /* A band block (walk.cl, -DLSQT_NB > 1): the tallies hold the block's bands one after
+     * another, each laid out as a one-band session's; these are the strides between them,
+     * in 64-bit words. 0 in a one-band program. */
+    lsqt_u32 band_nee_words, band_scalar_words, band_hist_words;
+    lsqt_u32 band_pad;
 } lsqt_dev_scene;
+
+/* A band block's table (walk.cl, -DLSQT_NB > 1), in reals: first the largest extinction
+ * of each medium over the block's bands (0: clear in every band), then per band the factors of each
+ * layer for light leaving on wo's side (fs) and on the other (fo), and each medium's mus,
+ * mut and optical thickness above and below it. The block's layer table holds each
+ * layer's unit model (fs = fo = 1) and its medium table the least of each medium's
+ * extinction and depths (host/sim/band_blocks.c). */
+#define LSQT_BAND_TAB_BAND(n_layers, b) ((n_layers) + 1 + (b) * (2 * (n_layers) + 4 * ((n_layers) + 1)))
+#define LSQT_BAND_FS(n_layers, b, li) (LSQT_BAND_TAB_BAND(n_layers, b) + (li))
+#define LSQT_BAND_FO(n_layers, b, li) (LSQT_BAND_TAB_BAND(n_layers, b) + (n_layers) + (li))
+#define LSQT_BAND_MUS(n_layers, b, m) (LSQT_BAND_TAB_BAND(n_layers, b) + 2 * (n_layers) + (m))
+#define LSQT_BAND_MUT(n_layers, b, m) (LSQT_BAND_MUS(n_layers, b, m) + (n_layers) + 1)
+#define LSQT_BAND_TAU_ABOVE(n_layers, b, m) (LSQT_BAND_MUS(n_layers, b, m) + 2 * ((n_layers) + 1))
+#define LSQT_BAND_TAU_BELOW(n_layers, b, m) (LSQT_BAND_MUS(n_layers, b, m) + 3 * ((n_layers) + 1))
+#define LSQT_BAND_TAB_SIZE(n_layers, nb) LSQT_BAND_TAB_BAND(n_layers, nb)
 
 /* The GPU code path's next-event record (kernels/walk.cl, -DLSQT_NEE_RECORDS): what a
  * path's vertex leaves for lsqt_estimate, its state that does not depend on the incident

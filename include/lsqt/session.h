@@ -7,6 +7,7 @@
 #include <stdint.h>
 
 #include "lsqt/assembly.h"
+#include "lsqt/band_blocks.h"
 #include "lsqt/device.h"
 #include "lsqt/state.h"
 
@@ -30,12 +31,18 @@ typedef struct lsqt_session {
     int slice_group;   /* launch slices per simulated slice (1; rx for the RRSS pilot) */
     int vw;            /* directions per vector in the next-event loops (LSQT_VW; pads n_wi) */
     int use_double;
-    size_t n_nee, n_scalars, n_hist; /* tally counts (lsqt_u128 each), this band's */
-    /* A run with bands: this session is band 0's, and bands[b - 1] band b's, each with its
-     * own tables and tallies and one program between them; a launch runs every band over
-     * the same paths (the same random numbers). */
-    int n_bands;
-    struct lsqt_session *bands;
+    size_t n_nee, n_scalars, n_hist; /* tally counts (lsqt_u128 each) of one band */
+    /* The bands on this session's paths: nb (its program's LSQT_NB; 1 for a one-band
+     * program) and the run's band in each slot, -1 for padding (band_blocks.h); bandw the
+     * block's table (kernels/bands.cl). Its tallies hold its nb bands one after another. */
+    int nb;
+    int band_of[LSQT_BAND_BLOCK_MAX];
+    cl_mem bandw;
+    /* A run with bands: this session is the first block's (band 0's), and blocks[i - 1]
+     * block i's, each with its own tables and tallies; blocks of one width share one
+     * program. A launch runs every block over the same path indices. */
+    int n_blocks;
+    struct lsqt_session *blocks;
 } lsqt_session;
 
 /* The OpenCL build options of A's program for n_wi directions per slice in groups of

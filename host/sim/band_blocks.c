@@ -1,0 +1,205 @@
+/* Band blocks: the bands that share their paths, and a block's device tables
+ * (include/lsqt/band_blocks.h; the kernels' side is kernels/bands.cl). */
+#include "lsqt/band_blocks.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "lsqt/tables.h"
+
+/* One band's device tables (double), n_layers + 1 media and n_layers layers. */
+typedef struct {
+    lsqt_dev_scene scene;
+    lsqt_dev_medium_d *media;
+    lsqt_dev_layer_d *layers;
+} band_tables;
+
+static int tables_of(const lsqt_assembly *a, int b, band_tables *t)
+{
+    const lsqt_assembly *x = lsqt_assembly_band(a, b);
+    t->media = calloc((size_t)x->n_layers + 1, sizeof *t->media);
+    t->layers = calloc((size_t)x->n_layers + 1, sizeof *t->layers);
+    if (!t->media || !t->layers) {
+        free(t->media), free(t->layers);
+        return 1;
+    }
+    lsqt_device_tables(x, &t->scene, t->media, t->layers);
+    return 0;
+}
+
+static void tables_free(band_tables *t) { free(t->media), free(t->layers); }
+
+/* A closed layer whose value is fs or fo times a unit model the bands share: its factors
+ * and the parameters the factors stand for (the others must agree). */
+static int factored(int kind) { return kind == LSQT_BSDF_LAMBERTIAN || kind == LSQT_BSDF_OREN_NAYAR; }
+
+static void layer_factors(const lsqt_dev_layer_d *l, double *fs, double *fo)
+{
+    if (l->kind == LSQT_BSDF_LAMBERTIAN) *fs = l->p[0], *fo = l->p[1];
+    else if (l->kind == LSQT_BSDF_OREN_NAYAR) *fs = l->p[0], *fo = 0.0;
+    else if (l->kind == LSQT_BSDF_NULL) *fs = *fo = 0.0;
+    else *fs = *fo = 1.0; /* the same model in every band */
+}
+
+static int tables_share(const band_tables *x, const band_tables *y, int n)
+{
+    for (int i = 0; i < n; i++) {
+        const lsqt_dev_layer_d *p = &x->layers[i], *q = &y->layers[i];
+        if (p->kind != q->kind || p->iter_count != q->iter_count || p->multiple_scattering != q->multiple_scattering)
+            return 0;
+        for (int k = 0; k < 8; k++) {
+            const int factor = factored(p->kind) && (k == 0 || (k == 1 && p->kind == LSQT_BSDF_LAMBERTIAN));
+            if (!factor && p->p[k] != q->p[k]) return 0;
+        }
+    }
+    for (int m = 0; m <= n; m++) {
+        const lsqt_dev_medium_d *p = &x->media[m], *q = &y->media[m];
+        if (p->eta != q->eta || p->thickness != q->thickness) return 0;
+        /* a phase function matters only where both bands scatter */
+        if (p->mus > 0 && q->mus > 0 && (p->phase_kind != q->phase_kind || memcmp(p->pp, q->pp, sizeof p->pp)))
+            return 0;
+    }
+    return 1;
+}
+
+int lsqt_bands_share(const lsqt_assembly *a, int b, int c)
+{
+    band_tables x, y;
+    if (lsqt_assembly_band(a, b)->n_layers != lsqt_assembly_band(a, c)->n_layers) return 0;
+    if (tables_of(a, b, &x)) return 0;
+    if (tables_of(a, c, &y)) {
+        tables_free(&x);
+        return 0;
+    }
+    const int r = tables_share(&x, &y, lsqt_assembly_band(a, b)->n_layers);
+    tables_free(&x);
+    tables_free(&y);
+    return r;
+}
+
+int lsqt_band_block_width(char *err, size_t errcap)
+{
+    const char *env = getenv("LSQT_BAND_BLOCK");
+    if (!env || !*env) return LSQT_BAND_BLOCK_MAX;
+    char *end = NULL;
+    const long w = strtol(env, &end, 10);
+    if (*end || w < 1 || w > LSQT_BAND_BLOCK_MAX) {
+        snprintf(err, errcap, "LSQT_BAND_BLOCK is '%s': expected 1 to %d", env, LSQT_BAND_BLOCK_MAX);
+        return 0;
+    }
+    return (int)w;
+}
+
+int lsqt_band_blocks(const lsqt_assembly *a, int width, lsqt_band_block **out)
+{
+    const int nb = lsqt_assembly_bands(a), n = a->n_layers;
+    if (width < 1) width = 1;
+    if (width > LSQT_BAND_BLOCK_MAX) width = LSQT_BAND_BLOCK_MAX;
+    int *group = malloc((size_t)nb * sizeof *group), n_groups = 0;
+    band_tables *t = calloc((size_t)nb, sizeof *t);
+    lsqt_band_block *blocks = calloc((size_t)nb, sizeof *blocks);
+    int ok = group && t && blocks, count = 0;
+    for (int b = 0; ok && b < nb; b++) ok = !tables_of(a, b, &t[b]);
+    /* Groups: a band joins the first group every member of which it shares with. */
+    for (int b = 0; ok && b < nb; b++) {
+        group[b] = -1;
+        for (int g = 0; g < n_groups && group[b] < 0 && width > 1; g++) {
+            int all = 1;
+            for (int c = 0; c < b && all; c++)
+                if (group[c] == g) all = tables_share(&t[b], &t[c], n);
+            if (all) group[b] = g;
+        }
+        if (group[b] < 0) group[b] = n_groups++;
+    }
+    /* Each group in as few blocks as the width allows, evenly filled. */
+    for (int g = 0; ok && g < n_groups; g++) {
+        int size = 0;
+        for (int b = 0; b < nb; b++) size += group[b] == g;
+        const int n_blk = (size + width - 1) / width, k = (size + n_blk - 1) / n_blk;
+        int slot = k;
+        for (int b = 0; b < nb; b++) {
+            if (group[b] != g) continue;
+            if (slot == k) {
+                lsqt_band_block *blk = &blocks[count++];
+                blk->nb = k, slot = 0;
+                for (int j = 0; j < LSQT_BAND_BLOCK_MAX; j++) blk->band[j] = -1;
+            }
+            blocks[count - 1].band[slot++] = b;
+        }
+    }
+    for (int b = 0; t && b < nb; b++) tables_free(&t[b]);
+    free(t);
+    free(group);
+    if (!ok) {
+        free(blocks);
+        return -1;
+    }
+    *out = blocks;
+    return count;
+}
+
+int lsqt_band_block_tables(const lsqt_assembly *a, const lsqt_band_block *blk, lsqt_dev_scene *scene,
+                           lsqt_dev_medium_d *media, lsqt_dev_layer_d *layers, double *bw)
+{
+    const int n = a->n_layers, first = blk->band[0];
+    lsqt_device_tables(lsqt_assembly_band(a, first), scene, media, layers);
+    band_tables t[LSQT_BAND_BLOCK_MAX];
+    int have = 0;
+    for (int j = 0; j < blk->nb; j++) {
+        t[j].media = NULL, t[j].layers = NULL;
+        if (blk->band[j] >= 0 && tables_of(a, blk->band[j], &t[j])) {
+            for (int i = 0; i < have; i++) tables_free(&t[i]);
+            return 1;
+        }
+        have = j + 1;
+    }
+    /* The reference media: the least extinction and depths, a phase function from a band
+     * that scatters; each medium's largest extinction (0: clear in every band). */
+    for (int m = 0; m <= n; m++) {
+        const int interior = m > 0 && m < n;
+        double most = 0.0;
+        for (int j = 0; j < have; j++) {
+            if (blk->band[j] < 0) continue;
+            const lsqt_dev_medium_d *q = &t[j].media[m];
+            lsqt_dev_medium_d *r = &media[m];
+            if (q->mut < r->mut) r->mut = q->mut;
+            if (q->tau_above < r->tau_above) r->tau_above = q->tau_above;
+            if (q->tau_below < r->tau_below) r->tau_below = q->tau_below;
+            if (q->mus > 0 && r->phase_kind == LSQT_PHASE_NONE) {
+                r->phase_kind = q->phase_kind, r->mus = q->mus;
+                memcpy(r->pp, q->pp, sizeof r->pp);
+            }
+            if (interior && q->mut > most) most = q->mut;
+        }
+        media[m].mus = media[m].mus < media[m].mut ? media[m].mus : media[m].mut;
+        media[m].mua = media[m].mut - media[m].mus;
+        bw[m] = most;
+    }
+    /* Unit models: the factors are the bands'. */
+    for (int i = 0; i < n; i++) {
+        if (layers[i].kind == LSQT_BSDF_LAMBERTIAN) layers[i].p[0] = layers[i].p[1] = 1.0;
+        if (layers[i].kind == LSQT_BSDF_OREN_NAYAR) layers[i].p[0] = 1.0;
+    }
+    /* Per slot, its band's factors; a padding slot repeats the block's last band (its
+     * tallies are dropped; as a hero it draws that band's flights). */
+    int last = 0;
+    for (int j = 0; j < blk->nb; j++) {
+        if (blk->band[j] >= 0) last = j;
+        const band_tables *q = &t[blk->band[j] >= 0 ? j : last];
+        for (int i = 0; i < n; i++) {
+            double fs = 0.0, fo = 0.0;
+            layer_factors(&q->layers[i], &fs, &fo);
+            bw[LSQT_BAND_FS(n, j, i)] = fs, bw[LSQT_BAND_FO(n, j, i)] = fo;
+        }
+        for (int m = 0; m <= n; m++) {
+            const int interior = m > 0 && m < n;
+            bw[LSQT_BAND_MUS(n, j, m)] = interior ? q->media[m].mus : 0.0;
+            bw[LSQT_BAND_MUT(n, j, m)] = interior ? q->media[m].mut : 0.0;
+            bw[LSQT_BAND_TAU_ABOVE(n, j, m)] = q->media[m].tau_above;
+            bw[LSQT_BAND_TAU_BELOW(n, j, m)] = q->media[m].tau_below;
+        }
+    }
+    for (int j = 0; j < have; j++) tables_free(&t[j]);
+    return 0;
+}

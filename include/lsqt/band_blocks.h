@@ -1,0 +1,50 @@
+/* Band blocks: which bands of a run share their paths, and the tables of a block
+ * (kernels/bands.cl; docs/architecture.md, "Bands"). */
+#ifndef LSQT_BAND_BLOCKS_H
+#define LSQT_BAND_BLOCKS_H
+
+#include "lsqt/assembly.h"
+#include "lsqt/device_layout.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* The widest block a program is built for (the kernels' per-band arrays are this long at
+ * most); the default width, and LSQT_BAND_BLOCK=1 ... 16 to choose another (1: every band
+ * walks its own paths, as a one-band run). */
+#define LSQT_BAND_BLOCK_MAX 16
+
+/* A block: its width nb (the program's LSQT_NB) and the run's band in each of its slots,
+ * -1 for a slot that only pads the block (it repeats the block's last band; its tallies are dropped). */
+typedef struct lsqt_band_block {
+    int nb;
+    int band[LSQT_BAND_BLOCK_MAX];
+} lsqt_band_block;
+
+/* Whether bands b and c of A can share their paths: the same stack and models, and
+ * values that differ only where a block has a factor per band (a closed layer's fR and
+ * fT; an interior medium's mus and mua, hence mut; a phase function only where one band
+ * has no scattering). */
+int lsqt_bands_share(const lsqt_assembly *a, int b, int c);
+
+/* Parts A's bands into blocks of at most width bands that share their paths (in
+ * LSQT_BAND_BLOCK_MAX or fewer slots, the blocks of a group evenly filled); returns the
+ * count, or -1 when out of memory; *out is malloc'ed. */
+int lsqt_band_blocks(const lsqt_assembly *a, int width, lsqt_band_block **out);
+
+/* The width asked for (LSQT_BAND_BLOCK, else LSQT_BAND_BLOCK_MAX); 0 with err set for a
+ * bad value. */
+int lsqt_band_block_width(char *err, size_t errcap);
+
+/* A block's device tables: its layers' unit models, its media with the least extinction
+ * and depths of its bands (and a phase function from a band that scatters), and bw (of
+ * LSQT_BAND_TAB_SIZE(n_layers, nb) reals) its majorants and per-band factors. Returns 0,
+ * or 1 when out of memory. */
+int lsqt_band_block_tables(const lsqt_assembly *a, const lsqt_band_block *blk, lsqt_dev_scene *scene,
+                           lsqt_dev_medium_d *media, lsqt_dev_layer_d *layers, double *bw);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

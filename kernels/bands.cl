@@ -1,0 +1,234 @@
+/* Band blocks: LSQT_NB bands on one path (docs/design.md, 3.7). Compiled only into a
+ * program built with -DLSQT_NB > 1 (the host's band blocks, host/sim/band_blocks.c); a
+ * one-band program has none of it.
+ *
+ * The bands of a block differ only where a factor per band says how: a closed layer's
+ * reflection and transmission factors (fs, fo: its model is fs or fo times a unit model
+ * the bands share), a medium's scattering and extinction. The path is sampled once for
+ * all of them and each band carries its own weight wb[b]:
+ * - what depends on the band is drawn from one band, the path's hero (path index mod
+ *   LSQT_NB, so every band leads as many paths): a medium's free flights from its
+ *   extinction, a closed layer's side (wo's or the other) from its fs : fo; the
+ *   direction from the unit model's cosine sampler, shared;
+ * - each band's weight is its own transport over the mixture of the bands' densities of
+ *   the whole path (spectral MIS with the balance heuristic: Wilkie et al. 2014, West et
+ *   al. 2020), kept as wb and, per band, rb: its density of the path over the mixture's
+ *   (mean 1). A band's weight is at most LSQT_NB times its weight on its own paths, so no
+ *   weight grows without bound, and where another band would have gone elsewhere (its
+ *   extinction or its fs : fo far from the hero's) a band keeps its path;
+ * - a vertex's next-event terms are evaluated once, for the unit model and the least
+ *   optical depths, into the scratch sums (c->sum), and spread to each band's sums with
+ *   the band's factor and, where its media are deeper, its extra transmittance.
+ * One band's program would draw the same paths as the one-band walk; a block's are its
+ * own, so a band of a block agrees with its one-band run within the error bars, not bit
+ * for bit. */
+#if LSQT_NB > 1
+
+#ifdef LSQT_NEE_RECORDS
+#error "band blocks run on the CPU code path only"
+#endif
+
+LSQT_INLINE real band_tab(const walk_ctx *c, int at) { return c->bw[at]; }
+
+/* Russian roulette per band, as each band's own walk would play it: a band whose weight
+ * is below LSQT_RR_WEIGHT goes on with that weight or stops (0), so a band that absorbs
+ * costs no more than on its own paths (band_spread and nee_flush skip it). Returns
+ * whether any band goes on. */
+LSQT_INLINE int roulette_bands(real *wb, rng_t *rng)
+{
+    int live = 0;
+    for (int b = 0; b < LSQT_NB; b++) {
+        if (wb[b] > R(0.0) && wb[b] < LSQT_RR_WEIGHT)
+            wb[b] = rng_uniform(rng) * LSQT_RR_WEIGHT < wb[b] ? LSQT_RR_WEIGHT : R(0.0);
+        live |= wb[b] > R(0.0);
+    }
+    return live;
+}
+
+/* wb *= f; whether any band still carries weight. */
+LSQT_INLINE int band_scale(real *wb, real f)
+{
+    int live = 0;
+    for (int b = 0; b < LSQT_NB; b++) wb[b] *= f, live |= wb[b] > R(0.0);
+    return live;
+}
+
+/* Spreads the scratch sums of one vertex (c->sum, weight 1, the unit model at the least
+ * depths) into each band's sums: lanes on wo's side (z * woz > 0) times cs[b], the others
+ * co[b], and each times 2^-(dtu[b] a_up + dtd[b] a_down), the band's transmittance beyond
+ * the least depths (skipped where no band has any). Clears the scratch sums. */
+LSQT_INLINE void band_spread(const walk_ctx *c, real woz, const real *cs, const real *co, const real *dtu,
+                             const real *dtd)
+{
+    int deeper = 0;
+    for (int b = 0; b < LSQT_NB; b++) deeper |= dtu[b] != R(0.0) || dtd[b] != R(0.0);
+    __global const real *zs = c->wi + 2 * LSQT_NWI_PAD, *a_up = c->tab, *a_down = c->tab + LSQT_NWI_PAD;
+    __local real *u = c->sum, *bs = c->bsum;
+    uint on = 0; /* the bands with a term here (the others' weights are 0) */
+    for (int b = 0; b < LSQT_NB; b++) on |= (cs[b] != R(0.0) || co[b] != R(0.0)) ? 1u << b : 0u;
+    *c->touched |= on;
+    for (int k = 0; k < LSQT_NWI_PAD; k += LSQT_VW) {
+        const realv v = VBLOCK(realv, u, k);
+        if (!anyv(v != R(0.0))) continue;
+        VBLOCK(realv, u, k) = (realv)(R(0.0));
+        const maskv same = vloadv(0, zs + k) * woz > R(0.0);
+        if (deeper) {
+            const realv au = vloadv(0, a_up + k), ad = vloadv(0, a_down + k);
+            for (int b = 0; b < LSQT_NB; b++) {
+                if (!(on >> b & 1u)) continue;
+                const realv t = exp2_negv(-(dtu[b] * au + dtd[b] * ad));
+                VBLOCK(realv, bs + b * LSQT_NWI_PAD, k) += select((realv)(co[b]), (realv)(cs[b]), same) * t * v;
+            }
+        } else {
+            for (int b = 0; b < LSQT_NB; b++)
+                if (on >> b & 1u) VBLOCK(realv, bs + b * LSQT_NWI_PAD, k) += select((realv)(co[b]), (realv)(cs[b]), same) * v;
+        }
+    }
+}
+
+/* Each band's optical depth beyond the block's least, above (tu) and below (td) a point
+ * at height h of interior medium mi or, with mi < 0, beside layer li (all of the media
+ * above it, all below). */
+LSQT_INLINE void band_depths(const walk_ctx *c, int b, int mi, real h, int li, real tu, real td, real *dtu, real *dtd)
+{
+    const int n = c->scene->n_layers;
+    if (mi >= 0) {
+        const real mut = band_tab(c, LSQT_BAND_MUT(n, b, mi)), th = c->media[mi].thickness;
+        *dtu = band_tab(c, LSQT_BAND_TAU_ABOVE(n, b, mi)) + mut * (th - h) - tu;
+        *dtd = band_tab(c, LSQT_BAND_TAU_BELOW(n, b, mi)) + mut * h - td;
+    } else {
+        *dtu = band_tab(c, LSQT_BAND_TAU_ABOVE(n, b, li)) + band_tab(c, LSQT_BAND_MUT(n, b, li)) * c->media[li].thickness - tu;
+        *dtd = band_tab(c, LSQT_BAND_TAU_BELOW(n, b, li + 1)) +
+               band_tab(c, LSQT_BAND_MUT(n, b, li + 1)) * c->media[li + 1].thickness - td;
+    }
+    /* Rounding may leave a hair below 0 where the depths are equal. */
+    *dtu = fmax(*dtu, R(0.0)), *dtd = fmax(*dtd, R(0.0));
+}
+
+/* The probability that band b's sampler leaves layer li on wo's side. */
+LSQT_INLINE real side_probability(const walk_ctx *c, int b, int li)
+{
+    const int n = c->scene->n_layers;
+    const real fs = band_tab(c, LSQT_BAND_FS(n, b, li)), fo = band_tab(c, LSQT_BAND_FO(n, b, li));
+    return fs + fo > R(0.0) ? fs / (fs + fo) : R(0.5);
+}
+
+/* layer_vertex for a block: the next-event terms of layer li for every band, then the
+ * hero's sample, weighed by spectral MIS as flights are (flight_bands). Returns whether
+ * any band still carries weight. */
+LSQT_INLINE int layer_vertex_bands(const walk_ctx *c, int li, real3 d, real *wb, real *rb, rng_t *rng, real3 *wi)
+{
+    const int n = c->scene->n_layers;
+    const int up = li == c->scene->top_nonnull, down = li == c->scene->bottom_nonnull;
+    __global const lsqt_dev_layer *l = &c->layers[li];
+    __global const lsqt_dev_medium *above = &c->media[li], *below = &c->media[li + 1];
+    const real tau_up = above->tau_above + above->mut * above->thickness;
+    const real tau_down = below->tau_below + below->mut * below->thickness;
+    const int visible = c->nee_on && nee_visible(tau_up, tau_down, up, down);
+    __global const real *tab = c->tab + LSQT_LAYER_TAB(li);
+    real cs[LSQT_NB], co[LSQT_NB], dtu[LSQT_NB], dtd[LSQT_NB];
+    for (int b = 0; b < LSQT_NB; b++) {
+        cs[b] = wb[b] * band_tab(c, LSQT_BAND_FS(n, b, li));
+        co[b] = wb[b] * band_tab(c, LSQT_BAND_FO(n, b, li));
+        band_depths(c, b, -1, R(0.0), li, tau_up, tau_down, &dtu[b], &dtd[b]);
+    }
+    c->work[WORK_LAYER]++;
+    if (layer_is_micro(l)) { /* the same in every band (fs = fo = 1) */
+        ms_sink k;
+        nee_ms_sink(c, tab, li, &k);
+        const real f = ms_vertex_walks(l, d, rng, R(1.0), visible, &k, wi);
+        if (visible) band_spread(c, -d.z, cs, co, dtu, dtd);
+        return band_scale(wb, f);
+    }
+    if (visible) {
+        c->work[WORK_NEE]++;
+        nee_layer_terms(c, l, li, -d, R(1.0), tab);
+        band_spread(c, -d.z, cs, co, dtu, dtd);
+    }
+    /* The hero's side, wo's with probability fs / (fs + fo) (1/2 where its band has
+     * neither); every band's weight by its own factor over the bands' mixture. */
+    const real u0 = rng_uniform(rng), u1 = rng_uniform(rng), u2 = rng_uniform(rng);
+    const int same = u0 < side_probability(c, c->hero, li);
+    real3 v = sample_cosine_hemisphere(u1, u2);
+    v.z *= (-d.z >= R(0.0)) == same ? R(1.0) : R(-1.0);
+    /* the unit model over its cosine sampler's density (1 for Lambertian) */
+    const real az = fabs(v.z), unit = az > R(0.0) ? bsdf_eval(l, -d, v) * LSQT_PI / az : R(0.0);
+    real sum = R(0.0);
+    for (int j = 0; j < LSQT_NB; j++) {
+        const real p = side_probability(c, j, li);
+        rb[j] *= same ? p : R(1.0) - p, sum += rb[j];
+    }
+    if (!(sum > R(0.0))) return 0;
+    const real inv = (real)LSQT_NB / sum;
+    int live = 0;
+    for (int b = 0; b < LSQT_NB; b++) {
+        wb[b] = (same ? cs[b] : co[b]) * unit * inv, rb[b] *= inv;
+        live |= wb[b] > R(0.0);
+    }
+    *wi = v;
+    return live;
+}
+
+/* A free flight of length t in medium mi, drawn from the hero band's extinction, ended
+ * by a collision (collided) or by the medium's boundary. Spectral MIS: each band's
+ * weight becomes its own transport over the bands' mixture of flight densities (the
+ * balance heuristic), kept as wb (the weights) and rb (each band's density of the path
+ * so far over the mixture's, mean 1): a band's density of this flight is
+ * mut e^-(mut t) for a collision and e^-(mut t) for a boundary, its transport the same
+ * with mus for mut. Both scale by a common factor that the mean of rb removes, so they
+ * are taken relative to the largest (no overflow at any depth). Returns whether any band
+ * still carries weight. */
+LSQT_INLINE int flight_bands(const walk_ctx *c, int mi, real t, int collided, real *wb, real *rb)
+{
+    const int n = c->scene->n_layers;
+    const real mt_h = band_tab(c, LSQT_BAND_MUT(n, c->hero, mi));
+    /* One extinction in every band: every band's density is the hero's (rb stays), and a
+     * collision weighs each band by its albedo. */
+    int alike = 1;
+    for (int j = 0; j < LSQT_NB; j++) alike &= band_tab(c, LSQT_BAND_MUT(n, j, mi)) == mt_h;
+    if (alike) {
+        if (!collided) return 1;
+        int live = 0;
+        for (int j = 0; j < LSQT_NB; j++) wb[j] *= band_tab(c, LSQT_BAND_MUS(n, j, mi)) / mt_h, live |= wb[j] > R(0.0);
+        return live;
+    }
+    real e[LSQT_NB], top = -INFINITY;
+    for (int j = 0; j < LSQT_NB; j++) {
+        const real mt = band_tab(c, LSQT_BAND_MUT(n, j, mi)), dm = mt - mt_h;
+        e[j] = dm == R(0.0) ? R(0.0) : -dm * t;
+        if (collided) e[j] += mt > R(0.0) ? log(mt) : -INFINITY;
+        if (rb[j] > R(0.0)) top = fmax(top, e[j] + log(rb[j]));
+    }
+    if (!(top > -INFINITY)) return 0;
+    real sum = R(0.0);
+    for (int j = 0; j < LSQT_NB; j++) {
+        const real p = exp(e[j] - top), mt = band_tab(c, LSQT_BAND_MUT(n, j, mi));
+        rb[j] *= p, sum += rb[j];
+        wb[j] *= collided ? (mt > R(0.0) ? p * (band_tab(c, LSQT_BAND_MUS(n, j, mi)) / mt) : R(0.0)) : p;
+    }
+    const real inv = (real)LSQT_NB / sum;
+    int live = 0;
+    for (int j = 0; j < LSQT_NB; j++) rb[j] *= inv, wb[j] *= inv, live |= wb[j] > R(0.0);
+    return live;
+}
+
+/* nee_medium for a block: the terms once, spread to every band. */
+LSQT_NOINLINE_CPU void nee_medium_bands(const walk_ctx *c, int mi, real h, real3 d, const real *wb,
+                                        const phase_vtx *pv)
+{
+    __global const lsqt_dev_medium *m = &c->media[mi];
+    const int top = c->scene->top_nonnull, bottom = c->scene->bottom_nonnull;
+    const int up = top < 0 || mi <= top, down = bottom < 0 || mi > bottom;
+    const real tau_up = m->tau_above + m->mut * (m->thickness - h);
+    const real tau_down = m->tau_below + m->mut * h;
+    if (!c->nee_on || !nee_visible(tau_up, tau_down, up, down)) return;
+    c->work[WORK_NEE]++;
+    const real tu = up && tau_up < LSQT_NEE_TAU_MAX ? tau_up : R(1e30);
+    const real td = down && tau_down < LSQT_NEE_TAU_MAX ? tau_down : R(1e30);
+    nee_medium_terms(c, m, mi, -d, R(1.0), pv, tu, td);
+    real dtu[LSQT_NB], dtd[LSQT_NB];
+    for (int b = 0; b < LSQT_NB; b++) band_depths(c, b, mi, h, -1, tau_up, tau_down, &dtu[b], &dtd[b]);
+    band_spread(c, -d.z, wb, wb, dtu, dtd);
+}
+
+#endif
