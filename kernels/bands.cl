@@ -192,20 +192,35 @@ LSQT_INLINE int flight_bands(const walk_ctx *c, int mi, real t, int collided, re
         for (int j = 0; j < LSQT_NB; j++) wb[j] *= band_tab(c, LSQT_BAND_MUS(n, j, mi)) / mt_h, live |= wb[j] > R(0.0);
         return live;
     }
-    real e[LSQT_NB], top = -INFINITY;
+    /* Each band's density relative to the hero's: 2^e[j] times mt (a collision) or 1. The
+     * products rb[j] 2^e[j] are taken as 2^(e[j] + ilogb(rb[j]) - top) times rb[j]'s
+     * mantissa, top the largest binary exponent among them, so none overflows or
+     * vanishes whatever the depths (e is held within +-1e4: a flight whose depths differ
+     * by more, e^-7000, weighs the same as at 1e4). A band's weight keeps its ratio to rb,
+     * its weight on its own paths (bounded), times its albedo at a collision. */
+    real e[LSQT_NB];
+    int top = INT_MIN;
     for (int j = 0; j < LSQT_NB; j++) {
         const real mt = band_tab(c, LSQT_BAND_MUT(n, j, mi)), dm = mt - mt_h;
-        e[j] = dm == R(0.0) ? R(0.0) : -dm * t;
-        if (collided) e[j] += mt > R(0.0) ? log(mt) : -INFINITY;
-        if (rb[j] > R(0.0)) top = fmax(top, e[j] + log(rb[j]));
+        e[j] = dm == R(0.0) ? R(0.0) : clamp(-dm * t * LSQT_LOG2E, R(-1e4), R(1e4));
+        if (rb[j] > R(0.0) && (!collided || mt > R(0.0)))
+            top = max(top, (int)floor(e[j]) + ilogb(rb[j]) + (collided ? ilogb(mt) : 0));
     }
-    if (!(top > -INFINITY)) return 0;
+    if (top == INT_MIN) return 0;
     real sum = R(0.0);
     for (int j = 0; j < LSQT_NB; j++) {
-        const real p = exp(e[j] - top), mt = band_tab(c, LSQT_BAND_MUT(n, j, mi));
-        rb[j] *= p, sum += rb[j];
-        wb[j] *= collided ? (mt > R(0.0) ? p * (band_tab(c, LSQT_BAND_MUS(n, j, mi)) / mt) : R(0.0)) : p;
+        const real mt = band_tab(c, LSQT_BAND_MUT(n, j, mi));
+        const real own = rb[j] > R(0.0) ? wb[j] / rb[j] : R(0.0);
+        if (!(rb[j] > R(0.0)) || (collided && !(mt > R(0.0)))) {
+            rb[j] = wb[j] = R(0.0);
+            continue;
+        }
+        const int x = ilogb(rb[j]);
+        rb[j] = exp2(e[j] + (real)(x - top)) * ldexp(rb[j], -x) * (collided ? mt : R(1.0));
+        wb[j] = own * rb[j] * (collided ? band_tab(c, LSQT_BAND_MUS(n, j, mi)) / mt : R(1.0));
+        sum += rb[j];
     }
+    if (!(sum > R(0.0))) return 0;
     const real inv = (real)LSQT_NB / sum;
     int live = 0;
     for (int j = 0; j < LSQT_NB; j++) rb[j] *= inv, wb[j] *= inv, live |= wb[j] > R(0.0);

@@ -1,0 +1,470 @@
+/* Bands that share their paths (band blocks: docs/design.md, 3.7; kernels/bands.cl,
+ * host/sim/band_blocks.c), every band against its own independent reference: the
+ * adding-doubling method (tests/ref_adding.h), which owes nothing to the program.
+ *
+ * Bands that differ only in their factors (a Lambertian's fR, an interior medium's mus and
+ * mua) walk each path once for the whole block: one band's free flights and layer side
+ * for all of them, each band with its own weight along the path, and each vertex's
+ * next-event terms spread to every band with its factor and its own extra transmittance.
+ * Each band's values must be its own stack's, as if it had walked alone. Here ONE run of
+ * each stack holds all its bands in one block (LSQT_BAND_BLOCK is set to 16, the default
+ * width), and each band is checked as test_media_stacks checks a one-band run: lit at
+ * theta_o = 0, 60 and 85 degrees, the RAW value f at theta_i = 0, 40, 70, 80, 87 and 89
+ * degrees, at azimuths 0, 90 and 180 from wo's, on both sides where the stack transmits.
+ *
+ *   albedo      one HG slab (g 0.6, tau 1, 0.8 thick) between null layers, four bands of
+ *               equal extinction and albedo 0, 0.5, 0.9 and 0.999: one extinction, the
+ *               bands differ only in what a collision leaves of their weights; the
+ *               albedo-0 band shares its paths with one that scatters hundreds of times.
+ *   extinction  an HG slab (g 0.6, 1.6 thick) of optical thickness 0.02, 0.2 and 2 (100:1:
+ *               a band's flights drawn for another's extinction weigh far off 1), albedo
+ *               0.9, 0.6, 0.95, over an opaque Lambertian of fR 0.1, 0.5, 0.8 (the floor's
+ *               factor per band).
+ *   extinction through  the same slab with nothing below: the bands' transmission, and
+ *               each band's own extra transmittance towards the directions below.
+ *   dust        tools/bench_bands.py's dusty coat at three bands: HG g 0.6, tau 2.0, 1.6,
+ *               1.2, albedo 0.98, 0.8, 0.6, 1 thick, over a Lambertian of fR 0.7, 0.4, 0.1.
+ *
+ *   test_band_blocks quick   the release suite's: the four stacks in float, 2^19 paths a
+ *                            slice (8-10 s on two cores with the kernels cached). The
+ *                            means over azimuths have a median relative standard error
+ *                            of 0.2 % (at most 0.8 %): a 1-2 % bias fails them.
+ *   test_band_blocks power   power (CI): the four at 2^22 paths a slice, and the
+ *                            reference's resolution at every band's stack (55-60 s).
+ *                            Median 0.08 % (at most 0.3 %): a 0.5 % bias fails.
+ *
+ * Checks, per band: per direction |f - ref| <= ZD sigma + ref REF_TOL; per (slice, side,
+ * theta_i) the mean of f/ref over the azimuths, per (slice, side) its mean over every
+ * direction, and per slice the analog R, T and delta_T, within ZA sigma + REF_TOL. ZD, ZA:
+ * Student t (31 degrees of freedom) for a family-wise false alarm rate of 1e-3 per
+ * section (tests/family_stats.h). REF_TOL bounds the reference's error (test_media_stacks
+ * reference checks the reference itself; the power section its resolution here). A band of
+ * albedo 0 scatters nothing: its f and R must be exactly 0 and its T exactly its delta_T
+ * (a neighbour's coefficient or factor leaking into it shows at once).
+ * Each band's standard errors of f/ref over every direction and of R are at most ERR_CAP_F
+ * and ERR_CAP_R (scaled to the section's paths): weights that run wild, with estimates too
+ * noisy for any z to fail, are caught there.
+ * That the paths were shared: the stack's bands make one block (lsqt_band_blocks), and
+ * every band's work counters (events and next-event evaluations per path, the block's
+ * path's, counted for each of its bands) are equal: bands walked apart would differ.
+ * What a section can see: it prints, per band and slice, the median relative standard
+ * error of f per direction and of the means; a bias of ZA times that is caught.
+ * `test_band_blocks SECTION N` adds N to every seed (to see that the tolerances hold). */
+#include "family_stats.h"
+#include "ref_adding.h"
+
+#include "lsqt/band_blocks.h"
+#include "lsqt/state.h"
+
+/* The reference's error bound and settings: nodes per panel, Fourier modes, the thickest
+ * start of the doubling. Against a reference with 1.5 times the nodes and modes and a
+ * start 10 times thinner (FINE_*) they differ by less than 1e-5 at every band's stack,
+ * and the last quarter of the modes adds less than 1e-6 (the power section checks both).
+ * 24 modes, not test_media_stacks's 16: with g 0.6 in every band, 16 modes' last quarter
+ * is 3e-5 (their error against FINE_* is still 3e-6). */
+#define REF_TOL 1e-4
+#define REF_T0 1e-7
+#define FINE_T0 1e-8
+enum { REF_PER_PANEL = 4, REF_MODES = 24, FINE_PER_PANEL = 6, FINE_MODES = 36 };
+
+/* The largest standard error of a band's mean of f/ref over every direction on a side
+ * (ERR_CAP_F, relative) and of its R (ERR_CAP_R), at CAP_PATHS paths a slice, scaled by
+ * 1/sqrt(paths): the quick section's are at most 1.2 % and 1.1e-3. */
+#define ERR_CAP_F 0.03
+#define ERR_CAP_R 0.005
+#define CAP_PATHS (1u << 19)
+
+/* ------------------------------------------------------------------ the stacks */
+
+enum { NTH = 6, NWI = 1 + 3 * (NTH - 1), NWI_T = 2 * NWI, NS = 3, MAX_BANDS = 4 };
+static const double TH_I[NTH] = {0, 40, 70, 80, 87, 89}, PH_I[3] = {0, 90, 180};
+static const double DEG_O[NS] = {0, 60, 85};
+
+/* One HG slab of thickness d between null layers, or over an opaque Lambertian floor;
+ * per band its optical thickness, albedo and the floor's fR. */
+typedef struct {
+    const char *name;
+    int nb;
+    double d, g;
+    double tau[MAX_BANDS], om[MAX_BANDS];
+    int floor;
+    double floor_fr[MAX_BANDS];
+} band_case;
+
+static const band_case ALBEDO = {"albedo", 4, 0.8, 0.6, {1.0, 1.0, 1.0, 1.0}, {0.0, 0.5, 0.9, 0.999}, 0, {0}};
+static const band_case EXTINCTION = {
+    "extinction", 3, 1.6, 0.6, {0.02, 0.2, 2.0}, {0.9, 0.6, 0.95}, 1, {0.1, 0.5, 0.8}};
+/* the same slab with nothing below: its bands' transmission, and each band's extra
+ * transmittance towards the directions below */
+static const band_case EXTINCTION_THROUGH = {
+    "extinction through", 3, 1.6, 0.6, {0.02, 0.2, 2.0}, {0.9, 0.6, 0.95}, 0, {0}};
+static const band_case DUST = {"dust", 3, 1.0, 0.6, {2.0, 1.6, 1.2}, {0.98, 0.8, 0.6}, 1, {0.7, 0.4, 0.1}};
+
+/* A band that can scatter nothing: no scattering in the slab and no floor */
+static int dark_band(const band_case *c, int b) { return c->om[b] == 0.0 && !c->floor; }
+
+/* "k=v1,v2,..." for the bands' values */
+static int put_list(char *text, size_t size, const char *key, const double *v, int n)
+{
+    int at = snprintf(text, size, " %s=", key);
+    for (int b = 0; b < n; b++) at += snprintf(text + at, size - (size_t)at, b ? ",%.17g" : "%.17g", v[b]);
+    return at;
+}
+
+static void case_text(const band_case *c, char *text, size_t size)
+{
+    double mus[MAX_BANDS], mua[MAX_BANDS];
+    for (int b = 0; b < c->nb; b++) {
+        const double mut = c->tau[b] / c->d;
+        mus[b] = c->om[b] * mut, mua[b] = mut - mus[b];
+    }
+    int at = snprintf(text, size, "Medium\nLayer z=%.17g NullBsdf\nMedium", c->d);
+    at += put_list(text + at, size - (size_t)at, "mus", mus, c->nb);
+    at += put_list(text + at, size - (size_t)at, "mua", mua, c->nb);
+    at += snprintf(text + at, size - (size_t)at, " HenyeyGreensteinPhase g=%.17g\n", c->g);
+    if (c->floor) {
+        at += snprintf(text + at, size - (size_t)at, "Layer z=0 LambertianBsdf");
+        at += put_list(text + at, size - (size_t)at, "fR", c->floor_fr, c->nb);
+        snprintf(text + at, size - (size_t)at, " fT=0\nMedium\n");
+    } else {
+        snprintf(text + at, size - (size_t)at, "Layer z=0 NullBsdf\nMedium\n");
+    }
+}
+
+/* The test's incident directions (up, then down): (side, theta_i) group of each in grp[]. */
+static void case_dirs(double (*d)[3], int *grp)
+{
+    int n = 0;
+    for (int side = 0; side < 2; side++)
+        for (int t = 0; t < NTH; t++)
+            for (int p = 0; p < (t ? 3 : 1); p++, n++) {
+                const double th = TH_I[t] * PI / 180.0, ph = PH_I[p] * PI / 180.0;
+                /* as the state keeps them: float */
+                d[n][0] = (float)(sin(th) * cos(ph)), d[n][1] = (float)(sin(th) * sin(ph));
+                d[n][2] = (float)(side ? -cos(th) : cos(th));
+                grp[n] = side * NTH + t;
+            }
+}
+
+/* The reference's grid: the quadrature, then the directions' |z| and the slices' cosines. */
+static void case_grid(ad_grid *G, int per_panel, int modes)
+{
+    double d[NWI_T][3], extra[NTH + NS];
+    int grp[NWI_T], n = 0;
+    case_dirs(d, grp);
+    for (int k = 0; k < NWI; k++)
+        if (k == 0 || fabs(d[k][2]) != extra[n - 1]) extra[n++] = fabs(d[k][2]);
+    for (int s = 0; s < NS; s++) extra[n++] = cos(DEG_O[s] * PI / 180.0);
+    ad_grid_init(G, per_panel, modes, extra, n);
+}
+
+/* Band b's own stack's reference. */
+static void band_ref(const band_case *c, int b, int per_panel, int modes, double t0, ad_ref *r)
+{
+    ad_grid G;
+    case_grid(&G, per_panel, modes);
+    const ad_stack_desc S = {1, {c->tau[b]}, {c->om[b]}, {c->g}, c->floor, c->floor ? c->floor_fr[b] : 0.0};
+    ad_ref_make(r, &G, &S, t0);
+}
+
+/* Reference f at state direction d (float components) for slice angle deg. */
+static double ref_f(const ad_ref *r, double deg, const double d[3], int modes)
+{
+    const double mu0 = cos(deg * PI / 180.0);
+    return ad_ref_f(r, mu0, d[2], atan2(d[1], d[0]) - PI, modes);
+}
+
+/* Parses the bands of TEXT, checks that they make one block of c->nb, and simulates them
+ * in one run at the slices DEG_O and the directions dirs; fills *st (every band) and
+ * returns the estimates (band after band), or NULL after a failed run. */
+static lsqt_slice_est *run_bands(const band_case *c, const char *text, int n_wi, const double (*dirs)[3],
+                                 uint64_t paths, uint64_t seed, lsqt_state *st)
+{
+    lsqt_assembly a;
+    lsqt_diag diag;
+    memset(&diag, 0, sizeof diag);
+    if (lsqt_parse_bands(text, strlen(text), "test", NULL, 0, ".", &a, &diag)) {
+        fprintf(stderr, "%s: parse failed: %s\n", c->name, diag.error);
+        exit(1);
+    }
+    CHECK(lsqt_assembly_bands(&a) == c->nb, "%s: %d bands, not %d", c->name, lsqt_assembly_bands(&a), c->nb);
+    lsqt_band_block *blocks = NULL;
+    const int n_blocks = lsqt_band_blocks(&a, LSQT_BAND_BLOCK_MAX, &blocks);
+    CHECK(n_blocks == 1 && blocks[0].nb == c->nb, "%s: %d bands in %d blocks (the first of %d): they do not share",
+          c->name, c->nb, n_blocks, n_blocks > 0 ? blocks[0].nb : 0);
+    free(blocks);
+    const size_t n = lsqt_assembly_canonical(&a, NULL, 0);
+    char *canon = malloc(n + 1);
+    lsqt_assembly_canonical(&a, canon, n + 1);
+    if (lsqt_state_init_bands(st, canon, lsqt_assembly_hash(&a), seed, NS, n_wi, lsqt_assembly_transmits(&a),
+                              lsqt_assembly_bands(&a), NULL))
+        exit(1);
+    free(canon);
+    st->use_double = 0;
+    for (int s = 0; s < NS; s++) {
+        st->theta_o[s] = DEG_O[s] * PI / 180.0;
+        float *w = st->wi + (size_t)s * (size_t)n_wi * 4;
+        for (int k = 0; k < n_wi; k++) {
+            w[4 * k] = (float)dirs[k][0], w[4 * k + 1] = (float)dirs[k][1], w[4 * k + 2] = (float)dirs[k][2];
+            w[4 * k + 3] = 0.0f;
+        }
+    }
+    st->seed += seed_offset;
+    /* a failed run (e.g. weights beyond the tallies' range) is a failed check of this stack */
+    lsqt_sim_opts o = {0, 0.0, 0, NULL, NULL, 0, 0.0, 0.0, NULL, NULL};
+    lsqt_sim_stats stats;
+    char err[1024];
+    const int rc = lsqt_simulate(&fixture_cx, &a, st, paths, &o, &stats, err, sizeof err);
+    lsqt_assembly_free(&a);
+    CHECK(rc == 0, "%s: the run failed: %s", c->name, err);
+    if (rc) return NULL;
+    CHECK(st->flags == 0, "%s: flags %u", c->name, st->flags);
+    return lsqt_estimates(st);
+}
+
+/* Median of n values (sorted in place). */
+static double median(double *v, int n)
+{
+    for (int i = 1; i < n; i++)
+        for (int j = i; j > 0 && v[j - 1] > v[j]; j--) {
+            const double t = v[j];
+            v[j] = v[j - 1], v[j - 1] = t;
+        }
+    return n ? (n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2])) : 0.0;
+}
+
+/* Simulates the stack's bands in one run and checks each band (count_only: only counts
+ * the checks). */
+static void case_check(const band_case *c, uint64_t paths, uint64_t seed, int count_only)
+{
+    /* an opaque stack: the upward directions only (the first NWI) */
+    const int nwi = c->floor ? NWI : NWI_T, ngrp = c->floor ? NTH : 2 * NTH, nsides = c->floor ? 1 : 2;
+    for (int b = 0; b < c->nb; b++) {
+        if (dark_band(c, b)) {
+            n_agg += NS; /* delta_T; the rest is exact */
+            continue;
+        }
+        n_dir += NS * nwi, n_agg += NS * (ngrp + nsides + 3);
+    }
+    if (count_only) return;
+    char text[2048];
+    case_text(c, text, sizeof text);
+    double dirs[NWI_T][3];
+    int grp[NWI_T];
+    case_dirs(dirs, grp);
+    lsqt_state st;
+    const double t0 = check_now();
+    lsqt_slice_est *e = run_bands(c, text, nwi, (const double(*)[3])dirs, paths, seed, &st);
+    const double secs = check_now() - t0;
+    if (!e) {
+        lsqt_state_free(&st);
+        return;
+    }
+    CHECK(st.n_bands == c->nb && st.transmits == !c->floor && st.n_wi == nwi,
+          "%s: %d bands, transmits %d, %d directions", c->name, st.n_bands, st.transmits, st.n_wi);
+    /* the paths were shared: every band's work counters are the block's */
+    for (int b = 1; b < c->nb; b++)
+        for (int s = 0; s < NS; s++) {
+            const lsqt_slice_est *x = &e[s], *y = &e[b * NS + s];
+            CHECK(x->layer_events == y->layer_events && x->medium_events == y->medium_events &&
+                      x->nee_evaluations == y->nee_evaluations,
+                  "%s to=%g: band %d's work (%.6g layer, %.6g medium events, %.6g evaluations) is not band 1's "
+                  "(%.6g, %.6g, %.6g): the bands did not share their paths",
+                  c->name, DEG_O[s], b + 1, y->layer_events, y->medium_events, y->nee_evaluations, x->layer_events,
+                  x->medium_events, x->nee_evaluations);
+        }
+    printf("  %s: %d bands in one run, %.1f s; %.2f medium events per path at to=0 (every band's)\n", c->name, c->nb,
+           secs, e[0].medium_events);
+    for (int b = 0; b < c->nb; b++) {
+        const lsqt_state v = lsqt_state_band(&st, b);
+        const lsqt_slice_est *eb = e + (size_t)b * NS;
+        char who[96];
+        if (c->floor)
+            snprintf(who, sizeof who, "%s band %d (tau %g, albedo %g, fR %g)", c->name, b + 1, c->tau[b], c->om[b],
+                     c->floor_fr[b]);
+        else
+            snprintf(who, sizeof who, "%s band %d (tau %g, albedo %g)", c->name, b + 1, c->tau[b], c->om[b]);
+        if (dark_band(c, b)) {
+            for (int s = 0; s < NS; s++) {
+                const double mu0 = cos(DEG_O[s] * PI / 180.0), dT = exp(-c->tau[b] / mu0);
+                int nonzero = 0;
+                double most = 0.0;
+                for (int k = 0; k < nwi; k++)
+                    nonzero += eb[s].f[k].mean != 0.0, most = fmax(most, fabs(eb[s].f[k].mean));
+                CHECK(nonzero == 0, "%s to=%g: f is not 0 at %d directions (up to %.3g)", who, DEG_O[s], nonzero,
+                      most);
+                CHECK(eb[s].R.mean == 0.0 && eb[s].T.mean == eb[s].delta_T.mean,
+                      "%s to=%g: R %.6g (must be 0), T %.8g (must be delta_T %.8g)", who, DEG_O[s], eb[s].R.mean,
+                      eb[s].T.mean, eb[s].delta_T.mean);
+                const double sd_dT = fmax(eb[s].delta_T.err, sqrt(dT * (1.0 - dT) / (double)paths));
+                CHECK(fabs(eb[s].delta_T.mean - dT) <= ZA * sd_dT + 1e-6 * dT, "%s to=%g: delta_T %.6g +- %.2g vs %.6g",
+                      who, DEG_O[s], eb[s].delta_T.mean, sd_dT, dT);
+                printf("  %-44s to=%2.0f: f and R exactly 0, T = delta_T %.5f (ref %.5f, z = %.2f)\n", who, DEG_O[s],
+                       eb[s].delta_T.mean, dT, (eb[s].delta_T.mean - dT) / sd_dT);
+            }
+            continue;
+        }
+        ad_ref r;
+        band_ref(c, b, REF_PER_PANEL, REF_MODES, REF_T0, &r);
+        for (int s = 0; s < NS; s++) {
+            const double mu0 = cos(DEG_O[s] * PI / 180.0);
+            double ref[NWI_T], rel_d[NWI_T], rel_a[2 * NTH], zmax = 0.0, amax = 0.0, pool[2] = {0, 0};
+            for (int k = 0; k < nwi; k++) {
+                ref[k] = ref_f(&r, DEG_O[s], dirs[k], REF_MODES);
+                const double f = eb[s].f[k].mean, sg = eb[s].f[k].err, dev = fabs(f - ref[k]);
+                const double z = (dev - REF_TOL * ref[k]) / sg;
+                zmax = fmax(zmax, dev / sg);
+                rel_d[k] = sg / ref[k];
+                CHECK(sg > 0 && z <= ZD,
+                      "%s to=%g wi=(%.4f %.4f %.4f): f %.6g +- %.2g vs reference %.6g: %+.2f %%, z = %.2f", who,
+                      DEG_O[s], dirs[k][0], dirs[k][1], dirs[k][2], f, sg, ref[k], 100 * (f / ref[k] - 1),
+                      (f - ref[k]) / sg);
+            }
+            /* per (side, theta_i): the mean of f/ref over the azimuths */
+            for (int g = 0; g < ngrp; g++) {
+                int ks[3], n = 0;
+                for (int k = 0; k < nwi; k++)
+                    if (grp[k] == g) ks[n++] = k;
+                const lsqt_est A = ratio_over(&v, s, ks, n, ref, NULL, 1.0);
+                amax = fmax(amax, fabs(A.mean - 1.0) / A.err);
+                rel_a[g] = A.err;
+                CHECK(A.err > 0 && fabs(A.mean - 1.0) <= ZA * A.err + REF_TOL,
+                      "%s to=%g %s theta_i=%g: mean f/ref %.5f +- %.2g (%+.2f %%, z = %.2f)", who, DEG_O[s],
+                      g < NTH ? "up" : "down", TH_I[g % NTH], A.mean, A.err, 100 * (A.mean - 1), (A.mean - 1) / A.err);
+            }
+            /* per side: the mean of f/ref over every direction */
+            for (int side = 0; side < nsides; side++) {
+                int ks[NWI], n = 0;
+                for (int k = 0; k < nwi; k++)
+                    if (grp[k] / NTH == side) ks[n++] = k;
+                const lsqt_est A = ratio_over(&v, s, ks, n, ref, NULL, 1.0);
+                amax = fmax(amax, fabs(A.mean - 1.0) / A.err);
+                pool[side] = A.err;
+                CHECK(A.err > 0 && fabs(A.mean - 1.0) <= ZA * A.err + REF_TOL,
+                      "%s to=%g %s, every direction: mean f/ref %.5f +- %.2g (%+.2f %%, z = %.2f)", who, DEG_O[s],
+                      side ? "down" : "up", A.mean, A.err, 100 * (A.mean - 1), (A.mean - 1) / A.err);
+            }
+            /* analog: R, T (with the unscattered beam) and delta_T */
+            double Rr, Tr;
+            ad_ref_hemi(&r, mu0, &Rr, &Tr);
+            const double dT = c->floor ? 0.0 : exp(-c->tau[b] / mu0);
+            Tr += dT;
+            CHECK(fabs(eb[s].R.mean - Rr) <= ZA * eb[s].R.err + REF_TOL * Rr,
+                  "%s to=%g: R %.6f +- %.2g vs %.6f (z = %.2f)", who, DEG_O[s], eb[s].R.mean, eb[s].R.err, Rr,
+                  (eb[s].R.mean - Rr) / eb[s].R.err);
+            CHECK(fabs(eb[s].T.mean - Tr) <= ZA * eb[s].T.err + REF_TOL * Tr,
+                  "%s to=%g: T %.6f +- %.2g vs %.6f (z = %.2f)", who, DEG_O[s], eb[s].T.mean, eb[s].T.err, Tr,
+                  (eb[s].T.mean - Tr) / eb[s].T.err);
+            /* delta_T: binomial; its batch-means error is 0 where no path came through */
+            const double sd_dT = fmax(eb[s].delta_T.err, sqrt(dT * (1.0 - dT) / (double)paths));
+            CHECK(fabs(eb[s].delta_T.mean - dT) <= ZA * sd_dT + 1e-6 * dT, "%s to=%g: delta_T %.6g +- %.2g vs %.6g",
+                  who, DEG_O[s], eb[s].delta_T.mean, sd_dT, dT);
+            /* the precision the section needs: weights that run wild give estimates too
+             * noisy for any z to fail */
+            const double scale = sqrt((double)CAP_PATHS / (double)paths);
+            CHECK(pool[0] <= ERR_CAP_F * scale && pool[1] <= ERR_CAP_F * scale && eb[s].R.err <= ERR_CAP_R * scale,
+                  "%s to=%g: standard errors %.3g (f/ref up), %.3g (down), R %.3g: more than %.3g, %.3g", who,
+                  DEG_O[s], pool[0], pool[1], eb[s].R.err, ERR_CAP_F * scale, ERR_CAP_R * scale);
+            /* what the section can see: the typical relative standard error of f, of the
+             * means over azimuths and over every direction, and of R */
+            const double md = median(rel_d, nwi), ma = median(rel_a, ngrp);
+            printf("  %-44s to=%2.0f: max |z| %.2f per direction, %.2f per mean; R %.5f (ref %.5f), T %.5f (ref %.5f); "
+                   "rel. s.e. %.2f %% per direction, %.2f %% per theta_i, %.2f %% all up, R %.2f %%\n",
+                   who, DEG_O[s], zmax, amax, eb[s].R.mean, Rr, eb[s].T.mean, Tr, 100 * md, 100 * ma, 100 * pool[0],
+                   100 * eb[s].R.err / Rr);
+        }
+        ad_ref_free(&r);
+    }
+    lsqt_estimates_free(e, NS);
+    lsqt_state_free(&st);
+}
+
+/* The reference at the sections' settings against a finer one (FINE_*: 1.5 times the
+ * nodes and modes, a start 10 times thinner) and against its own first 3/4 of the modes,
+ * at every direction and slice of the test, for every band's stack: each below
+ * REF_TOL / 10. */
+static void check_resolution(const band_case *c)
+{
+    double d[NWI_T][3];
+    int grp[NWI_T];
+    case_dirs(d, grp);
+    const int nwi = c->floor ? NWI : NWI_T;
+    for (int b = 0; b < c->nb; b++) {
+        if (dark_band(c, b)) continue;
+        ad_ref a, f;
+        band_ref(c, b, REF_PER_PANEL, REF_MODES, REF_T0, &a);
+        band_ref(c, b, FINE_PER_PANEL, FINE_MODES, FINE_T0, &f);
+        double dq = 0.0, dm = 0.0;
+        for (int s = 0; s < NS; s++)
+            for (int k = 0; k < nwi; k++) {
+                const double x = ref_f(&a, DEG_O[s], d[k], REF_MODES);
+                dq = fmax(dq, fabs(x / ref_f(&f, DEG_O[s], d[k], FINE_MODES) - 1.0));
+                dm = fmax(dm, fabs(ref_f(&a, DEG_O[s], d[k], REF_MODES * 3 / 4) / x - 1.0));
+            }
+        CHECK(dq < REF_TOL / 10 && dm < REF_TOL / 10,
+              "reference %s band %d: %.3g from the finer one, truncation %.3g (>= %g)", c->name, b + 1, dq, dm,
+              REF_TOL / 10);
+        printf("  reference %s band %d: %.2g from the finer one, %.2g from 3/4 of its modes (largest relative "
+               "difference)\n",
+               c->name, b + 1, dq, dm);
+        ad_ref_free(&a), ad_ref_free(&f);
+    }
+}
+
+/* ---------------------------------------------------------------- sections */
+
+static void section_quick(int count_only)
+{
+    case_check(&ALBEDO, (uint64_t)1 << 19, 4001, count_only);
+    case_check(&EXTINCTION, (uint64_t)1 << 19, 4002, count_only);
+    case_check(&EXTINCTION_THROUGH, (uint64_t)1 << 19, 4004, count_only);
+    case_check(&DUST, (uint64_t)1 << 19, 4003, count_only);
+}
+
+static void section_power(int count_only)
+{
+    if (!count_only) {
+        check_resolution(&ALBEDO);
+        check_resolution(&EXTINCTION);
+        check_resolution(&EXTINCTION_THROUGH);
+        check_resolution(&DUST);
+    }
+    case_check(&ALBEDO, (uint64_t)1 << 22, 4101, count_only);
+    case_check(&EXTINCTION, (uint64_t)1 << 22, 4102, count_only);
+    case_check(&EXTINCTION_THROUGH, (uint64_t)1 << 22, 4104, count_only);
+    case_check(&DUST, (uint64_t)1 << 22, 4103, count_only);
+}
+
+int main(int argc, char **argv)
+{
+    static const char *names[] = {"quick", "power"};
+    static void (*const run[])(int) = {section_quick, section_power};
+    int sec = -1;
+    for (int i = 0; argc >= 2 && i < 2; i++)
+        if (!strcmp(argv[1], names[i])) sec = i;
+    if (sec < 0 || argc > 3) {
+        fprintf(stderr, "usage: test_band_blocks quick|power [SEED_OFFSET]\n");
+        return 2;
+    }
+    if (argc == 3) seed_offset = strtoull(argv[2], NULL, 10);
+    /* the default width, whatever the caller's environment says */
+    setenv("LSQT_BAND_BLOCK", "16", 1);
+    run[sec](1);
+    ZD = z_family(n_dir, 5e-4), ZA = z_family(n_agg, 5e-4);
+    printf("%s: %d checks of single directions, |z| <= %.2f; %d aggregates, |z| <= %.2f (Student t, 31 dof, "
+           "family 1e-3)\n",
+           names[sec], n_dir, ZD, n_agg, ZA);
+    fixture_open();
+    /* The GPU path runs every band alone (one band a program): nothing shares there. */
+    const char *gp = getenv("LSQT_GPU_PATH");
+    if (gp && *gp ? strcmp(gp, "0") != 0 : !fixture_cx.dev.is_cpu) {
+        printf("the GPU path walks every band alone: skipped\n");
+        lsqt_context_release(&fixture_cx);
+        return 77;
+    }
+    run[sec](0);
+    lsqt_context_release(&fixture_cx);
+    char what[64];
+    snprintf(what, sizeof what, "test_band_blocks %s", names[sec]);
+    return check_finish(what);
+}
