@@ -93,13 +93,13 @@ LSQT_INLINE void band_depths(const walk_ctx *c, int b, int mi, real h, int li, r
 {
     const int n = c->scene->n_layers;
     if (mi >= 0) {
-        const real mut = band_tab(c, LSQT_BAND_MUT(n, b, mi)), th = c->media[mi].thickness;
-        *dtu = band_tab(c, LSQT_BAND_TAU_ABOVE(n, b, mi)) + mut * (th - h) - tu;
-        *dtd = band_tab(c, LSQT_BAND_TAU_BELOW(n, b, mi)) + mut * h - td;
+        const real mut = band_tab(c, LSQT_BAND_MUT(n, LSQT_NBP, b, mi)), th = c->media[mi].thickness;
+        *dtu = band_tab(c, LSQT_BAND_TAU_ABOVE(n, LSQT_NBP, b, mi)) + mut * (th - h) - tu;
+        *dtd = band_tab(c, LSQT_BAND_TAU_BELOW(n, LSQT_NBP, b, mi)) + mut * h - td;
     } else {
-        *dtu = band_tab(c, LSQT_BAND_TAU_ABOVE(n, b, li)) + band_tab(c, LSQT_BAND_MUT(n, b, li)) * c->media[li].thickness - tu;
-        *dtd = band_tab(c, LSQT_BAND_TAU_BELOW(n, b, li + 1)) +
-               band_tab(c, LSQT_BAND_MUT(n, b, li + 1)) * c->media[li + 1].thickness - td;
+        *dtu = band_tab(c, LSQT_BAND_TAU_ABOVE(n, LSQT_NBP, b, li)) + band_tab(c, LSQT_BAND_MUT(n, LSQT_NBP, b, li)) * c->media[li].thickness - tu;
+        *dtd = band_tab(c, LSQT_BAND_TAU_BELOW(n, LSQT_NBP, b, li + 1)) +
+               band_tab(c, LSQT_BAND_MUT(n, LSQT_NBP, b, li + 1)) * c->media[li + 1].thickness - td;
     }
     /* Rounding may leave a hair below 0 where the depths are equal. */
     *dtu = fmax(*dtu, R(0.0)), *dtd = fmax(*dtd, R(0.0));
@@ -109,7 +109,7 @@ LSQT_INLINE void band_depths(const walk_ctx *c, int b, int mi, real h, int li, r
 LSQT_INLINE real side_probability(const walk_ctx *c, int b, int li)
 {
     const int n = c->scene->n_layers;
-    const real fs = band_tab(c, LSQT_BAND_FS(n, b, li)), fo = band_tab(c, LSQT_BAND_FO(n, b, li));
+    const real fs = band_tab(c, LSQT_BAND_FS(n, LSQT_NBP, b, li)), fo = band_tab(c, LSQT_BAND_FO(n, LSQT_NBP, b, li));
     return fs + fo > R(0.0) ? fs / (fs + fo) : R(0.5);
 }
 
@@ -128,8 +128,8 @@ LSQT_INLINE int layer_vertex_bands(const walk_ctx *c, int li, real3 d, real *wb,
     __global const real *tab = c->tab + LSQT_LAYER_TAB(li);
     real cs[LSQT_NB], co[LSQT_NB], dtu[LSQT_NB], dtd[LSQT_NB];
     for (int b = 0; b < LSQT_NB; b++) {
-        cs[b] = wb[b] * band_tab(c, LSQT_BAND_FS(n, b, li));
-        co[b] = wb[b] * band_tab(c, LSQT_BAND_FO(n, b, li));
+        cs[b] = wb[b] * band_tab(c, LSQT_BAND_FS(n, LSQT_NBP, b, li));
+        co[b] = wb[b] * band_tab(c, LSQT_BAND_FO(n, LSQT_NBP, b, li));
         band_depths(c, b, -1, R(0.0), li, tau_up, tau_down, &dtu[b], &dtd[b]);
     }
     c->work[WORK_LAYER]++;
@@ -171,57 +171,49 @@ LSQT_INLINE int layer_vertex_bands(const walk_ctx *c, int li, real3 d, real *wb,
 
 /* A free flight of length t in medium mi, drawn from the hero band's extinction, ended
  * by a collision (collided) or by the medium's boundary. Spectral MIS: each band's
- * weight becomes its own transport over the bands' mixture of flight densities (the
+ * weight becomes its own transport over the bands' mixture of densities of the path (the
  * balance heuristic), kept as wb (the weights) and rb (each band's density of the path
- * so far over the mixture's, mean 1): a band's density of this flight is
- * mut e^-(mut t) for a collision and e^-(mut t) for a boundary, its transport the same
- * with mus for mut. Both scale by a common factor that the mean of rb removes, so they
- * are taken relative to the largest (no overflow at any depth). Returns whether any band
- * still carries weight. */
+ * over the mixture's, mean 1). A band's density of this flight is mut e^-(mut t) for a
+ * collision and e^-(mut t) for a boundary; its weight keeps its ratio to rb (its weight
+ * on its own paths), times its albedo at a collision. The products are taken in log2,
+ * relative to the largest (no overflow at any depth; e held within +-1e4: a flight whose
+ * depths differ by more, e^-7000, weighs the same as at 1e4), LSQT_VW bands at a time.
+ * Returns whether any band still carries weight. */
 LSQT_INLINE int flight_bands(const walk_ctx *c, int mi, real t, int collided, real *wb, real *rb)
 {
     const int n = c->scene->n_layers;
-    const real mt_h = band_tab(c, LSQT_BAND_MUT(n, c->hero, mi));
+    __global const real *mts = c->bw + LSQT_BAND_MUT(n, LSQT_NBP, 0, mi), *muss = c->bw + LSQT_BAND_MUS(n, LSQT_NBP, 0, mi);
+    const real mt_h = mts[c->hero];
     /* One extinction in every band: every band's density is the hero's (rb stays), and a
      * collision weighs each band by its albedo. */
     int alike = 1;
-    for (int j = 0; j < LSQT_NB; j++) alike &= band_tab(c, LSQT_BAND_MUT(n, j, mi)) == mt_h;
+    for (int j = 0; j < LSQT_NB; j++) alike &= mts[j] == mt_h;
     if (alike) {
         if (!collided) return 1;
         int live = 0;
-        for (int j = 0; j < LSQT_NB; j++) wb[j] *= band_tab(c, LSQT_BAND_MUS(n, j, mi)) / mt_h, live |= wb[j] > R(0.0);
+        for (int j = 0; j < LSQT_NB; j++) wb[j] *= muss[j] / mt_h, live |= wb[j] > R(0.0);
         return live;
     }
-    /* Each band's density relative to the hero's: 2^e[j] times mt (a collision) or 1. The
-     * products rb[j] 2^e[j] are taken as 2^(e[j] + ilogb(rb[j]) - top) times rb[j]'s
-     * mantissa, top the largest binary exponent among them, so none overflows or
-     * vanishes whatever the depths (e is held within +-1e4: a flight whose depths differ
-     * by more, e^-7000, weighs the same as at 1e4). A band's weight keeps its ratio to rb,
-     * its weight on its own paths (bounded), times its albedo at a collision. */
-    real e[LSQT_NB];
-    int top = INT_MIN;
-    for (int j = 0; j < LSQT_NB; j++) {
-        const real mt = band_tab(c, LSQT_BAND_MUT(n, j, mi)), dm = mt - mt_h;
-        e[j] = dm == R(0.0) ? R(0.0) : clamp(-dm * t * LSQT_LOG2E, R(-1e4), R(1e4));
-        if (rb[j] > R(0.0) && (!collided || mt > R(0.0)))
-            top = max(top, (int)floor(e[j]) + ilogb(rb[j]) + (collided ? ilogb(mt) : 0));
+    real lv[LSQT_NBP], top = -INFINITY;
+    for (int j = 0; j < LSQT_NBP; j += LSQT_VW) {
+        const realv mt = vloadv(0, mts + j), dm = mt - mt_h;
+        realv v = select(clamp(dm * (-t * LSQT_LOG2E), R(-1e4), R(1e4)), (realv)(R(0.0)), dm == R(0.0));
+        v += log2(vloadv(0, rb + j));
+        if (collided) v += log2(mt);
+        vstorev(v, 0, lv + j);
     }
-    if (top == INT_MIN) return 0;
+    for (int j = 0; j < LSQT_NB; j++) top = fmax(top, lv[j]);
+    if (!(top > -INFINITY)) return 0;
+    for (int j = 0; j < LSQT_NBP; j += LSQT_VW) {
+        const realv p = exp2(vloadv(0, lv + j) - top), r = vloadv(0, rb + j), mt = vloadv(0, mts + j);
+        realv own = select((realv)(R(0.0)), vloadv(0, wb + j) / r, r > R(0.0));
+        if (collided) own *= select((realv)(R(0.0)), vloadv(0, muss + j) / mt, mt > R(0.0));
+        vstorev(p, 0, rb + j);
+        vstorev(own * p, 0, wb + j);
+    }
     real sum = R(0.0);
-    for (int j = 0; j < LSQT_NB; j++) {
-        const real mt = band_tab(c, LSQT_BAND_MUT(n, j, mi));
-        const real own = rb[j] > R(0.0) ? wb[j] / rb[j] : R(0.0);
-        if (!(rb[j] > R(0.0)) || (collided && !(mt > R(0.0)))) {
-            rb[j] = wb[j] = R(0.0);
-            continue;
-        }
-        const int x = ilogb(rb[j]);
-        rb[j] = exp2(e[j] + (real)(x - top)) * ldexp(rb[j], -x) * (collided ? mt : R(1.0));
-        wb[j] = own * rb[j] * (collided ? band_tab(c, LSQT_BAND_MUS(n, j, mi)) / mt : R(1.0));
-        sum += rb[j];
-    }
-    if (!(sum > R(0.0))) return 0;
-    const real inv = (real)LSQT_NB / sum;
+    for (int j = 0; j < LSQT_NB; j++) sum += rb[j];
+    const real inv = (real)LSQT_NB / sum; /* sum >= 1: the largest term is 1 */
     int live = 0;
     for (int j = 0; j < LSQT_NB; j++) rb[j] *= inv, wb[j] *= inv, live |= wb[j] > R(0.0);
     return live;

@@ -33,6 +33,9 @@
 #define LSQT_NB 1
 #endif
 #define LSQT_SUM_ROWS (LSQT_NB > 1 ? LSQT_NB + 1 : 1)
+/* The band count padded to the vector width: a block's per-band arrays and its table's
+ * rows are this long, so that bands.cl can take them LSQT_VW at a time. */
+#define LSQT_NBP LSQT_PAD(LSQT_NB, LSQT_VW)
 
 /* A work-item's work counters, in the order of the LSQT_T_LAYER_EVENTS... tallies. */
 #define WORK_LAYER (LSQT_T_LAYER_EVENTS - LSQT_T_LAYER_EVENTS)
@@ -49,7 +52,7 @@ typedef struct {
     __local real *sum;                 /* the current path's point estimates (CPU path; a band
                                           block's: the current vertex's, bands.cl) */
     __local real *bsum;                /* a band block's: each band's path sums, LSQT_NWI_PAD apart */
-    __global const real *bw;           /* a band block's table (LSQT_BAND_TAB_BAND), else unused */
+    __global const real *bw;           /* a band block's table (LSQT_BAND_AT), else unused */
     __local ulong *nee;                /* this work-item's point-estimate sums, low words (CPU path;
                                           a band block's: each band's, LSQT_NWI_PAD apart) */
     ulong *work;                       /* this work-item's work counters (LSQT_T_LAYER_EVENTS ...) */
@@ -415,6 +418,7 @@ LSQT_NOINLINE_CPU void nee_medium_bands(const walk_ctx *c, int mi, real h, real3
  * band b (0 in a one-band program) with weight w. */
 LSQT_INLINE void tally_exit(const walk_ctx *c, int b, real3 d, int up, int scattered, real w, __global ulong *hist)
 {
+    if (LSQT_NB > 1 && w == R(0.0)) return; /* a block's band that stopped earlier */
     acc_add_band(c, b, up ? LSQT_T_R : LSQT_T_T, w);
     if (nee_counting(c)) return;
     if (scattered) {
@@ -437,8 +441,8 @@ LSQT_INLINE void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulon
     real w = R(1.0), h = R(0.0);
 #if LSQT_NB > 1
     /* each band's weight, and its density of the path over the bands' mixture (bands.cl) */
-    real wb[LSQT_NB], rb[LSQT_NB];
-    for (int b = 0; b < LSQT_NB; b++) wb[b] = rb[b] = R(1.0);
+    real wb[LSQT_NBP], rb[LSQT_NBP];
+    for (int b = 0; b < LSQT_NBP; b++) wb[b] = rb[b] = b < LSQT_NB ? R(1.0) : R(0.0);
     (void)w;
 #endif
     int scattered = 0, at_layer = 1, layer = 0, medium = 0;
@@ -501,7 +505,7 @@ LSQT_INLINE void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulon
         /* The hero band's flight, every band's weight by spectral MIS (bands.cl); a
          * medium clear in every band is crossed as it is without bands. */
         if (c->bw[medium] > R(0.0)) {
-            const real mt_h = c->bw[LSQT_BAND_MUT(n, c->hero, medium)];
+            const real mt_h = c->bw[LSQT_BAND_MUT(n, LSQT_NBP, c->hero, medium)];
             const real s = mt_h > R(0.0) ? neg_log_unit(R(1.0) - rng_uniform(rng)) / mt_h : (real)INFINITY;
             if (d.z < R(0.0) ? s * -d.z < h : s * d.z < m->thickness - h) {
                 h = clamp(h + s * d.z, R(0.0), (real)m->thickness);

@@ -2,6 +2,7 @@
  * (include/lsqt/band_blocks.h; the kernels' side is kernels/bands.cl). */
 #include "lsqt/band_blocks.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -139,8 +140,8 @@ int lsqt_band_blocks(const lsqt_assembly *a, int width, lsqt_band_block **out)
     return count;
 }
 
-int lsqt_band_block_tables(const lsqt_assembly *a, const lsqt_band_block *blk, lsqt_dev_scene *scene,
-                           lsqt_dev_medium_d *media, lsqt_dev_layer_d *layers, double *bw)
+int lsqt_band_block_tables(const lsqt_assembly *a, const lsqt_band_block *blk, int nbp, double same_mut,
+                           lsqt_dev_scene *scene, lsqt_dev_medium_d *media, lsqt_dev_layer_d *layers, double *bw)
 {
     const int n = a->n_layers, first = blk->band[0];
     lsqt_device_tables(lsqt_assembly_band(a, first), scene, media, layers);
@@ -153,6 +154,28 @@ int lsqt_band_block_tables(const lsqt_assembly *a, const lsqt_band_block *blk, l
             return 1;
         }
         have = j + 1;
+    }
+    /* Extinctions within same_mut (relative) of a medium's least are the least (a band's
+     * mus + mua written as decimals to 6 digits may miss the others' sum by 1e-6): the
+     * kernels then see one extinction and take the flights' short way (bands.cl).
+     * Each band's depths are summed again as tables.c sums them, so equal extinctions
+     * give equal depths. */
+    for (int m = 1; m < n; m++) {
+        double least = INFINITY;
+        for (int j = 0; j < have; j++)
+            if (blk->band[j] >= 0 && t[j].media[m].mut < least) least = t[j].media[m].mut;
+        for (int j = 0; j < have; j++) {
+            lsqt_dev_medium_d *q = blk->band[j] >= 0 ? &t[j].media[m] : NULL;
+            if (q && q->mut != least && fabs(q->mut - least) <= same_mut * least)
+                q->mus *= least / q->mut, q->mut = least, q->mua = least - q->mus;
+        }
+    }
+    for (int j = 0; j < have; j++) {
+        if (blk->band[j] < 0) continue;
+        double acc = 0.0;
+        for (int m = 0; m <= n; m++) t[j].media[m].tau_above = acc, acc += t[j].media[m].mut * t[j].media[m].thickness;
+        acc = 0.0;
+        for (int m = n; m >= 0; m--) t[j].media[m].tau_below = acc, acc += t[j].media[m].mut * t[j].media[m].thickness;
     }
     /* The reference media: the least extinction and depths, a phase function from a band
      * that scatters; each medium's largest extinction (0: clear in every band). */
@@ -190,14 +213,14 @@ int lsqt_band_block_tables(const lsqt_assembly *a, const lsqt_band_block *blk, l
         for (int i = 0; i < n; i++) {
             double fs = 0.0, fo = 0.0;
             layer_factors(&q->layers[i], &fs, &fo);
-            bw[LSQT_BAND_FS(n, j, i)] = fs, bw[LSQT_BAND_FO(n, j, i)] = fo;
+            bw[LSQT_BAND_FS(n, nbp, j, i)] = fs, bw[LSQT_BAND_FO(n, nbp, j, i)] = fo;
         }
         for (int m = 0; m <= n; m++) {
             const int interior = m > 0 && m < n;
-            bw[LSQT_BAND_MUS(n, j, m)] = interior ? q->media[m].mus : 0.0;
-            bw[LSQT_BAND_MUT(n, j, m)] = interior ? q->media[m].mut : 0.0;
-            bw[LSQT_BAND_TAU_ABOVE(n, j, m)] = q->media[m].tau_above;
-            bw[LSQT_BAND_TAU_BELOW(n, j, m)] = q->media[m].tau_below;
+            bw[LSQT_BAND_MUS(n, nbp, j, m)] = interior ? q->media[m].mus : 0.0;
+            bw[LSQT_BAND_MUT(n, nbp, j, m)] = interior ? q->media[m].mut : 0.0;
+            bw[LSQT_BAND_TAU_ABOVE(n, nbp, j, m)] = q->media[m].tau_above;
+            bw[LSQT_BAND_TAU_BELOW(n, nbp, j, m)] = q->media[m].tau_below;
         }
     }
     for (int j = 0; j < have; j++) tables_free(&t[j]);

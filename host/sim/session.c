@@ -163,7 +163,8 @@ static int upload(lsqt_session *s, const lsqt_assembly *full, const lsqt_band_bl
     lsqt_dev_layer_d *layers = calloc((size_t)n + 1, sizeof *layers);
     lsqt_dev_medium *media_f = calloc((size_t)n + 1, sizeof *media_f);
     lsqt_dev_layer *layers_f = calloc((size_t)n + 1, sizeof *layers_f);
-    const size_t n_bw = s->nb > 1 ? (size_t)LSQT_BAND_TAB_SIZE(n, s->nb) : 1;
+    const int nbp = (int)LSQT_PAD(s->nb, s->vw); /* walk.cl's LSQT_NBP */
+    const size_t n_bw = s->nb > 1 ? (size_t)LSQT_BAND_TAB_SIZE(n, nbp) : 1;
     double *bw = calloc(n_bw, sizeof *bw);
     float *bw_f = calloc(n_bw, sizeof *bw_f);
     void *tal[3] = {block_tallies(s, st, 0, NULL, 0), block_tallies(s, st, 1, NULL, 0), block_tallies(s, st, 2, NULL, 0)};
@@ -176,7 +177,7 @@ static int upload(lsqt_session *s, const lsqt_assembly *full, const lsqt_band_bl
     int rc = 1;
     cl_int e = CL_SUCCESS;
     if (!media || !layers || !media_f || !layers_f || !wo || !wo_f || !wi_up || !bw || !bw_f || !tal[0] || !tal[1] ||
-        !tal[2] || (s->nb > 1 && lsqt_band_block_tables(full, blk, &scene, media, layers, bw))) {
+        !tal[2] || (s->nb > 1 && lsqt_band_block_tables(full, blk, nbp, st->use_double ? 0.0 : 0x1p-19, &scene, media, layers, bw))) {
         snprintf(err, errcap, "out of memory");
         goto done;
     }

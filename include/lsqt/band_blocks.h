@@ -39,10 +39,13 @@ int lsqt_band_block_width(char *err, size_t errcap);
 
 /* A block's device tables: its layers' unit models, its media with the least extinction
  * and depths of its bands (and a phase function from a band that scatters), and bw (of
- * LSQT_BAND_TAB_SIZE(n_layers, nb) reals) its majorants and per-band factors. Returns 0,
- * or 1 when out of memory. */
-int lsqt_band_block_tables(const lsqt_assembly *a, const lsqt_band_block *blk, lsqt_dev_scene *scene,
-                           lsqt_dev_medium_d *media, lsqt_dev_layer_d *layers, double *bw);
+ * LSQT_BAND_TAB_SIZE(n_layers, nbp) reals, zeroed by the caller; nbp: the band count
+ * padded to the kernels' vector width) each medium's largest extinction and the
+ * per-band factors. Extinctions within same_mut (relative) of a medium's least are taken
+ * as the least (the float kernels: 2^-19, what 6-digit decimals miss by; 0 in double).
+ * Returns 0, or 1 when out of memory. */
+int lsqt_band_block_tables(const lsqt_assembly *a, const lsqt_band_block *blk, int nbp, double same_mut,
+                           lsqt_dev_scene *scene, lsqt_dev_medium_d *media, lsqt_dev_layer_d *layers, double *bw);
 
 #ifdef __cplusplus
 }
