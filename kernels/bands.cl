@@ -19,9 +19,9 @@
  * - a vertex's next-event terms are evaluated once, for the unit model and the least
  *   optical depths, into the scratch sums (c->sum), and spread to each band's sums with
  *   the band's factor and, where its media are deeper, its extra transmittance.
- * One band's program would draw the same paths as the one-band walk; a block's are its
- * own, so a band of a block agrees with its one-band run within the error bars, not bit
- * for bit. */
+ * A block's paths are its own (the hero and the per-band roulette draw numbers a one-band
+ * walk does not), so a band of a block agrees with its one-band run within the error
+ * bars, not bit for bit. */
 #if LSQT_NB > 1
 
 #ifdef LSQT_NEE_RECORDS
