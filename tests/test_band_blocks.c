@@ -52,6 +52,7 @@
  * `test_band_blocks SECTION N` adds N to every seed (to see that the tolerances hold). */
 #include "family_stats.h"
 #include "ref_adding.h"
+#include "stack_dirs.h"
 
 #include "lsqt/band_blocks.h"
 #include "lsqt/state.h"
@@ -76,9 +77,7 @@ enum { REF_PER_PANEL = 4, REF_MODES = 24, FINE_PER_PANEL = 6, FINE_MODES = 36 };
 
 /* ------------------------------------------------------------------ the stacks */
 
-enum { NTH = 6, NWI = 1 + 3 * (NTH - 1), NWI_T = 2 * NWI, NS = 3, MAX_BANDS = 4 };
-static const double TH_I[NTH] = {0, 40, 70, 80, 87, 89}, PH_I[3] = {0, 90, 180};
-static const double DEG_O[NS] = {0, 60, 85};
+enum { MAX_BANDS = 4 };
 
 /* One HG slab of thickness d between null layers, or over an opaque Lambertian floor;
  * per band its optical thickness, albedo and the floor's fR. */
@@ -131,38 +130,11 @@ static void case_text(const band_case *c, char *text, size_t size)
     }
 }
 
-/* The test's incident directions (up, then down): (side, theta_i) group of each in grp[]. */
-static void case_dirs(double (*d)[3], int *grp)
-{
-    int n = 0;
-    for (int side = 0; side < 2; side++)
-        for (int t = 0; t < NTH; t++)
-            for (int p = 0; p < (t ? 3 : 1); p++, n++) {
-                const double th = TH_I[t] * PI / 180.0, ph = PH_I[p] * PI / 180.0;
-                /* as the state keeps them: float */
-                d[n][0] = (float)(sin(th) * cos(ph)), d[n][1] = (float)(sin(th) * sin(ph));
-                d[n][2] = (float)(side ? -cos(th) : cos(th));
-                grp[n] = side * NTH + t;
-            }
-}
-
-/* The reference's grid: the quadrature, then the directions' |z| and the slices' cosines. */
-static void case_grid(ad_grid *G, int per_panel, int modes)
-{
-    double d[NWI_T][3], extra[NTH + NS];
-    int grp[NWI_T], n = 0;
-    case_dirs(d, grp);
-    for (int k = 0; k < NWI; k++)
-        if (k == 0 || fabs(d[k][2]) != extra[n - 1]) extra[n++] = fabs(d[k][2]);
-    for (int s = 0; s < NS; s++) extra[n++] = cos(DEG_O[s] * PI / 180.0);
-    ad_grid_init(G, per_panel, modes, extra, n);
-}
-
 /* Band b's own stack's reference. */
 static void band_ref(const band_case *c, int b, int per_panel, int modes, double t0, ad_ref *r)
 {
     ad_grid G;
-    case_grid(&G, per_panel, modes);
+    stack_grid(&G, per_panel, modes);
     const ad_stack_desc S = {1, {c->tau[b]}, {c->om[b]}, {c->g}, c->floor, c->floor ? c->floor_fr[b] : 0.0};
     ad_ref_make(r, &G, &S, t0);
 }
@@ -251,7 +223,7 @@ static void case_check(const band_case *c, uint64_t paths, uint64_t seed, int co
     case_text(c, text, sizeof text);
     double dirs[NWI_T][3];
     int grp[NWI_T];
-    case_dirs(dirs, grp);
+    stack_dirs(dirs, grp);
     lsqt_state st;
     const double t0 = check_now();
     lsqt_slice_est *e = run_bands(c, text, nwi, (const double(*)[3])dirs, paths, seed, &st);
@@ -387,7 +359,7 @@ static void check_resolution(const band_case *c)
 {
     double d[NWI_T][3];
     int grp[NWI_T];
-    case_dirs(d, grp);
+    stack_dirs(d, grp);
     const int nwi = c->floor ? NWI : NWI_T;
     for (int b = 0; b < c->nb; b++) {
         if (dark_band(c, b)) continue;

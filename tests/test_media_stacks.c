@@ -32,6 +32,7 @@
  * seed (to see that the tolerances hold). */
 #include "family_stats.h"
 #include "ref_adding.h"
+#include "stack_dirs.h"
 
 /* The reference's error bound (relative), and the settings all value sections use:
  * nodes per panel, Fourier modes, the thickest start of the doubling. Against a reference
@@ -44,9 +45,7 @@ enum { REF_PER_PANEL = 4, REF_MODES = 16, FINE_PER_PANEL = 6, FINE_MODES = 24 };
 
 /* ------------------------------------------------------------------ the stacks */
 
-enum { NTH = 6, NWI = 1 + 3 * (NTH - 1), NWI_T = 2 * NWI, NS = 3, MAX_MEDIA = 4 };
-static const double TH_I[NTH] = {0, 40, 70, 80, 87, 89}, PH_I[3] = {0, 90, 180};
-static const double DEG_O[NS] = {0, 60, 85};
+enum { MAX_MEDIA = 4 };
 
 typedef struct {
     const char *name;
@@ -93,33 +92,6 @@ static void stack_text(const stack_case *c, char *text, size_t size)
         snprintf(text + at, size - (size_t)at, "Layer z=0 LambertianBsdf fR=%.17g fT=0\nMedium\n", c->floor_fr);
     else
         snprintf(text + at, size - (size_t)at, "Layer z=0 NullBsdf\nMedium\n");
-}
-
-/* The test's incident directions (up, then down): theta_i band of each in band[]. */
-static void stack_dirs(double (*d)[3], int *band)
-{
-    int n = 0;
-    for (int side = 0; side < 2; side++)
-        for (int t = 0; t < NTH; t++)
-            for (int p = 0; p < (t ? 3 : 1); p++, n++) {
-                const double th = TH_I[t] * PI / 180.0, ph = PH_I[p] * PI / 180.0;
-                /* as the state keeps them: float */
-                d[n][0] = (float)(sin(th) * cos(ph)), d[n][1] = (float)(sin(th) * sin(ph));
-                d[n][2] = (float)(side ? -cos(th) : cos(th));
-                band[n] = side * NTH + t;
-            }
-}
-
-/* The reference's grid: the quadrature, then the directions' |z| and the slices' cosines. */
-static void stack_grid(ad_grid *G, int per_panel, int modes)
-{
-    double d[NWI_T][3], extra[NTH + NS];
-    int band[NWI_T], n = 0;
-    stack_dirs(d, band);
-    for (int k = 0; k < NWI; k++)
-        if (k == 0 || fabs(d[k][2]) != extra[n - 1]) extra[n++] = fabs(d[k][2]);
-    for (int s = 0; s < NS; s++) extra[n++] = cos(DEG_O[s] * PI / 180.0);
-    ad_grid_init(G, per_panel, modes, extra, n);
 }
 
 static void stack_ref(const stack_case *c, int per_panel, int modes, double t0, ad_ref *r)
