@@ -175,10 +175,7 @@ LSQT_INLINE int layer_vertex_bands(const walk_ctx *c, int li, real3 d, real *wb,
  * balance heuristic), kept as wb (the weights) and rb (each band's density of the path
  * over the mixture's, mean 1). A band's density of this flight is mut e^-(mut t) for a
  * collision and e^-(mut t) for a boundary; its weight keeps its ratio to rb (its weight
- * on its own paths), times its albedo at a collision. The products are taken in log2,
- * relative to the largest (no overflow at any depth; e held within +-1e4: a flight whose
- * depths differ by more, e^-7000, weighs the same as at 1e4), LSQT_VW bands at a time.
- * Returns whether any band still carries weight. */
+ * on its own paths), times its albedo at a collision. LSQT_VW bands at a time. */
 LSQT_INLINE int flight_bands(const walk_ctx *c, int mi, real t, int collided, real *wb, real *rb)
 {
     const int n = c->scene->n_layers;
@@ -187,36 +184,62 @@ LSQT_INLINE int flight_bands(const walk_ctx *c, int mi, real t, int collided, re
     /* One extinction in every band: every band's density is the hero's (rb stays), and a
      * collision weighs each band by its albedo. */
     int alike = 1;
-    for (int j = 0; j < LSQT_NB; j++) alike &= mts[j] == mt_h;
+    real mt_min = mt_h;
+    for (int j = 0; j < LSQT_NB; j++) alike &= mts[j] == mt_h, mt_min = fmin(mt_min, mts[j]);
     if (alike) {
         if (!collided) return 1;
         int live = 0;
         for (int j = 0; j < LSQT_NB; j++) wb[j] *= muss[j] / mt_h, live |= wb[j] > R(0.0);
         return live;
     }
-    real lv[LSQT_NBP], top = -INFINITY;
+    /* The densities relative to the least extinct band's e^-(mut t): each factor at most
+     * 1, so no overflow; the padding lanes (mut 0, rb 0) stay 0. */
+    const real et = -t * LSQT_LOG2E;
+    real lv[LSQT_NBP];
+    realv acc = (realv)(R(0.0));
     for (int j = 0; j < LSQT_NBP; j += LSQT_VW) {
-        const realv mt = vloadv(0, mts + j), dm = mt - mt_h;
-        realv v = select(clamp(dm * (-t * LSQT_LOG2E), R(-1e4), R(1e4)), (realv)(R(0.0)), dm == R(0.0));
-        v += log2(vloadv(0, rb + j));
-        if (collided) v += log2(mt);
-        vstorev(v, 0, lv + j);
+        const realv mt = vloadv(0, mts + j), r = vloadv(0, rb + j);
+        realv p = r * exp2_negv(fmin((mt - mt_min) * et, R(0.0)));
+        if (collided) p *= mt;
+        vstorev(p, 0, lv + j);
+        acc += p;
     }
-    for (int j = 0; j < LSQT_NB; j++) top = fmax(top, lv[j]);
-    if (!(top > -INFINITY)) return 0;
+    real sum = sumv(acc);
+    /* Where every band's density is below float's normal range (a band far less extinct
+     * than the others, with little rb), the same products in log2, relative to the
+     * largest (e held within +-1e4: a flight whose depths differ by more, e^-7000, weighs
+     * the same as at 1e4). */
+    if (!(sum > R(1e-30))) {
+        real top = -INFINITY;
+        for (int j = 0; j < LSQT_NBP; j += LSQT_VW) {
+            const realv mt = vloadv(0, mts + j), dm = mt - mt_h;
+            realv v = select(clamp(dm * et, R(-1e4), R(1e4)), (realv)(R(0.0)), dm == R(0.0));
+            v += log2(vloadv(0, rb + j));
+            if (collided) v += log2(mt);
+            vstorev(v, 0, lv + j);
+        }
+        for (int j = 0; j < LSQT_NB; j++) top = fmax(top, lv[j]);
+        if (!(top > -INFINITY)) return 0;
+        for (int j = 0; j < LSQT_NBP; j += LSQT_VW) vstorev(exp2(vloadv(0, lv + j) - top), 0, lv + j);
+        sum = R(0.0);
+        for (int j = 0; j < LSQT_NB; j++) sum += lv[j];
+    }
     for (int j = 0; j < LSQT_NBP; j += LSQT_VW) {
-        const realv p = exp2(vloadv(0, lv + j) - top), r = vloadv(0, rb + j), mt = vloadv(0, mts + j);
+        const realv p = vloadv(0, lv + j), r = vloadv(0, rb + j), mt = vloadv(0, mts + j);
         realv own = select((realv)(R(0.0)), vloadv(0, wb + j) / r, r > R(0.0));
         if (collided) own *= select((realv)(R(0.0)), vloadv(0, muss + j) / mt, mt > R(0.0));
         vstorev(p, 0, rb + j);
         vstorev(own * p, 0, wb + j);
     }
-    real sum = R(0.0);
-    for (int j = 0; j < LSQT_NB; j++) sum += rb[j];
-    const real inv = (real)LSQT_NB / sum; /* sum >= 1: the largest term is 1 */
-    int live = 0;
-    for (int j = 0; j < LSQT_NB; j++) rb[j] *= inv, wb[j] *= inv, live |= wb[j] > R(0.0);
-    return live;
+    const real inv = (real)LSQT_NB / sum;
+    maskv live = (maskv)(0);
+    for (int j = 0; j < LSQT_NBP; j += LSQT_VW) {
+        const realv w = vloadv(0, wb + j) * inv;
+        vstorev(vloadv(0, rb + j) * inv, 0, rb + j);
+        vstorev(w, 0, wb + j);
+        live |= w > R(0.0);
+    }
+    return anyv(live);
 }
 
 /* nee_medium for a block: the terms once, spread to every band. */

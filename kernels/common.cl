@@ -71,19 +71,25 @@ LSQT_INLINE real3 make_real3(real x, real y, real z) { return (real3)(x, y, z); 
 
 /* any() and all() of a comparison of LSQT_VW lanes (lanes -1 or 0), by OR / AND of
  * halves: PoCL's builtins test lane after lane with a branch each (a fifth of the path
- * sums' conversion). */
+ * sums' conversion); sumv, the sum of the lanes, by halves (a lane-after-lane sum waits
+ * for each add). */
 #define LSQT_OR_HALVES(m) ((m).lo | (m).hi)
 #define LSQT_AND_HALVES(m) ((m).lo & (m).hi)
+#define LSQT_ADD_HALVES(m) ((m).lo + (m).hi)
 #if LSQT_VW == 16
+#define sumv(v) LSQT_ADD_HALVES(LSQT_ADD_HALVES(LSQT_ADD_HALVES(LSQT_ADD_HALVES(v))))
 #define anyv(m) (LSQT_OR_HALVES(LSQT_OR_HALVES(LSQT_OR_HALVES(LSQT_OR_HALVES(m)))) < 0)
 #define allv(m) (LSQT_AND_HALVES(LSQT_AND_HALVES(LSQT_AND_HALVES(LSQT_AND_HALVES(m)))) < 0)
 #elif LSQT_VW == 8
+#define sumv(v) LSQT_ADD_HALVES(LSQT_ADD_HALVES(LSQT_ADD_HALVES(v)))
 #define anyv(m) (LSQT_OR_HALVES(LSQT_OR_HALVES(LSQT_OR_HALVES(m))) < 0)
 #define allv(m) (LSQT_AND_HALVES(LSQT_AND_HALVES(LSQT_AND_HALVES(m))) < 0)
 #elif LSQT_VW == 4
+#define sumv(v) LSQT_ADD_HALVES(LSQT_ADD_HALVES(v))
 #define anyv(m) (LSQT_OR_HALVES(LSQT_OR_HALVES(m)) < 0)
 #define allv(m) (LSQT_AND_HALVES(LSQT_AND_HALVES(m)) < 0)
 #elif LSQT_VW == 2
+#define sumv(v) LSQT_ADD_HALVES(v)
 #define anyv(m) (LSQT_OR_HALVES(m) < 0)
 #define allv(m) (LSQT_AND_HALVES(m) < 0)
 #else

@@ -425,10 +425,12 @@ LSQT_INLINE void tally_exit(const walk_ctx *c, int b, real3 d, int up, int scatt
         /* every block of a grouped session holds the same paths' exits */
         fix1 q = to_fixed(w, c->flags);
         const int bin = hist_bin(d, up), g = max(c->scene->slice_group, 1);
-        __global ulong *hb = hist + (size_t)b * c->scene->band_hist_words;
+        /* A block's bands are the innermost index: one exit's adds share cache lines (one
+         * band's histograms after another's were a sixth of a 32-band run, in misses). */
         if (LSQT_NB == 1 || q.lo || q.hi) /* a block's bands without weight add nothing */
             for (int j = 0; j < g; j++)
-                global_add128(hb + 2 * ((size_t)j * LSQT_BATCHES * LSQT_HIST_BINS + bin), q.lo, q.hi, c->flags);
+                global_add128(hist + 2 * (((size_t)j * LSQT_BATCHES * LSQT_HIST_BINS + bin) * LSQT_NB + b), q.lo, q.hi,
+                              c->flags);
     } else {
         acc_add_band(c, b, LSQT_T_DELTA_T, w);
     }
@@ -642,7 +644,7 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
     c.nee_on = 1, c.exit_dir = 0, c.hero = 0, c.touched = &touched;
     c.sum = 0, c.bsum = 0, c.nee = 0, c.bw = bandw;
     real3 wo = make_real3(wo_dirs[4 * v], wo_dirs[4 * v + 1], wo_dirs[4 * v + 2]);
-    __global ulong *hist_b = hist + 2 * ((ulong)v * LSQT_BATCHES + (ulong)s.batch) * LSQT_HIST_BINS;
+    __global ulong *hist_b = hist + 2 * ((ulong)v * LSQT_BATCHES + (ulong)s.batch) * LSQT_HIST_BINS * LSQT_NB;
     /* The chunk's paths, one body per code path. The CPU path's local memory can only be
      * declared in the kernel; the GPU path's loop stays here too (in a function of its
      * own, clang-15 inlines the walk in another order, and lsqt_walk and lsqt_exits take

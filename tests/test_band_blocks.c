@@ -195,6 +195,23 @@ static lsqt_slice_est *run_bands(const band_case *c, const char *text, int n_wi,
 }
 
 /* Median of n values (sorted in place). */
+/* Every scattered exit of a band lands in one bin of that band's histogram, in its path's
+ * batch, with the same fixed-point weight as its R or T tally (the block's histogram has
+ * the bands innermost: this reads each band's part back): hist + delta_T = R + T, exactly,
+ * batch by batch. Returns the number of batches where they differ. */
+static int hist_mismatches(const lsqt_state *v, int s)
+{
+    int bad = 0;
+    for (int b = 0; b < LSQT_BATCHES; b++) {
+        const lsqt_u128 *sc = v->scalars + ((size_t)s * LSQT_BATCHES + (size_t)b) * LSQT_T_COUNT;
+        const lsqt_u128 *h = v->hist + ((size_t)s * LSQT_BATCHES + (size_t)b) * LSQT_HIST_BINS;
+        lsqt_u128 exits = lsqt_u128_add(sc[LSQT_T_R], sc[LSQT_T_T]), binned = sc[LSQT_T_DELTA_T];
+        for (int i = 0; i < LSQT_HIST_BINS; i++) binned = lsqt_u128_add(binned, h[i]);
+        bad += exits.lo != binned.lo || exits.hi != binned.hi;
+    }
+    return bad;
+}
+
 static double median(double *v, int n)
 {
     for (int i = 1; i < n; i++)
@@ -250,6 +267,11 @@ static void case_check(const band_case *c, uint64_t paths, uint64_t seed, int co
     for (int b = 0; b < c->nb; b++) {
         const lsqt_state v = lsqt_state_band(&st, b);
         const lsqt_slice_est *eb = e + (size_t)b * NS;
+        for (int s = 0; s < NS; s++) {
+            const int bad = hist_mismatches(&v, s);
+            CHECK(bad == 0, "%s band %d to=%g: the histogram + delta_T is not R + T in %d of %d batches", c->name, b + 1,
+                  DEG_O[s], bad, LSQT_BATCHES);
+        }
         char who[96];
         if (c->floor)
             snprintf(who, sizeof who, "%s band %d (tau %g, albedo %g, fR %g)", c->name, b + 1, c->tau[b], c->om[b],

@@ -133,8 +133,9 @@ static cl_int set_kernel_args(lsqt_session *s)
     return e;
 }
 
-/* A block's tallies as its buffers hold them: each slot's band after band (zeros for a
- * padding slot); with back, the other way, from the buffers' copy t into ST. */
+/* A block's tallies as its buffers hold them: the path sums and scalars slot after slot,
+ * the histogram with the slots innermost (device_layout.h; zeros for a padding slot);
+ * with back, the other way, from the buffers' copy t into ST. */
 static void *block_tallies(const lsqt_session *s, const lsqt_state *st, int which, void *t, int back)
 {
     const size_t n = which == 0 ? s->n_nee : which == 1 ? s->n_scalars : s->n_hist;
@@ -143,8 +144,15 @@ static void *block_tallies(const lsqt_session *s, const lsqt_state *st, int whic
         if (s->band_of[j] < 0) continue;
         const lsqt_state v = lsqt_state_band(st, s->band_of[j]);
         lsqt_u128 *band = which == 0 ? v.nee : which == 1 ? v.scalars : v.hist;
-        if (back) memcpy(band, all + (size_t)j * n, n * sizeof *all);
-        else memcpy(all + (size_t)j * n, band, n * sizeof *all);
+        if (which == 2) {
+            for (size_t i = 0; i < n; i++)
+                if (back) band[i] = all[i * s->nb + j];
+                else all[i * s->nb + j] = band[i];
+        } else if (back) {
+            memcpy(band, all + (size_t)j * n, n * sizeof *all);
+        } else {
+            memcpy(all + (size_t)j * n, band, n * sizeof *all);
+        }
     }
     return all;
 }
@@ -191,7 +199,6 @@ static int upload(lsqt_session *s, const lsqt_assembly *full, const lsqt_band_bl
     }
     scene.band_nee_words = (lsqt_u32)(2 * s->n_nee);
     scene.band_scalar_words = (lsqt_u32)(2 * s->n_scalars);
-    scene.band_hist_words = (lsqt_u32)(2 * s->n_hist);
     /* The kernel reads the layout it was built for (see device_layout.h). */
     const void *media_up = st->use_double ? (const void *)media : (const void *)media_f;
     const void *layers_up = st->use_double ? (const void *)layers : (const void *)layers_f;

@@ -118,10 +118,11 @@ typedef struct lsqt_dev_scene {
     lsqt_u32 rng_side;        /* OR'ed into every RNG purpose: 0, or LSQT_RNG_BELOW for a state
                                  of light entering from below, so its paths are not those of
                                  the slices from above */
-    /* A band block (walk.cl, -DLSQT_NB > 1): the tallies hold the block's bands one after
-     * another, each laid out as a one-band session's; these are the strides between them,
-     * in 64-bit words. 0 in a one-band program. */
-    lsqt_u32 band_nee_words, band_scalar_words, band_hist_words;
+    /* A band block (walk.cl, -DLSQT_NB > 1): the path sums and scalars hold the block's
+     * bands one after another, each laid out as a one-band session's; these are the
+     * strides between them, in 64-bit words (0 in a one-band program). Its histogram has
+     * the bands innermost: a one-band session's bin i of band b is entry i NB + b. */
+    lsqt_u32 band_nee_words, band_scalar_words, band_hist_unused;
     lsqt_u32 band_pad;
 } lsqt_dev_scene;
 
