@@ -113,6 +113,61 @@ LSQT_INLINE real side_probability(const walk_ctx *c, int b, int li)
     return fs + fo > R(0.0) ? fs / (fs + fo) : R(0.5);
 }
 
+/* wb *= each band's Fresnel factor at a facet whose cosine with the ray is vm (the
+ * conductor li's n and k per band: bw's rows), LSQT_VW bands at a time; bands without
+ * weight (and the padding lanes, n = k = 0) stay 0. */
+LSQT_INLINE void fresnel_bands(const walk_ctx *c, int li, real vm, real *wb)
+{
+    const int n = c->scene->n_layers;
+    __global const real *etas = c->bw + LSQT_BAND_ETA(n, LSQT_NBP, 0, li), *ks = c->bw + LSQT_BAND_KAPPA(n, LSQT_NBP, 0, li);
+    for (int j = 0; j < LSQT_NBP; j += LSQT_VW) {
+        const realv w = vloadv(0, wb + j);
+        const realv f = fresnel_conductor_lanes(vloadv(0, etas + j), vloadv(0, ks + j), (realv)(vm));
+        vstorev(select((realv)(R(0.0)), w * f, w > R(0.0)), 0, wb + j);
+    }
+}
+
+/* A hidden conductor's vertex (one under another layer that is not null: light leaves
+ * it only through that layer, so it has no next-event terms, and the bands' n and k may
+ * differ; host/sim/band_blocks.c). The sample of microsurface.cl on the block's unit
+ * layer (conductor_sample for single scattering, else ms_walk's walk of reflections),
+ * each reflection weighed by each band's Fresnel factor instead of the unit layer's. The
+ * walk does not depend on the band, so no band's density of the path changes (rb stays),
+ * and it plays no roulette of its own (the factors only shrink; roulette_bands follows
+ * the vertex). Returns whether any band still carries weight. */
+LSQT_INLINE int conductor_vertex_bands(const walk_ctx *c, __global const lsqt_dev_layer *l, int li, real3 d,
+                                       real *wb, rng_t *rng, real3 *wi)
+{
+    const real alpha = l->p[0];
+    if (!(d.z < R(0.0))) return band_scale(wb, R(0.0)); /* light reaches it from above only */
+    if (!l->multiple_scattering) {
+        const real3 wo = -d;
+        (void)rng_uniform(rng); /* conductor_sample's u0, unused */
+        const real u1 = rng_uniform(rng), u2 = rng_uniform(rng);
+        ms_vtx x = ms_vertex(alpha, wo, R(1.0), R(1.0), u1, u2);
+        const real vm = dot(x.v, x.m), lam_v = ggx_lambda(alpha, wo.z);
+        const real3 r = normalize(R(2.0) * vm * x.m - x.v);
+        if (!(vm > R(0.0)) || !(r.z > R(0.0))) return band_scale(wb, R(0.0));
+        fresnel_bands(c, li, vm, wb);
+        *wi = r;
+        return band_scale(wb, (R(1.0) + lam_v) / (R(1.0) + lam_v + ggx_lambda(alpha, r.z)));
+    }
+    real3 r = d; /* from above: the ray's side's frame is the world's */
+    real h = R(1.0);
+    for (int order = 1;; order++) {
+        if (!ms_next_height(alpha, r, &h, R(1.0) - rng_uniform(rng))) break;
+        if (order > LSQT_MS_MAX_ORDER) return band_scale(wb, R(0.0));
+        const real u1 = rng_uniform(rng), u2 = rng_uniform(rng);
+        ms_vtx x = ms_vertex(alpha, -r, h, R(1.0), u1, u2);
+        const real vm = dot(x.v, x.m);
+        if (!(vm > R(0.0))) return band_scale(wb, R(0.0));
+        r = normalize(R(2.0) * vm * x.m - x.v);
+        fresnel_bands(c, li, vm, wb); /* every reflection's, in every band */
+    }
+    *wi = r;
+    return band_scale(wb, R(1.0));
+}
+
 /* layer_vertex for a block: the next-event terms of layer li for every band, then the
  * hero's sample, weighed by spectral MIS as flights are (flight_bands). Returns whether
  * any band still carries weight. */
@@ -133,6 +188,8 @@ LSQT_INLINE int layer_vertex_bands(const walk_ctx *c, int li, real3 d, real *wb,
         band_depths(c, b, -1, R(0.0), li, tau_up, tau_down, &dtu[b], &dtd[b]);
     }
     c->work[WORK_LAYER]++;
+    if (LSQT_ON(BSDF_MS_CONDUCTIVE) && l->kind == LSQT_BSDF_MS_CONDUCTIVE && !up)
+        return conductor_vertex_bands(c, l, li, d, wb, rng, wi);
     if (layer_is_micro(l)) { /* the same in every band (fs = fo = 1) */
         ms_sink k;
         nee_ms_sink(c, tab, li, &k);

@@ -12,7 +12,7 @@
  * closed form of the complex-index Fresnel equations)
  *   Rs = (a2b2 - 2 a c + c^2) / (a2b2 + 2 a c + c^2),
  *   Rp = Rs (a2b2 c^2 - 2 a c s^2 + s^4) / (a2b2 c^2 + 2 a c s^2 + s^4). */
-LSQT_INLINE realv fresnel_conductorv(real eta, real k, realv c)
+LSQT_INLINE realv fresnel_conductor_lanes(realv eta, realv k, realv c)
 {
     c = clamp(c, (realv)(R(0.0)), (realv)(R(1.0)));
     realv c2 = c * c, s2 = R(1.0) - c2;
@@ -22,6 +22,12 @@ LSQT_INLINE realv fresnel_conductorv(real eta, real k, realv c)
     realv rs = (a2b2 - R(2.0) * a * c + c2) / (a2b2 + R(2.0) * a * c + c2);
     realv rp = rs * (a2b2 * c2 - R(2.0) * a * c * s2 + s2 * s2) / (a2b2 * c2 + R(2.0) * a * c * s2 + s2 * s2);
     return R(0.5) * (rs + rp);
+}
+
+/* One index, LSQT_VW cosines (a band block's walk takes LSQT_VW indices at one cosine). */
+LSQT_INLINE realv fresnel_conductorv(real eta, real k, realv c)
+{
+    return fresnel_conductor_lanes((realv)(eta), (realv)(k), c);
 }
 
 /* The facets' phase function towards u (the ray's side's frame): F D_v(m) / (4 v.m) =

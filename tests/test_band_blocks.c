@@ -52,6 +52,7 @@
  * `test_band_blocks SECTION N` adds N to every seed (to see that the tolerances hold). */
 #include "family_stats.h"
 #include "ref_adding.h"
+#include "ref_conductor.h"
 #include "stack_dirs.h"
 
 #include "lsqt/band_blocks.h"
@@ -64,6 +65,9 @@
  * 24 modes, not test_media_stacks's 16: with g 0.6 in every band, 16 modes' last quarter
  * is 3e-5 (their error against FINE_* is still 3e-6). */
 #define REF_TOL 1e-4
+/* The metal case's quadrature: against 1.5 times the nodes its E differs by less than
+ * REF_TOL / 10 (the power section checks). */
+#define METAL_NODES 24
 #define REF_T0 1e-7
 #define FINE_T0 1e-8
 enum { REF_PER_PANEL = 4, REF_MODES = 24, FINE_PER_PANEL = 6, FINE_MODES = 36 };
@@ -88,16 +92,28 @@ typedef struct {
     double tau[MAX_BANDS], om[MAX_BANDS];
     int floor;
     double floor_fr[MAX_BANDS];
+    /* or, with metal: a diffuser (LambertianBsdf fR=0 fT=1) over a conductor (GGX METAL_ALPHA,
+     * single scattering) of index n + i k per band */
+    int metal;
+    double n[MAX_BANDS], k[MAX_BANDS];
 } band_case;
 
-static const band_case ALBEDO = {"albedo", 4, 0.8, 0.6, {1.0, 1.0, 1.0, 1.0}, {0.0, 0.5, 0.9, 0.999}, 0, {0}};
+static const band_case ALBEDO = {"albedo", 4, 0.8, 0.6, {1.0, 1.0, 1.0, 1.0}, {0.0, 0.5, 0.9, 0.999}, 0, {0}, 0, {0}, {0}};
 static const band_case EXTINCTION = {
-    "extinction", 3, 1.6, 0.6, {0.02, 0.2, 2.0}, {0.9, 0.6, 0.95}, 1, {0.1, 0.5, 0.8}};
+    "extinction", 3, 1.6, 0.6, {0.02, 0.2, 2.0}, {0.9, 0.6, 0.95}, 1, {0.1, 0.5, 0.8}, 0, {0}, {0}};
 /* the same slab with nothing below: its bands' transmission, and each band's extra
  * transmittance towards the directions below */
 static const band_case EXTINCTION_THROUGH = {
-    "extinction through", 3, 1.6, 0.6, {0.02, 0.2, 2.0}, {0.9, 0.6, 0.95}, 0, {0}};
-static const band_case DUST = {"dust", 3, 1.0, 0.6, {2.0, 1.6, 1.2}, {0.98, 0.8, 0.6}, 1, {0.7, 0.4, 0.1}};
+    "extinction through", 3, 1.6, 0.6, {0.02, 0.2, 2.0}, {0.9, 0.6, 0.95}, 0, {0}, 0, {0}, {0}};
+static const band_case DUST = {"dust", 3, 1.0, 0.6, {2.0, 1.6, 1.2}, {0.98, 0.8, 0.6}, 1, {0.7, 0.4, 0.1}, 0, {0}, {0}};
+/* A hidden conductor (under the diffuser: its n and k weigh its walk, and each band's own
+ * Fresnel factors must be taken at every reflection) whose index crosses k = n over the
+ * bands: gold at 650 nm (n 0.17, k 3.15), k = 2 n, k = n, k = n / 6. The diffuser
+ * transmits everything, spread as cos theta: the stack's R is the conductor's albedo
+ * averaged over cosine-weighted incidence, E = 2 int A(mu) mu dmu (A: tests/ref_conductor.h,
+ * an independent model), the same from every wo, and f = E / pi. */
+#define METAL_ALPHA 0.3
+static const band_case METAL = {"metal", 4, 1.0, 0.0, {0}, {0}, 1, {0}, 1, {0.17, 0.8, 1.3, 2.4}, {3.15, 1.6, 1.3, 0.4}};
 
 /* A band that can scatter nothing: no scattering in the slab and no floor */
 static int dark_band(const band_case *c, int b) { return c->om[b] == 0.0 && !c->floor; }
@@ -112,6 +128,15 @@ static int put_list(char *text, size_t size, const char *key, const double *v, i
 
 static void case_text(const band_case *c, char *text, size_t size)
 {
+    if (c->metal) {
+        int at = snprintf(text, size, "Medium\nLayer z=1 LambertianBsdf fR=0 fT=1\nMedium\n"
+                                      "Layer z=0 MicrosurfaceConductive alpha=%g use_multiple_scattering=false\nMedium",
+                          METAL_ALPHA);
+        at += put_list(text + at, size - (size_t)at, "eta", c->n, c->nb);
+        at += put_list(text + at, size - (size_t)at, "mua", c->k, c->nb);
+        snprintf(text + at, size - (size_t)at, "\n");
+        return;
+    }
     double mus[MAX_BANDS], mua[MAX_BANDS];
     for (int b = 0; b < c->nb; b++) {
         const double mut = c->tau[b] / c->d;
@@ -130,6 +155,19 @@ static void case_text(const band_case *c, char *text, size_t size)
     }
 }
 
+/* The metal case's R: E = 2 int_0^1 A(mu) mu dmu by Gauss-Legendre over mu (nodes), A
+ * by ref_albedo with nodes per panel. */
+static double metal_e(const band_case *c, int b, int nodes)
+{
+    double x[64], w[64], e = 0.0;
+    gauss_legendre(nodes, x, w);
+    for (int i = 0; i < nodes; i++) {
+        const double mu = 0.5 + 0.5 * x[i];
+        e += w[i] * mu * ref_albedo(METAL_ALPHA, c->n[b] + I * c->k[b], acos(mu), nodes);
+    }
+    return e; /* 2 * (1/2) sum w mu A */
+}
+
 /* Band b's own stack's reference. */
 static void band_ref(const band_case *c, int b, int per_panel, int modes, double t0, ad_ref *r)
 {
@@ -140,7 +178,7 @@ static void band_ref(const band_case *c, int b, int per_panel, int modes, double
 }
 
 /* Reference f at state direction d (float components) for slice angle deg. */
-static double ref_f(const ad_ref *r, double deg, const double d[3], int modes)
+static double slab_f(const ad_ref *r, double deg, const double d[3], int modes)
 {
     const double mu0 = cos(deg * PI / 180.0);
     return ad_ref_f(r, mu0, d[2], atan2(d[1], d[0]) - PI, modes);
@@ -273,7 +311,9 @@ static void case_check(const band_case *c, uint64_t paths, uint64_t seed, int co
                   DEG_O[s], bad, LSQT_BATCHES);
         }
         char who[96];
-        if (c->floor)
+        if (c->metal)
+            snprintf(who, sizeof who, "%s band %d (n %g, k %g)", c->name, b + 1, c->n[b], c->k[b]);
+        else if (c->floor)
             snprintf(who, sizeof who, "%s band %d (tau %g, albedo %g, fR %g)", c->name, b + 1, c->tau[b], c->om[b],
                      c->floor_fr[b]);
         else
@@ -299,12 +339,13 @@ static void case_check(const band_case *c, uint64_t paths, uint64_t seed, int co
             continue;
         }
         ad_ref r;
-        band_ref(c, b, REF_PER_PANEL, REF_MODES, REF_T0, &r);
+        const double metal_r = c->metal ? metal_e(c, b, METAL_NODES) : 0.0;
+        if (!c->metal) band_ref(c, b, REF_PER_PANEL, REF_MODES, REF_T0, &r);
         for (int s = 0; s < NS; s++) {
             const double mu0 = cos(DEG_O[s] * PI / 180.0);
             double ref[NWI_T], rel_d[NWI_T], rel_a[2 * NTH], zmax = 0.0, amax = 0.0, pool[2] = {0, 0};
             for (int k = 0; k < nwi; k++) {
-                ref[k] = ref_f(&r, DEG_O[s], dirs[k], REF_MODES);
+                ref[k] = c->metal ? metal_r / PI : slab_f(&r, DEG_O[s], dirs[k], REF_MODES);
                 const double f = eb[s].f[k].mean, sg = eb[s].f[k].err, dev = fabs(f - ref[k]);
                 const double z = (dev - REF_TOL * ref[k]) / sg;
                 zmax = fmax(zmax, dev / sg);
@@ -339,8 +380,8 @@ static void case_check(const band_case *c, uint64_t paths, uint64_t seed, int co
                       side ? "down" : "up", A.mean, A.err, 100 * (A.mean - 1), (A.mean - 1) / A.err);
             }
             /* analog: R, T (with the unscattered beam) and delta_T */
-            double Rr, Tr;
-            ad_ref_hemi(&r, mu0, &Rr, &Tr);
+            double Rr = metal_r, Tr = 0.0;
+            if (!c->metal) ad_ref_hemi(&r, mu0, &Rr, &Tr);
             const double dT = c->floor ? 0.0 : exp(-c->tau[b] / mu0);
             Tr += dT;
             CHECK(fabs(eb[s].R.mean - Rr) <= ZA * eb[s].R.err + REF_TOL * Rr,
@@ -367,7 +408,7 @@ static void case_check(const band_case *c, uint64_t paths, uint64_t seed, int co
                    who, DEG_O[s], zmax, amax, eb[s].R.mean, Rr, eb[s].T.mean, Tr, 100 * md, 100 * ma, 100 * pool[0],
                    100 * eb[s].R.err / Rr);
         }
-        ad_ref_free(&r);
+        if (!c->metal) ad_ref_free(&r);
     }
     lsqt_estimates_free(e, NS);
     lsqt_state_free(&st);
@@ -379,6 +420,15 @@ static void case_check(const band_case *c, uint64_t paths, uint64_t seed, int co
  * REF_TOL / 10. */
 static void check_resolution(const band_case *c)
 {
+    if (c->metal) {
+        for (int b = 0; b < c->nb; b++) {
+            const double e = metal_e(c, b, METAL_NODES), f = metal_e(c, b, METAL_NODES * 3 / 2);
+            CHECK(fabs(e / f - 1.0) < REF_TOL / 10, "reference %s band %d: E %.9f, with 1.5 times the nodes %.9f",
+                  c->name, b + 1, e, f);
+            printf("  reference %s band %d: E %.6f, %.2g from 1.5 times the nodes\n", c->name, b + 1, e, fabs(e / f - 1.0));
+        }
+        return;
+    }
     double d[NWI_T][3];
     int grp[NWI_T];
     stack_dirs(d, grp);
@@ -391,9 +441,9 @@ static void check_resolution(const band_case *c)
         double dq = 0.0, dm = 0.0;
         for (int s = 0; s < NS; s++)
             for (int k = 0; k < nwi; k++) {
-                const double x = ref_f(&a, DEG_O[s], d[k], REF_MODES);
-                dq = fmax(dq, fabs(x / ref_f(&f, DEG_O[s], d[k], FINE_MODES) - 1.0));
-                dm = fmax(dm, fabs(ref_f(&a, DEG_O[s], d[k], REF_MODES * 3 / 4) / x - 1.0));
+                const double x = slab_f(&a, DEG_O[s], d[k], REF_MODES);
+                dq = fmax(dq, fabs(x / slab_f(&f, DEG_O[s], d[k], FINE_MODES) - 1.0));
+                dm = fmax(dm, fabs(slab_f(&a, DEG_O[s], d[k], REF_MODES * 3 / 4) / x - 1.0));
             }
         CHECK(dq < REF_TOL / 10 && dm < REF_TOL / 10,
               "reference %s band %d: %.3g from the finer one, truncation %.3g (>= %g)", c->name, b + 1, dq, dm,
@@ -413,6 +463,7 @@ static void section_quick(int count_only)
     case_check(&EXTINCTION, (uint64_t)1 << 19, 4002, count_only);
     case_check(&EXTINCTION_THROUGH, (uint64_t)1 << 19, 4004, count_only);
     case_check(&DUST, (uint64_t)1 << 19, 4003, count_only);
+    case_check(&METAL, (uint64_t)1 << 19, 4005, count_only);
 }
 
 static void section_power(int count_only)
@@ -422,11 +473,13 @@ static void section_power(int count_only)
         check_resolution(&EXTINCTION);
         check_resolution(&EXTINCTION_THROUGH);
         check_resolution(&DUST);
+        check_resolution(&METAL);
     }
     case_check(&ALBEDO, (uint64_t)1 << 22, 4101, count_only);
     case_check(&EXTINCTION, (uint64_t)1 << 22, 4102, count_only);
     case_check(&EXTINCTION_THROUGH, (uint64_t)1 << 22, 4104, count_only);
     case_check(&DUST, (uint64_t)1 << 22, 4103, count_only);
+    case_check(&METAL, (uint64_t)1 << 22, 4105, count_only);
 }
 
 int main(int argc, char **argv)

@@ -57,5 +57,5 @@ LSQT_NEE_RECORD_CAP=30 same Substr-parts "$EX/tutorial/Substr.lsqt" -p 300 -wo 4
 # Bands: one sub-session per band, lending each other one record buffer; RRSS on their sum
 # (the GPU code path has no band blocks, so the CPU's runs each band on its own paths too).
 LSQT_BAND_BLOCK=1 same RGB "$EX/paint-rgb.lsqt" -p 300 -wo 4 -wi 24
-LSQT_NEE_RECORD_CAP=30 same Gold "$EX/gold-coat.lsqt" -p 300 -wo 4 -wi 24 --wi-spread --wavelengths 450:650:100
+LSQT_BAND_BLOCK=1 LSQT_NEE_RECORD_CAP=30 same Gold "$EX/gold-coat.lsqt" -p 300 -wo 4 -wi 24 --wi-spread --wavelengths 450:650:100
 finish test_gpu_path

@@ -43,20 +43,32 @@ static void layer_factors(const lsqt_dev_layer_d *l, double *fs, double *fo)
     else *fs = *fo = 1.0; /* the same model in every band */
 }
 
+/* A conductor under another layer that is not null (bands.cl: conductor_vertex_bands):
+ * light leaves it only through that layer, so its n and k weigh its walk and no next-event
+ * term; they may differ between the bands. */
+static int hidden_metal(const band_tables *t, int i)
+{
+    return t->layers[i].kind == LSQT_BSDF_MS_CONDUCTIVE && t->scene.top_nonnull != i;
+}
+
 static int tables_share(const band_tables *x, const band_tables *y, int n)
 {
+    if (x->scene.top_nonnull != y->scene.top_nonnull) return 0;
     for (int i = 0; i < n; i++) {
         const lsqt_dev_layer_d *p = &x->layers[i], *q = &y->layers[i];
         if (p->kind != q->kind || p->iter_count != q->iter_count || p->multiple_scattering != q->multiple_scattering)
             return 0;
         for (int k = 0; k < 8; k++) {
-            const int factor = factored(p->kind) && (k == 0 || (k == 1 && p->kind == LSQT_BSDF_LAMBERTIAN));
+            const int factor = (factored(p->kind) && (k == 0 || (k == 1 && p->kind == LSQT_BSDF_LAMBERTIAN))) ||
+                               (hidden_metal(x, i) && (k == 1 || k == 2));
             if (!factor && p->p[k] != q->p[k]) return 0;
         }
     }
     for (int m = 0; m <= n; m++) {
         const lsqt_dev_medium_d *p = &x->media[m], *q = &y->media[m];
-        if (p->eta != q->eta || p->thickness != q->thickness) return 0;
+        /* the metal's index is its conductor's n and k (compared there) */
+        const int metal = m == n && n > 0 && p->mus == 0 && x->layers[n - 1].kind == LSQT_BSDF_MS_CONDUCTIVE;
+        if ((!metal && p->eta != q->eta) || p->thickness != q->thickness) return 0;
         /* a phase function matters only where both bands scatter */
         if (p->mus > 0 && q->mus > 0 && (p->phase_kind != q->phase_kind || memcmp(p->pp, q->pp, sizeof p->pp)))
             return 0;
@@ -214,6 +226,8 @@ int lsqt_band_block_tables(const lsqt_assembly *a, const lsqt_band_block *blk, i
             double fs = 0.0, fo = 0.0;
             layer_factors(&q->layers[i], &fs, &fo);
             bw[LSQT_BAND_FS(n, nbp, j, i)] = fs, bw[LSQT_BAND_FO(n, nbp, j, i)] = fo;
+            if (q->layers[i].kind == LSQT_BSDF_MS_CONDUCTIVE)
+                bw[LSQT_BAND_ETA(n, nbp, j, i)] = q->layers[i].p[1], bw[LSQT_BAND_KAPPA(n, nbp, j, i)] = q->layers[i].p[2];
         }
         for (int m = 0; m <= n; m++) {
             const int interior = m > 0 && m < n;
