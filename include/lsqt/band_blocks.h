@@ -24,8 +24,9 @@ typedef struct lsqt_band_block {
 
 /* Whether bands b and c of A can share their paths: the same stack and models, and
  * values that differ only where a block has a factor per band (a closed layer's fR and
- * fT; an interior medium's mus and mua, hence mut; a phase function only where one band
- * has no scattering). */
+ * fT; an interior medium's mus and mua, hence mut; a hidden conductor's n and k, one
+ * under another non-null layer; a phase function only where one band has no
+ * scattering). */
 int lsqt_bands_share(const lsqt_assembly *a, int b, int c);
 
 /* Parts A's bands into blocks of at most width bands that share their paths (in
