@@ -43,20 +43,46 @@ LSQT_INLINE uint4 rng_counter(uint slice, ulong path, uint purpose)
  * multiplies are two vector multiplies for four blocks; out[4 b + j] is word j of block b,
  * the order of the one-block form's draws. On a GPU a work-item's vectors are sequential
  * work and its 32-word buffers would be registers, so it keeps the one-block form. */
+/* Philox's ten rounds on N blocks at once, word j of block b in lane b of cj (N 4 or 8). */
+#define PHILOX_ROUNDS_N(N, c0, c1, c2, c3, key)                                                                       \
+    do {                                                                                                              \
+        uint k0_ = (key).x, k1_ = (key).y;                                                                            \
+        for (int r_ = 0; r_ < 10; r_++) {                                                                             \
+            ulong##N p0_ = (ulong##N)(PHILOX_M0) * convert_ulong##N(c0), p1_ = (ulong##N)(PHILOX_M1) * convert_ulong##N(c2); \
+            uint##N n0_ = convert_uint##N(p1_ >> 32) ^ c1 ^ (uint##N)(k0_);                                           \
+            uint##N n2_ = convert_uint##N(p0_ >> 32) ^ c3 ^ (uint##N)(k1_);                                           \
+            c1 = convert_uint##N(p1_), c3 = convert_uint##N(p0_), c0 = n0_, c2 = n2_;                                 \
+            k0_ += PHILOX_W0, k1_ += PHILOX_W1; /* the key of the next round */                                       \
+        }                                                                                                             \
+    } while (0)
+
 LSQT_INLINE void philox4x32_10_x4(uint4 ctr, uint2 key, uint *out)
 {
     uint4 c0 = (uint4)(ctr.x) + (uint4)(0u, 1u, 2u, 3u), c1 = (uint4)(ctr.y), c2 = (uint4)(ctr.z), c3 = (uint4)(ctr.w);
-    uint k0 = key.x, k1 = key.y;
-    for (int r = 0; r < 10; r++) {
-        ulong4 p0 = (ulong4)(PHILOX_M0) * convert_ulong4(c0), p1 = (ulong4)(PHILOX_M1) * convert_ulong4(c2);
-        uint4 n0 = convert_uint4(p1 >> 32) ^ c1 ^ (uint4)(k0), n2 = convert_uint4(p0 >> 32) ^ c3 ^ (uint4)(k1);
-        c1 = convert_uint4(p1), c3 = convert_uint4(p0), c0 = n0, c2 = n2;
-        k0 += PHILOX_W0, k1 += PHILOX_W1; /* the key of the next round */
-    }
+    PHILOX_ROUNDS_N(4, c0, c1, c2, c3, key);
     vstore4((uint4)(c0.x, c1.x, c2.x, c3.x), 0, out);
     vstore4((uint4)(c0.y, c1.y, c2.y, c3.y), 1, out);
     vstore4((uint4)(c0.z, c1.z, c2.z, c3.z), 2, out);
     vstore4((uint4)(c0.w, c1.w, c2.w, c3.w), 3, out);
+}
+
+/* The same for two counters a and b at once (eight lanes, a's blocks first): the rounds
+ * are a chain of dependent multiplies, as long for two streams as for one, so two paths'
+ * first draws cost what one's did (a path's start was a third of a one-bounce walk). */
+LSQT_INLINE void philox4x32_10_x4x2(uint4 a, uint4 b, uint2 key, uint *out_a, uint *out_b)
+{
+    const uint4 step = (uint4)(0u, 1u, 2u, 3u);
+    uint8 c0 = (uint8)((uint4)(a.x) + step, (uint4)(b.x) + step), c1 = (uint8)((uint4)(a.y), (uint4)(b.y));
+    uint8 c2 = (uint8)((uint4)(a.z), (uint4)(b.z)), c3 = (uint8)((uint4)(a.w), (uint4)(b.w));
+    PHILOX_ROUNDS_N(8, c0, c1, c2, c3, key);
+    vstore4((uint4)(c0.s0, c1.s0, c2.s0, c3.s0), 0, out_a);
+    vstore4((uint4)(c0.s1, c1.s1, c2.s1, c3.s1), 1, out_a);
+    vstore4((uint4)(c0.s2, c1.s2, c2.s2, c3.s2), 2, out_a);
+    vstore4((uint4)(c0.s3, c1.s3, c2.s3, c3.s3), 3, out_a);
+    vstore4((uint4)(c0.s4, c1.s4, c2.s4, c3.s4), 0, out_b);
+    vstore4((uint4)(c0.s5, c1.s5, c2.s5, c3.s5), 1, out_b);
+    vstore4((uint4)(c0.s6, c1.s6, c2.s6, c3.s6), 2, out_b);
+    vstore4((uint4)(c0.s7, c1.s7, c2.s7, c3.s7), 3, out_b);
 }
 
 typedef struct {
@@ -76,6 +102,17 @@ LSQT_INLINE rng_t rng_init(uint seed_lo, uint seed_hi, uint slice, ulong path, u
     r.ctr.x += 4u;
     r.used = 0, r.ahead = 0;
     return r;
+}
+
+/* rng_init of paths pa (into *a) and pb (into *b), the same streams, made together. */
+LSQT_INLINE void rng_init_pair(uint seed_lo, uint seed_hi, uint slice, ulong pa, ulong pb, uint purpose, rng_t *a,
+                               rng_t *b)
+{
+    a->key = b->key = (uint2)(seed_lo, seed_hi);
+    a->ctr = rng_counter(slice, pa, purpose), b->ctr = rng_counter(slice, pb, purpose);
+    philox4x32_10_x4x2(a->ctr, b->ctr, a->key, a->buf, b->buf);
+    a->ctr.x += 4u, b->ctr.x += 4u;
+    a->used = b->used = 0, a->ahead = b->ahead = 0;
 }
 
 /* Most paths of a thin slab use fewer than 16 draws, so the first four blocks come

@@ -600,7 +600,18 @@ typedef struct {
 LSQT_INLINE chunk_span chunk_of(ulong chunk_first, ulong path_begin, ulong path_end)
 {
     chunk_span s;
+#ifdef LSQT_NEE_RECORDS
     const ulong chunk = chunk_first + get_group_id(0);
+#else
+    /* A CPU runs the groups in the order of their index, so the index goes batch by batch
+     * (chunk_first + r, r + 32, r + 64, ... for r = 0, 1, ...): consecutive groups add to
+     * one batch's histogram, which stays in cache (a chunk's exits spread over its batch's
+     * 16 KB of bins, a new batch's every time: a tenth of a Lambertian run went to those
+     * misses). Which group runs a chunk changes no tally. */
+    const ulong g = get_group_id(0), n = get_num_groups(0), q = n / LSQT_BATCHES, big = (n % LSQT_BATCHES) * (q + 1);
+    const ulong r = g < big ? g / (q + 1) : n % LSQT_BATCHES + (g - big) / q;
+    const ulong chunk = chunk_first + r + LSQT_BATCHES * (g < big ? g % (q + 1) : (g - big) % q);
+#endif
     s.lid = (int)get_local_id(0), s.lsz = (int)get_local_size(0);
     s.slice = (uint)get_global_id(1);
     s.begin = max(chunk * LSQT_CHUNK, path_begin);
@@ -677,9 +688,22 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
     for (int k = 0; k < LSQT_SUM_ROWS * LSQT_NWI_PAD; k++) path_sum[k] = R(0.0);
     c.sum = path_sum, c.nee = nee_priv, c.out = 0, c.count_only = 0;
     c.bsum = path_sum + LSQT_NWI_PAD; /* a band block's: after the vertex's row */
+#ifdef LSQT_RNG_WIDE
+    rng_t ahead; /* the next path's stream, made with this one's (rng_init_pair) */
+    int have_ahead = 0;
+#endif
     for (ulong p = s.begin + (ulong)lid; p < s.end; p += (ulong)lsz) {
         c.hero = (int)(p % LSQT_NB); /* every band leads as many paths */
-        rng_t rng = rng_init(scene->seed_lo, scene->seed_hi, s.slice, p, RNG_PURPOSE_WALK | scene->rng_side);
+        const uint purpose = RNG_PURPOSE_WALK | scene->rng_side;
+        rng_t rng;
+#ifdef LSQT_RNG_WIDE
+        if (have_ahead)
+            rng = ahead, have_ahead = 0;
+        else if (p + (ulong)lsz < s.end)
+            rng_init_pair(scene->seed_lo, scene->seed_hi, s.slice, p, p + (ulong)lsz, purpose, &rng, &ahead), have_ahead = 1;
+        else
+#endif
+            rng = rng_init(scene->seed_lo, scene->seed_hi, s.slice, p, purpose);
         run_path(&c, wo, &rng, hist_b);
         nee_flush(&c);
     }
