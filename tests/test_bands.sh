@@ -87,6 +87,18 @@ assert b["bands"] == 1 and b["wavelengths"] is None
 PY
 # A one-band run is today's: LSS version 6.
 expect 0 "format: LSS version 6" -- "$BIN" info one-1.lsqt.lss
+# One band at one wavelength keeps it: its RAW's header (um), the JSON, info, and the LSS
+# (version 7, one band), which the same command continues and another wavelength does not.
+printf 'Medium\nLayer z=0 LambertianBsdf fR=0.5\nMedium\n' > w1.lsqt
+"$BIN" w1.lsqt $S -R --wavelengths 550 --json w1.json
+if [ "$(sed -n 2p w1.lsqt.raw)" = "1 0.55" ]; then ok; else bad "one band at 550 nm: RAW header '$(sed -n 2p w1.lsqt.raw)'"; fi
+python3 -c 'import json, sys; j = json.load(open(sys.argv[1])); assert j["bands"] == 1 and j["wavelengths"] == [550] and isinstance(j["slices"][0]["R"], float), j["wavelengths"]' w1.json && ok || bad "one band at 550 nm: the JSON"
+expect 0 "band: one, at 550 nm" -- "$BIN" info w1.lsqt.lss
+expect 0 "format: LSS version 7" -- "$BIN" info w1.lsqt.lss
+expect 0 "" -- "$BIN" w1.lsqt $S --wavelengths 550
+expect 0 "paths: 6000 per slice" -- "$BIN" info w1.lsqt.lss
+expect 2 "holds a run made with --wavelengths 550, this one is with --wavelengths 650" -- "$BIN" w1.lsqt $S --wavelengths 650
+expect 2 "this one is without --wavelengths" -- "$BIN" w1.lsqt $S
 
 # Shared paths: bands 0 and 2 share (band 2 does not scatter, so its phase function does
 # not matter; the extinctions differ), band 1's phase function differs from band 0's.

@@ -32,7 +32,8 @@ printf 'Medium\nLayer z=0 LambertianBsdf fR=0.3 fT=0.5\nMedium eta=1.3 mus=2 mua
 
 # check.py NC INFO_JSON NO NI NPHI: the NetCDF against info --json --bsdf. With bands
 # (info's "bands" > 1) every value of band k (info's lists) is channel k's, the channel
-# dimension leads, and its labels and wavelengths are the run's; one band has none.
+# dimension leads, and its labels and wavelengths are the run's; one band has no channel
+# dimension, and at one wavelength (--wavelengths 550) a scalar wavelength coordinate.
 cat > check.py <<'PY'
 import json, math, sys
 import numpy as np
@@ -52,8 +53,13 @@ if nb > 1:
     if wl is not None and ("wavelength" not in d["brdf"].coords or d["wavelength"].dtype != np.float64
                            or list(d["wavelength"].values) != wl or d["wavelength"].attrs.get("units") != "nm"):
         p.append("wavelength coordinate %s, expected %s nm" % (d["wavelength"].values if "wavelength" in d else None, wl))
-elif "channel" in d.dims or "wavelength" in d.variables:
-    p.append("one band with a channel dimension or wavelengths")
+elif "channel" in d.dims:
+    p.append("one band with a channel dimension")
+elif wl is None and "wavelength" in d.variables:
+    p.append("one band without a wavelength has a wavelength coordinate")
+elif wl is not None and ("wavelength" not in d["brdf"].coords or d["wavelength"].dims != ()
+                         or [float(d["wavelength"])] != wl or d["wavelength"].attrs.get("units") != "nm"):
+    p.append("one band at %s nm: wavelength %s" % (wl, d["wavelength"].values if "wavelength" in d else None))
 bands = range(nb)
 def band(x, k): return x[k] if nb > 1 else x  # info's value of band k
 def chan(a, k): return a.isel(channel=k) if nb > 1 else a  # the NetCDF's
@@ -141,6 +147,10 @@ sed 's/fR=0.3 fT=0.5/fR=0.3,0.6 fT=0.5,0.2/' t.lsqt > tw.lsqt
   && ok || bad "wavelengths: run and export"
 "$BIN" info tw.lsqt.lss --json tw.json --bsdf > /dev/null
 "$PY" check.py tw.nc tw.json 3 3 6 > out.txt 2>&1 && ok || bad "NetCDF with wavelengths: $(cat out.txt)"
+"$BIN" -q -p 600 --grid 3,3,6 --wavelengths 550 -o t1.raw --lss t1.lss t.lsqt && "$BIN" export -q t1.lss -o t1.nc \
+  && ok || bad "one band at 550 nm: run and export"
+"$BIN" info t1.lss --json t1.json --bsdf > /dev/null
+"$PY" check.py t1.nc t1.json 3 3 6 > out.txt 2>&1 && ok || bad "NetCDF of one band at 550 nm: $(cat out.txt)"
 "$PY" -c 'import xarray as xr, sys; d = xr.open_dataset(sys.argv[1])
 sys.exit(not (list(d.btdf_below.dims) == ["channel", "cos_theta_i", "phi_d", "cos_theta_o"]
               and float(d.brdf.sel(channel="650nm").wavelength) == 650.0))' tw.nc \

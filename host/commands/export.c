@@ -145,6 +145,9 @@ static void define_axes(ncw *w, const lsqt_state *st, const grid *g, nc_vars *v)
             v->v_wl = def_var(w, "wavelength", 1, &v->d_c, "nm", "wavelength of the band");
             put_text(w, v->v_wl, "standard_name", "radiation_wavelength");
         }
+    } else if (st->wavelengths) { /* one band with its wavelength: a scalar coordinate */
+        v->v_wl = def_var(w, "wavelength", 0, NULL, "nm", "wavelength of the band");
+        put_text(w, v->v_wl, "standard_name", "radiation_wavelength");
     }
     if (w->status == NC_NOERR) nc_check(w, nc_def_dim(w->id, "cos_theta_i", (size_t)g->ni, &v->d_i), "cos_theta_i");
     if (w->status == NC_NOERR) nc_check(w, nc_def_dim(w->id, "phi_d", (size_t)g->nphi, &v->d_p), "phi_d");
@@ -241,9 +244,9 @@ static int put_values(ncw *w, const lsqt_state *st, const lsqt_slice_est *est, c
     if (nb > 1) {
         for (size_t b = 0; b < nb; b++) labels[b] = lsqt_band_label(g->nb, st->wavelengths, (int)b, lab[b], sizeof lab[b]);
         if (w->status == NC_NOERR) nc_check(w, nc_put_var_string(w->id, v->v_ch, labels), "channel values");
-        if (v->v_wl >= 0 && w->status == NC_NOERR)
-            nc_check(w, nc_put_var_double(w->id, v->v_wl, st->wavelengths), "wavelength values");
     }
+    if (v->v_wl >= 0 && w->status == NC_NOERR)
+        nc_check(w, nc_put_var_double(w->id, v->v_wl, st->wavelengths), "wavelength values");
     const size_t ns = (size_t)st->n_slices;
     for (int side = 0; side < (g->below ? 2 : 1); side++) {
         for (int h = 0; h < (st->transmits ? 2 : 1); h++)

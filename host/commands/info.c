@@ -156,6 +156,8 @@ static void print_text(FILE *f, const char *path, const lsqt_state *st, const ls
         fprintf(f, "bands: %d", nb);
         for (int b = 0; st->wavelengths && b < nb; b++) fprintf(f, "%s%.10g", b ? ", " : " at ", st->wavelengths[b]);
         fprintf(f, "%s\n", st->wavelengths ? " nm" : nb == 3 ? " (R, G, B)" : " (unnamed)");
+    } else if (st->wavelengths) {
+        fprintf(f, "band: one, at %.10g nm\n", st->wavelengths[0]);
     }
     if (st->flags) fprintf(f, "flags: 0x%x (%s)\n", st->flags, flags);
     else fprintf(f, "flags: none\n");

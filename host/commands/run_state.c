@@ -183,6 +183,17 @@ static int continue_lss(lsqt_state *st, const lsqt_cli *c, const lsqt_assembly *
         lsqt_state_free(st);
         rc = fail(2, "'%s' was made for a different assembly; use -R to start over and replace it%s",
                   lss_path, "");
+    } else if ((st->wavelengths != NULL) != (a->wavelengths != NULL) ||
+               (st->wavelengths && st->n_bands == lsqt_assembly_bands(a) &&
+                memcmp(st->wavelengths, a->wavelengths, (size_t)st->n_bands * sizeof *st->wavelengths))) {
+        /* one band's wavelength is not in the assembly's text (bands' are) */
+        char was[64] = "without --wavelengths", now[64] = "without --wavelengths";
+        if (st->wavelengths) snprintf(was, sizeof was, "with --wavelengths %g", st->wavelengths[0]);
+        if (a->wavelengths) snprintf(now, sizeof now, "with --wavelengths %g", a->wavelengths[0]);
+        lsqt_state_free(st);
+        snprintf(err, sizeof err, "'%s' holds a run made %s, this one is %s; use -R to start over and replace it",
+                 lss_path, was, now);
+        rc = fail(2, "%s%s", err, "");
     } else if (st->stage == LSQT_STAGE_PILOT && lsqt_state_contiguous(st) == UINT64_MAX) {
         lsqt_state_free(st);
         rc = fail(2, "'%s' is one shard of an RRSS pilot: merge all of the pilot's shards first "

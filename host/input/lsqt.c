@@ -1051,6 +1051,9 @@ int lsqt_parse_bands(const char *text, size_t len, const char *name, const doubl
     if (!rc && bands.n == 1) {
         rc = lsqt_parse_band(text, len, name, &bands, 0, out, diag);
         lsqt_bands_free(&bands);
+        /* one band at one wavelength keeps it (its RAW header, the JSON, the LSS) */
+        if (!rc && n_wl == 1 && (out->wavelengths = malloc(sizeof *out->wavelengths)) != NULL)
+            out->wavelengths[0] = wl[0];
         return rc;
     }
     int prune_at = -1;

@@ -129,7 +129,8 @@ static void put_f32(wbuf *w, float f)
 static void put_state(wbuf *w, const lsqt_state *st, uint64_t file_bytes)
 {
     const size_t nw = (size_t)st->n_wi;
-    const int bands = st->n_bands > 1; /* one band: version 6, as before bands */
+    /* one band without a wavelength: version 6, as before bands */
+    const int bands = st->n_bands > 1 || st->wavelengths;
     put(w, magic, 8);
     put_u32(w, bands ? LSQT_LSS_VERSION : 6u);
     uint32_t layout[] = {LSQT_CHUNK, LSQT_BATCHES, LSQT_FIX_BITS, LSQT_HIST_NMU, LSQT_HIST_NPHI, LSQT_T_COUNT};
@@ -387,7 +388,7 @@ static void announced_size(lss_header *h)
     const uint32_t n_slices = h->n_slices, n_wi = h->n_wi, tl = h->tl, n_ranges = h->n_ranges;
     const uint32_t nb = h->version >= 7 ? h->n_bands : 1;
     int sane = n_slices >= 1 && n_slices <= 4096 * 8 && n_wi >= 1 && n_wi <= 65536 && tl <= (1u << 24) &&
-               n_ranges <= (1u << 20) && (h->version < 7 || (nb >= 2 && nb <= LSQT_MAX_BANDS && h->named <= 1));
+               n_ranges <= (1u << 20) && (h->version < 7 || ((nb >= 2 || (nb == 1 && h->named == 1)) && nb <= LSQT_MAX_BANDS && h->named <= 1));
     const size_t tallies = (size_t)LSQT_BATCHES * (n_wi + LSQT_T_COUNT + LSQT_HIST_BINS) * nb;
     const size_t fixed = sane ? h->header + (size_t)tl + (h->named ? (size_t)nb * 8 : 0) + (size_t)n_ranges * 16 +
                                     (20 + (size_t)n_wi * 12) * n_slices + 4

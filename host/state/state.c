@@ -50,7 +50,7 @@ int lsqt_state_init_bands(lsqt_state *st, const char *canonical, uint64_t hash, 
 {
     memset(st, 0, sizeof *st);
     st->n_bands = n_bands > 1 ? n_bands : 1;
-    if (wl && st->n_bands > 1) {
+    if (wl) { /* one band keeps its wavelength too (its RAW header, the JSON, a version 7 LSS) */
         st->wavelengths = malloc((size_t)st->n_bands * sizeof *wl);
         if (!st->wavelengths) return -1;
         memcpy(st->wavelengths, wl, (size_t)st->n_bands * sizeof *wl);
