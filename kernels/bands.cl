@@ -145,8 +145,9 @@ LSQT_INLINE int conductor_vertex_bands(const walk_ctx *c, __global const lsqt_de
         (void)rng_uniform(rng); /* conductor_sample's u0, unused */
         const real u1 = rng_uniform(rng), u2 = rng_uniform(rng);
         ms_vtx x = ms_vertex(alpha, wo, R(1.0), R(1.0), u1, u2);
-        const real vm = dot(x.v, x.m), lam_v = ggx_lambda(alpha, wo.z);
-        const real3 r = normalize(R(2.0) * vm * x.m - x.v);
+        real vm;
+        const real3 r = conductor_reflect(&x, &vm);
+        const real lam_v = ggx_lambda(alpha, wo.z);
         if (!(vm > R(0.0)) || !(r.z > R(0.0))) return band_scale(wb, R(0.0));
         fresnel_bands(c, li, vm, wb);
         *wi = r;
@@ -159,9 +160,9 @@ LSQT_INLINE int conductor_vertex_bands(const walk_ctx *c, __global const lsqt_de
         if (order > LSQT_MS_MAX_ORDER) return band_scale(wb, R(0.0));
         const real u1 = rng_uniform(rng), u2 = rng_uniform(rng);
         ms_vtx x = ms_vertex(alpha, -r, h, R(1.0), u1, u2);
-        const real vm = dot(x.v, x.m);
+        real vm;
+        r = conductor_reflect(&x, &vm);
         if (!(vm > R(0.0))) return band_scale(wb, R(0.0));
-        r = normalize(R(2.0) * vm * x.m - x.v);
         fresnel_bands(c, li, vm, wb); /* every reflection's, in every band */
     }
     *wi = r;
@@ -176,6 +177,10 @@ LSQT_INLINE int layer_vertex_bands(const walk_ctx *c, int li, real3 d, real *wb,
     const int n = c->scene->n_layers;
     const int up = li == c->scene->top_nonnull, down = li == c->scene->bottom_nonnull;
     __global const lsqt_dev_layer *l = &c->layers[li];
+    if (LSQT_ON(BSDF_MS_CONDUCTIVE) && l->kind == LSQT_BSDF_MS_CONDUCTIVE && !up) {
+        c->work[WORK_LAYER]++;
+        return conductor_vertex_bands(c, l, li, d, wb, rng, wi); /* no factors, no terms */
+    }
     __global const lsqt_dev_medium *above = &c->media[li], *below = &c->media[li + 1];
     const real tau_up = above->tau_above + above->mut * above->thickness;
     const real tau_down = below->tau_below + below->mut * below->thickness;
@@ -188,8 +193,6 @@ LSQT_INLINE int layer_vertex_bands(const walk_ctx *c, int li, real3 d, real *wb,
         band_depths(c, b, -1, R(0.0), li, tau_up, tau_down, &dtu[b], &dtd[b]);
     }
     c->work[WORK_LAYER]++;
-    if (LSQT_ON(BSDF_MS_CONDUCTIVE) && l->kind == LSQT_BSDF_MS_CONDUCTIVE && !up)
-        return conductor_vertex_bands(c, l, li, d, wb, rng, wi);
     if (layer_is_micro(l)) { /* the same in every band (fs = fo = 1) */
         ms_sink k;
         nee_ms_sink(c, tab, li, &k);

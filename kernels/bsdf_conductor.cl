@@ -42,11 +42,19 @@ LSQT_INLINE realv conductor_phasev(__global const lsqt_dev_layer *l, const ms_vt
     return select((realv)(R(0.0)), f, (vm > R(0.0)) & (u.z > R(0.0)));
 }
 
+/* The ray's reflection about the vertex's visible normal; *vm, the cosine between them
+ * (band blocks weigh it per band: bands.cl). */
+LSQT_INLINE real3 conductor_reflect(const ms_vtx *x, real *vm)
+{
+    *vm = dot(x->v, x->m);
+    return normalize(R(2.0) * *vm * x->m - x->v);
+}
+
 /* Reflects about the vertex's visible normal; returns the facet albedo F. */
 LSQT_INLINE real conductor_scatter(__global const lsqt_dev_layer *l, const ms_vtx *x, real3 *r)
 {
-    real vm = dot(x->v, x->m);
-    *r = normalize(R(2.0) * vm * x->m - x->v);
+    real vm;
+    *r = conductor_reflect(x, &vm);
     return vm > R(0.0) ? fresnel_conductorv(l->p[1], l->p[2], (realv)(vm)).s0 : R(0.0);
 }
 

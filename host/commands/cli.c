@@ -62,6 +62,7 @@ static void help_run_flags(FILE *f)
           "                              value per band) or @FILE (a table of nm and value, read\n"
           "                              at each band); without it, comma lists alone set the bands\n"
           "                              (three are R, G, B). One RAW per band: OUT.550nm.raw\n"
+          "                              (one band at one wavelength: OUT.raw, which records it)\n"
           ,f);
     fputs("      --from-below            when the stack transmits, also the slices of light entering\n"
           "                              from the bottom medium (the full two-sided BSDF), written\n"
