@@ -72,7 +72,7 @@ n=$("$BIN" info s.lss --json - 2>/dev/null | python3 -c "import json,sys; print(
   && cmp -s s.below.raw r.below.raw && ok || bad "an interrupted two-sided LSS of $n paths is not a -p $n run"
 # Ctrl-C in a two-sided RRSS pilot: the LSS is the pilot of both sides (the same paths);
 # continuing with the same -p finishes it: the bytes of the uninterrupted run, both RAWs.
-"$BIN" -v -wo 4 -wi 16 -p 1.2e6 --from-below -o q.raw --lss q.lss S.lsqt 2>q.err >/dev/null &
+"$BIN" -v -wo 4 -wi 16 -p 1.2e6 -rp 0.8 --from-below -o q.raw --lss q.lss S.lsqt 2>q.err >/dev/null &
 pid=$!
 for _ in $(seq 600); do grep -q "RRSS: .* pilot paths" q.err 2>/dev/null && break; sleep 0.1; done
 sleep 0.3 # the pilot of 9.6e5 paths per side takes about 1.5 s on 2 cores
@@ -80,7 +80,7 @@ kill -INT "$pid"
 wait "$pid"
 "$BIN" info q.lss >q.info 2>&1
 grep -q "^stage: RRSS pilot" q.info && ok || bad "Ctrl-C in a two-sided pilot: $(grep -E 'stage|paths:' q.info)"
-"$BIN" -q -p 1.2e6 -o q.raw --lss q.lss S.lsqt && "$BIN" -q -wo 4 -wi 16 -p 1.2e6 --from-below -o u.raw --lss u.lss S.lsqt &&
+"$BIN" -q -p 1.2e6 -o q.raw --lss q.lss S.lsqt && "$BIN" -q -wo 4 -wi 16 -p 1.2e6 -rp 0.8 --from-below -o u.raw --lss u.lss S.lsqt &&
   cmp -s q.lss u.lss && cmp -s q.raw u.raw && cmp -s q.below.raw u.below.raw && ok ||
   bad "continuing an interrupted two-sided RRSS pilot differs from one run"
 # A one-sided LSS stays one-sided: --from-below contradicts it (exit 2, nothing written).

@@ -190,7 +190,8 @@ grep -q '"seed": 9007199254740993,' s1.json && ok || bad "JSON seed: $(grep -o '
 expect 0 "kernel build options: " -- "$BIN" -v -R -p 300 -wo 4 -wi 16 -o v.raw --lss v.lss L.lsqt
 expect 0 "-cl-std=CL1.2" -- "$BIN" -v -R -p 300 -wo 4 -wi 16 -o v.raw --lss v.lss L.lsqt
 
-# RRSS (the default): the pilot is -rp of the first run's -p and chooses the directions,
+# RRSS (the default): the pilot is -rp (default 0.3: 1200 of 4000 paths) of the first
+# run's -p and chooses the directions,
 # which later runs keep; so "-p 4000, then -p 8000" is byte for byte "-p 4000" three times.
 # Runs are deterministic; info says how the directions were chosen.
 "$BIN" -q -R -p 4000 -wo 4 -wi 16 -o r1.raw --lss r1.lss S.lsqt && "$BIN" -q -p 8000 -o r1.raw --lss r1.lss S.lsqt \
@@ -200,7 +201,7 @@ expect 0 "-cl-std=CL1.2" -- "$BIN" -v -R -p 300 -wo 4 -wi 16 -o v.raw --lss v.ls
   || bad "RRSS: -p 4000 then -p 8000 differs from -p 4000 three times"
 "$BIN" -q -R -p 4000 -wo 4 -wi 16 -o r4.raw --lss r4.lss S.lsqt && "$BIN" -q -R -p 4000 -wo 4 -wi 16 -o r5.raw \
   --lss r5.lss S.lsqt && cmp -s r4.lss r5.lss && ok || bad "RRSS: two runs differ"
-expect 0 "directions: RRSS (4 candidates per direction, pilot of 3200 paths)" -- "$BIN" info r4.lss
+expect 0 "directions: RRSS (4 candidates per direction, pilot of 1200 paths)" -- "$BIN" info r4.lss
 expect 0 "directions: even spread" -- "$BIN" info once.lss
 # A stack that sends nothing back out: the walks give no candidates; the spread fills in,
 # and the run says so.

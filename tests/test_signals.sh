@@ -49,10 +49,10 @@ N=$(paths sTERM.lss)
 "$BIN" -q -p 5000 --lss sTERM.lss -o sTERM.raw S.lsqt && "$BIN" -q -R -p $((N + 5000)) "${F[@]}" --lss v.lss -o v.raw S.lsqt \
   && cmp -s v.lss sTERM.lss && cmp -s v.raw sTERM.raw && ok || bad "continuing the SIGTERM LSS differs from one run"
 
-# SIGTERM during the RRSS pilot (default directions; rp 0.8, so most of a run): the LSS
+# SIGTERM during the RRSS pilot (RRSS with -rp 0.8, so most of a run is pilot): the LSS
 # is the pilot so far, and continuing finishes the pilot, chooses and runs the rest: the
 # bytes of the uninterrupted run.
-"$BIN" -v -R -p 3e6 -wo 4 -wi 16 --lss p.lss -o p.raw S.lsqt 2>p.err >/dev/null &
+"$BIN" -v -R -p 3e6 -rp 0.8 -wo 4 -wi 16 --lss p.lss -o p.raw S.lsqt 2>p.err >/dev/null &
 pid=$!
 (sleep 120; kill -KILL $pid 2>/dev/null) >/dev/null 2>&1 &
 watchdogs+=($!)
@@ -64,7 +64,7 @@ rc=$?
 "$BIN" info p.lss > p.info 2>&1
 [ "$rc" = 1 ] && grep -q "^stage: RRSS pilot" p.info && [ -s p.raw ] && ok ||
   bad "SIGTERM in the RRSS pilot: exit $rc, $(grep -E 'stage|paths:' p.info), $(tail -2 p.err)"
-"$BIN" -q -p 3e6 --lss p.lss -o p.raw S.lsqt && "$BIN" -q -R -p 3e6 -wo 4 -wi 16 --lss q.lss -o q.raw S.lsqt &&
+"$BIN" -q -p 3e6 --lss p.lss -o p.raw S.lsqt && "$BIN" -q -R -p 3e6 -rp 0.8 -wo 4 -wi 16 --lss q.lss -o q.raw S.lsqt &&
   cmp -s p.lss q.lss && cmp -s p.raw q.raw && ok || bad "continuing an interrupted RRSS pilot differs from one run"
 
 # Checkpoints: a SIGKILL (nothing can be written then) still leaves the last checkpoint,

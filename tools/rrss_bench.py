@@ -17,7 +17,8 @@ the run's seconds, and efficiency = 1 / (E^2 * seconds): higher is better.
 usage: tools/rrss_bench.py LSQT_CL FILE [PATHS...]   (default: 2e4 1e5)
 environment: LSQT_FLAGS (default "-wo 4 -wi 80"), LSQT_REF_PATHS (default 4e5),
              LSQT_TESTS (test directions per slice, default 900), LSQT_RRSS_FLAGS (more
-             flags for the RRSS runs, e.g. "-rp 0.3").
+             flags for the RRSS runs, e.g. "-rp 0.3"; several sets apart by ';' compare
+             them: "-rp 0.8;-rp 0.3").
 Where the rebuilt BSDF's error is mostly that of the directions' placement (a narrow lobe),
 E does not fall with more paths: compare E at equal seconds, not the efficiency."""
 import json, math, os, random, subprocess, sys, tempfile
@@ -136,10 +137,11 @@ def main():
             vals.append(best)
         refs.append(vals)
     print("reference: %s paths per slice at %d test directions per slice; %s" % (ref_paths, n_tests, " ".join(flags)))
-    print("%-8s %-8s %10s %9s %9s %12s" % ("method", "paths", "E (rms)", "seconds", "CPU s", "efficiency"))
+    print("%-16s %-8s %10s %9s %9s %12s" % ("method", "paths", "E (rms)", "seconds", "CPU s", "efficiency"))
+    sets = os.environ.get("LSQT_RRSS_FLAGS", "").split(";")
+    methods = [(("rrss " + fl.strip()).strip(), fl.split()) for fl in sets] + [("spread", ["--wi-spread"])]
     for p in paths:
-        rrss_flags = os.environ.get("LSQT_RRSS_FLAGS", "").split()
-        for method, extra in (("rrss", rrss_flags), ("spread", ["--wi-spread"])):
+        for method, extra in methods:
             t0 = os.times()
             run(binp, ["-p", p, *flags, *extra, "--lss", o("m.lss"), "-o", o("m.raw"), "--json", o("m.json"), f])
             t1 = os.times()
@@ -155,7 +157,7 @@ def main():
                     den += fr * abs(w[2]) / pd
                 e2.append((num / den) ** 2 if den > 0 else float("nan"))
             e = math.sqrt(sum(e2) / len(e2))
-            print("%-8s %-8s %10.4g %9.3f %9.2f %12.4g" % (method, p, e, secs, cpu, 1 / (e * e * secs) if e > 0 else float("inf")))
+            print("%-16s %-8s %10.4g %9.3f %9.2f %12.4g" % (method, p, e, secs, cpu, 1 / (e * e * secs) if e > 0 else float("inf")))
 
 
 if __name__ == "__main__":

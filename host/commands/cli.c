@@ -36,7 +36,7 @@ static void help_usage_and_sampling(FILE *f)
           "                              the RAW, which holds both mirror images, has it as given\n"
           "  -rx, --rrss-oversampling N  RRSS candidates per incident direction, 2-8 (default 4)\n"
           "  -rp, --rrss-path-frac F     share of the first run's -p spent on the RRSS pilot, (0,1]\n"
-          "                              (default 0.8; its tallies are kept)\n"
+          "                              (default 0.3; its tallies are kept)\n"
           "      --wi-spread             an even spread of incident directions instead of RRSS\n"
           "      --grid NO,NI,NPHI       a regular grid instead of -wo and -wi (for NetCDF and\n"
           "                              Eradiate): slices at cos(theta_o) = linspace(0, 1, NO),\n"
@@ -383,7 +383,7 @@ int lsqt_cli_parse(int argc, char **argv, lsqt_cli *c, char *err, size_t errcap)
     c->wo_count = 12;
     c->wi_count = 80;
     c->rx = 4;
-    c->rp = 0.8;
+    c->rp = 0.3;
     c->checkpoint = 300;
     char wi_name[16] = ""; /* -wi or --wi-count, as given */
     for (int i = 1; i < argc; i++) {
