@@ -422,15 +422,13 @@ LSQT_INLINE void tally_exit(const walk_ctx *c, int b, real3 d, int up, int scatt
     acc_add_band(c, b, up ? LSQT_T_R : LSQT_T_T, w);
     if (nee_counting(c)) return;
     if (scattered) {
-        /* every block of a grouped session holds the same paths' exits */
+        /* one histogram a simulated slice: a grouped session's blocks are the same paths */
         fix1 q = to_fixed(w, c->flags);
-        const int bin = hist_bin(d, up), g = max(c->scene->slice_group, 1);
+        const int bin = hist_bin(d, up);
         /* A block's bands are the innermost index: one exit's adds share cache lines (one
          * band's histograms after another's were a sixth of a 32-band run, in misses). */
         if (LSQT_NB == 1 || q.lo || q.hi) /* a block's bands without weight add nothing */
-            for (int j = 0; j < g; j++)
-                global_add128(hist + 2 * (((size_t)j * LSQT_BATCHES * LSQT_HIST_BINS + bin) * LSQT_NB + b), q.lo, q.hi,
-                              c->flags);
+            global_add128(hist + 2 * ((size_t)bin * LSQT_NB + b), q.lo, q.hi, c->flags);
     } else {
         acc_add_band(c, b, LSQT_T_DELTA_T, w);
     }
@@ -623,8 +621,8 @@ LSQT_INLINE chunk_span chunk_of(ulong chunk_first, ulong path_begin, ulong path_
 /* The paths: a work-group runs those of its chunk (chunk_span) and adds its tallies once
  * per chunk to the batch's. In a grouped session (the RRSS pilot) one walk serves every
  * block of the slice: block b's directions are [b LSQT_GROUP_PAD, + LSQT_GROUP_NWI), and
- * its tallies are state slice slice * slice_group + b, whose R, T, work and histogram are
- * the walk's. The CPU path sums the next-event estimates in local memory and ignores rec,
+ * its tallies are state slice slice * slice_group + b, whose R and T and work are the
+ * walk's; the histogram is one a simulated slice (the host gives it to every block). The CPU path sums the next-event estimates in local memory and ignores rec,
  * rec_off and count_only. The GPU path (LSQT_NEE_RECORDS) makes none: path p's records
  * go to rec from rec_off[slice * (path_end - path_begin) + p - path_begin] on, and
  * lsqt_estimate evaluates them; with count_only it only writes each path's record count
@@ -655,7 +653,7 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
     c.nee_on = 1, c.exit_dir = 0, c.hero = 0, c.touched = &touched;
     c.sum = 0, c.bsum = 0, c.nee = 0, c.bw = bandw;
     real3 wo = make_real3(wo_dirs[4 * v], wo_dirs[4 * v + 1], wo_dirs[4 * v + 2]);
-    __global ulong *hist_b = hist + 2 * ((ulong)v * LSQT_BATCHES + (ulong)s.batch) * LSQT_HIST_BINS * LSQT_NB;
+    __global ulong *hist_b = hist + 2 * ((ulong)s.slice * LSQT_BATCHES + (ulong)s.batch) * LSQT_HIST_BINS * LSQT_NB;
     /* The chunk's paths, one body per code path. The CPU path's local memory can only be
      * declared in the kernel; the GPU path's loop stays here too (in a function of its
      * own, clang-15 inlines the walk in another order, and lsqt_walk and lsqt_exits take

@@ -10,7 +10,8 @@
  *    the kept directions' tallies are bit for bit those of a plain run of the pilot's
  *    paths with those directions (so "they keep their pilot tallies" holds exactly), and
  *    continuing both by the same paths keeps them equal; every candidate block of the
- *    pilot state holds the R, T, work and histogram of a plain run of the same paths;
+ *    pilot state holds the R, T, work and histogram of a plain run of the same paths, also
+ *    when the pilot is continued from a state that holds each block's histogram;
  *  - placement: for a smooth dielectric (alpha 0.05) the share of kept directions within
  *    10 degrees of the mirror direction is well above the even spread's (which is about
  *    the cap's solid angle, 0.095 sr of the pi-sr half hemisphere). */
@@ -317,9 +318,32 @@ static void test_pilot_blocks(void)
             const size_t v = (size_t)s * RX + (size_t)b;
             CHECK(!memcmp(ps.scalars + v * ns, plain.st.scalars + (size_t)s * ns, ns * sizeof *ps.scalars),
                   "pilot slice %d block %d: R, T or work differ from a plain run of the same paths", s, b);
-            CHECK(!memcmp(ps.hist + v * nh, plain.st.hist + (size_t)s * nh, nh * sizeof *ps.hist),
+            CHECK(!memcmp(lsqt_state_hist_of(&ps, (int)v), plain.st.hist + (size_t)s * nh, nh * sizeof *ps.hist),
                   "pilot slice %d block %d: the exit histogram differs from a plain run's", s, b);
         }
+    /* A pilot stopped after 1000 paths and continued from a state that holds every block's
+     * histogram (as one read from its LSS does) ends with every block's histogram that of
+     * the plain run of all 2000 paths. */
+    lsqt_state half, q;
+    memset(&half, 0, sizeof half);
+    CHECK(lsqt_rrss_pilot(&fixture_cx, &r.a, &r.st, RX, 2000, 2000, 0, 1000, &o, &half, &info, err, sizeof err) == 0,
+          "%s", err);
+    CHECK(half.hist_group == RX, "the pilot state's histograms are one a slice (group %u)", half.hist_group);
+    CHECK(lsqt_state_init_bands(&q, half.canonical, half.hash, half.seed, half.n_slices, half.n_wi, half.transmits, 1,
+                                NULL) == 0 && lsqt_state_set_ranges(&q, half.ranges, half.n_ranges) == 0,
+          "out of memory");
+    q.use_double = half.use_double, q.dir_method = half.dir_method, q.rx = half.rx, q.stage = half.stage;
+    q.pilot_paths = half.pilot_paths, q.span_end = half.span_end, q.flags = half.flags;
+    memcpy(q.theta_o, half.theta_o, (size_t)q.n_slices * sizeof *q.theta_o);
+    memcpy(q.slice_flags, half.slice_flags, (size_t)q.n_slices * sizeof *q.slice_flags);
+    memcpy(q.wi, half.wi, (size_t)q.n_slices * (size_t)q.n_wi * 4 * sizeof *q.wi);
+    for (int v = 0; v < q.n_slices; v++) lsqt_state_copy_slice_tallies(&q, v, &half, v);
+    CHECK(lsqt_rrss_pilot_continue(&fixture_cx, &r.a, &q, 1000, 1000, &o, &info, err, sizeof err) == 0, "%s", err);
+    for (int v = 0; v < q.n_slices && q.n_slices == 2 * RX; v++)
+        CHECK(!memcmp(lsqt_state_hist_of(&q, v), plain.st.hist + (size_t)(v / RX) * nh, nh * sizeof *q.hist),
+              "pilot continued from every block's histograms: block %d of slice %d differs from a plain run's", v % RX,
+              v / RX);
+    lsqt_state_free(&q), lsqt_state_free(&half);
     lsqt_state_free(&ps);
     free_run(&r), free_run(&plain);
 }

@@ -374,6 +374,12 @@ int lsqt_rrss_pilot(lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *
         snprintf(err, errcap, "out of memory");
         return 1;
     }
+    /* the blocks of a slice are the same paths: one histogram (a 32-band pilot's were 0.8 GB) */
+    if (lsqt_state_group_hist(ps, rx)) {
+        lsqt_state_free(ps);
+        snprintf(err, errcap, "out of memory");
+        return 1;
+    }
     ps->use_double = st->use_double;
     ps->dir_method = LSQT_DIRS_RRSS;
     ps->rx = (uint32_t)rx;
@@ -484,8 +490,7 @@ int lsqt_rrss_choose(const lsqt_state *ps, lsqt_state *st, lsqt_rrss_info *info,
             const lsqt_state to = lsqt_state_band(st, band), from = lsqt_state_band(ps, band);
             memcpy(to.scalars + (size_t)sl * B * LSQT_T_COUNT, from.scalars + (size_t)sl * rx * B * LSQT_T_COUNT,
                    B * LSQT_T_COUNT * sizeof *st->scalars);
-            memcpy(to.hist + (size_t)sl * B * LSQT_HIST_BINS, from.hist + (size_t)sl * rx * B * LSQT_HIST_BINS,
-                   B * LSQT_HIST_BINS * sizeof *st->hist);
+            memcpy(lsqt_state_hist_of(&to, sl), lsqt_state_hist_of(&from, sl * rx), B * LSQT_HIST_BINS * sizeof *st->hist);
         }
     }
     info->select_seconds = lsqt_now() - t_sel;

@@ -133,28 +133,62 @@ static cl_int set_kernel_args(lsqt_session *s)
     return e;
 }
 
-/* A block's tallies as its buffers hold them: the path sums and scalars slot after slot,
- * the histogram with the slots innermost (device_layout.h; zeros for a padding slot);
- * with back, the other way, from the buffers' copy t into ST. */
-static void *block_tallies(const lsqt_session *s, const lsqt_state *st, int which, void *t, int back)
+/* A block's tallies between ST and ALL, laid out as its buffers hold them: the path sums
+ * and scalars slot after slot, the histogram with the slots innermost (device_layout.h)
+ * and one per slice group (its blocks' exits are the same paths'). With back, from ALL
+ * into ST (every slice of a group, unless ST shares them too); else from ST into ALL,
+ * a padding slot's part left as it is. */
+static void block_tallies(const lsqt_session *s, const lsqt_state *st, int which, lsqt_u128 *all, int back)
 {
-    const size_t n = which == 0 ? s->n_nee : which == 1 ? s->n_scalars : s->n_hist;
-    lsqt_u128 *all = back ? t : calloc((size_t)s->nb * n + 1, sizeof *all);
-    for (int j = 0; all && j < s->nb; j++) {
-        if (s->band_of[j] < 0) continue;
-        const lsqt_state v = lsqt_state_band(st, s->band_of[j]);
-        lsqt_u128 *band = which == 0 ? v.nee : which == 1 ? v.scalars : v.hist;
-        if (which == 2) {
-            for (size_t i = 0; i < n; i++)
-                if (back) band[i] = all[i * s->nb + j];
-                else all[i * s->nb + j] = band[i];
-        } else if (back) {
-            memcpy(band, all + (size_t)j * n, n * sizeof *all);
-        } else {
-            memcpy(all + (size_t)j * n, band, n * sizeof *all);
+    const size_t n = which == 0 ? s->n_nee : which == 1 ? s->n_scalars : s->n_hist, nb = (size_t)s->nb;
+    lsqt_state v[LSQT_BAND_BLOCK_MAX];
+    for (size_t j = 0; j < nb; j++)
+        if (s->band_of[j] >= 0) v[j] = lsqt_state_band(st, s->band_of[j]);
+    if (which != 2) {
+        for (size_t j = 0; j < nb; j++) {
+            if (s->band_of[j] < 0) continue;
+            lsqt_u128 *band = which == 0 ? v[j].nee : v[j].scalars;
+            if (back) memcpy(band, all + j * n, n * sizeof *all);
+            else memcpy(all + j * n, band, n * sizeof *all);
         }
+        return;
     }
-    return all;
+    /* bin by bin, every slot's at once: ALL is read or written in order (slot by slot it
+     * was a fifth of a 32-band run, each line fetched once per slot) */
+    const size_t per = (size_t)LSQT_BATCHES * LSQT_HIST_BINS, g = (size_t)s->slice_group;
+    lsqt_u128 *h[LSQT_BAND_BLOCK_MAX];
+    for (size_t k = 0; k < n / per; k++)
+        for (size_t m = 0; m < (back ? g : 1); m++) {
+            int shared = 0;
+            for (size_t j = 0; j < nb; j++) {
+                h[j] = s->band_of[j] >= 0 ? lsqt_state_hist_of(&v[j], (int)(k * g + m)) : NULL;
+                shared |= m && h[j] && h[j] == lsqt_state_hist_of(&v[j], (int)(k * g));
+            }
+            if (shared) break; /* ST's groups are these: written once */
+            for (size_t i = 0; i < per; i++) {
+                lsqt_u128 *row = all + (k * per + i) * nb;
+                for (size_t j = 0; j < nb; j++)
+                    if (!h[j]) continue;
+                    else if (back) h[j][i] = row[j];
+                    else row[j] = h[j][i];
+            }
+        }
+}
+
+/* Buffer BUF (BYTES) gets ST's tallies WHICH: zeros filled on the device for a state
+ * without paths (a fresh run, a pilot: no staging copy of what may be a GB of zeros),
+ * else written in place through a map. */
+static cl_int put_tallies(const lsqt_session *s, const lsqt_state *st, int which, cl_mem buf, size_t bytes)
+{
+    cl_command_queue q = s->cx->queue;
+    const cl_ulong zero = 0;
+    if (st->paths == 0) return clEnqueueFillBuffer(q, buf, &zero, sizeof zero, 0, bytes, 0, NULL, NULL);
+    cl_int e = CL_SUCCESS;
+    lsqt_u128 *p = clEnqueueMapBuffer(q, buf, CL_TRUE, CL_MAP_WRITE_INVALIDATE_REGION, 0, bytes, 0, NULL, NULL, &e);
+    if (e != CL_SUCCESS) return e;
+    memset(p, 0, bytes); /* a padding slot's part */
+    block_tallies(s, st, which, p, 0);
+    return clEnqueueUnmapMemObject(q, buf, p, 0, NULL, NULL);
 }
 
 /* The tables, the directions and the tallies go up; the direction tables (T, Lambda,
@@ -175,7 +209,6 @@ static int upload(lsqt_session *s, const lsqt_assembly *full, const lsqt_band_bl
     const size_t n_bw = s->nb > 1 ? (size_t)LSQT_BAND_TAB_SIZE(n, nbp) : 1;
     double *bw = calloc(n_bw, sizeof *bw);
     float *bw_f = calloc(n_bw, sizeof *bw_f);
-    void *tal[3] = {block_tallies(s, st, 0, NULL, 0), block_tallies(s, st, 1, NULL, 0), block_tallies(s, st, 2, NULL, 0)};
     /* Directions go to the device in the kernel's precision: double for --double. */
     const size_t pad = LSQT_PAD((size_t)st->n_wi, (size_t)s->vw), n_wo = (size_t)st->n_slices * 4;
     double *wo = calloc(n_wo, sizeof *wo);
@@ -184,8 +217,8 @@ static int upload(lsqt_session *s, const lsqt_assembly *full, const lsqt_band_bl
     void *wi_up = directions_of(st, s->slice_group, s->vw, &wi_bytes);
     int rc = 1;
     cl_int e = CL_SUCCESS;
-    if (!media || !layers || !media_f || !layers_f || !wo || !wo_f || !wi_up || !bw || !bw_f || !tal[0] || !tal[1] ||
-        !tal[2] || (s->nb > 1 && lsqt_band_block_tables(full, blk, nbp, st->use_double ? 0.0 : 0x1p-19, &scene, media, layers, bw))) {
+    if (!media || !layers || !media_f || !layers_f || !wo || !wo_f || !wi_up || !bw || !bw_f ||
+        (s->nb > 1 && lsqt_band_block_tables(full, blk, nbp, st->use_double ? 0.0 : 0x1p-19, &scene, media, layers, bw))) {
         snprintf(err, errcap, "out of memory");
         goto done;
     }
@@ -217,13 +250,21 @@ static int upload(lsqt_session *s, const lsqt_assembly *full, const lsqt_band_bl
     const size_t tab_size = (size_t)st->n_slices * ((size_t)n * LSQT_LAYER_TAB_ROWS + LSQT_MEDIA_TAB_ROWS) * pad * dir_size; /* LSQT_SLICE_TAB */
     s->tab = make_buffer(cx, rw, tab_size, NULL, &e);
     const size_t nb = (size_t)s->nb;
-    s->nee = make_buffer(cx, rw, nb * s->n_nee * sizeof *st->nee, tal[0], &e);
-    s->scalars = make_buffer(cx, rw, nb * s->n_scalars * sizeof *st->scalars, tal[1], &e);
-    s->hist = make_buffer(cx, rw, nb * s->n_hist * sizeof *st->hist, tal[2], &e);
+    s->nee = make_buffer(cx, rw, nb * s->n_nee * sizeof *st->nee, NULL, &e);
+    s->scalars = make_buffer(cx, rw, nb * s->n_scalars * sizeof *st->scalars, NULL, &e);
+    s->hist = make_buffer(cx, rw, nb * s->n_hist * sizeof *st->hist, NULL, &e);
     s->bandw = make_buffer(cx, ro, n_bw * dir_size, st->use_double ? (void *)bw : (void *)bw_f, &e);
     s->flags = make_buffer(cx, rw, sizeof flags0, &flags0, &e);
     if (e != CL_SUCCESS) {
         snprintf(err, errcap, "cannot allocate device buffers: %s (%d)", lsqt_cl_error_name(e), (int)e);
+        goto done;
+    }
+    const size_t tally_bytes[3] = {nb * s->n_nee * sizeof *st->nee, nb * s->n_scalars * sizeof *st->scalars,
+                                   nb * s->n_hist * sizeof *st->hist};
+    cl_mem tally_buf[3] = {s->nee, s->scalars, s->hist};
+    for (int i = 0; i < 3 && e == CL_SUCCESS; i++) e = put_tallies(s, st, i, tally_buf[i], tally_bytes[i]);
+    if (e != CL_SUCCESS) {
+        snprintf(err, errcap, "cannot put the tallies on the device: %s (%d)", lsqt_cl_error_name(e), (int)e);
         goto done;
     }
     e = set_kernel_args(s);
@@ -246,7 +287,6 @@ done:
     free(wi_up);
     free(bw);
     free(bw_f);
-    for (int i = 0; i < 3; i++) free(tal[i]);
     return rc;
 }
 
@@ -300,7 +340,7 @@ static int session_shape(lsqt_session *s, const lsqt_assembly *a, const lsqt_sta
     s->n_wi = st->n_wi;
     s->n_nee = lsqt_state_nee_count(st);
     s->n_scalars = lsqt_state_scalar_count(st);
-    s->n_hist = lsqt_state_hist_count(st);
+    s->n_hist = (size_t)(st->n_slices / s->slice_group) * LSQT_BATCHES * LSQT_HIST_BINS; /* one a slice group */
     /* One assembly serves one side: the slices from below run the mirrored one (below.h). */
     for (int sl = 1; sl < st->n_slices; sl++)
         if ((st->slice_flags[sl] ^ st->slice_flags[0]) & LSQT_SLICE_BELOW) {
@@ -621,15 +661,12 @@ static int read_block(lsqt_session *s, lsqt_state *st, char *err, size_t errcap)
     const size_t nb = (size_t)s->nb, counts[3] = {s->n_nee, s->n_scalars, s->n_hist};
     cl_mem bufs[3] = {s->nee, s->scalars, s->hist};
     cl_int e = CL_SUCCESS;
-    for (int i = 0; i < 3 && e == CL_SUCCESS; i++) {
-        lsqt_u128 *t = malloc(nb * counts[i] * sizeof *t + 1);
-        if (!t) {
-            snprintf(err, errcap, "out of memory");
-            return 1;
-        }
-        e = clEnqueueReadBuffer(q, bufs[i], CL_TRUE, 0, nb * counts[i] * sizeof *t, t, 0, NULL, NULL);
-        if (e == CL_SUCCESS) block_tallies(s, st, i, t, 1);
-        free(t);
+    for (int i = 0; i < 3 && e == CL_SUCCESS; i++) { /* in place, through a map: no staging copy */
+        lsqt_u128 *t = clEnqueueMapBuffer(q, bufs[i], CL_TRUE, CL_MAP_READ, 0, nb * counts[i] * sizeof *t, 0, NULL,
+                                          NULL, &e);
+        if (e != CL_SUCCESS) break;
+        block_tallies(s, st, i, t, 1);
+        e = clEnqueueUnmapMemObject(q, bufs[i], t, 0, NULL, NULL);
     }
     if (e == CL_SUCCESS) e = clEnqueueReadBuffer(q, s->flags, CL_TRUE, 0, sizeof fl, &fl, 0, NULL, NULL);
     if (e != CL_SUCCESS) {

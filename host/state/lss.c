@@ -71,7 +71,7 @@ static tally_run slice_tallies(const lsqt_state *st, size_t s)
 {
     const size_t nw = (size_t)st->n_wi;
     tally_run t = {{st->nee + s * LSQT_BATCHES * nw, st->scalars + s * LSQT_BATCHES * LSQT_T_COUNT,
-                    st->hist + s * LSQT_BATCHES * LSQT_HIST_BINS},
+                    lsqt_state_hist_of(st, (int)s)},
                    {LSQT_BATCHES * nw, LSQT_BATCHES * LSQT_T_COUNT, LSQT_BATCHES * LSQT_HIST_BINS}};
     return t;
 }

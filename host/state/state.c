@@ -9,7 +9,11 @@ static size_t bands_of(const lsqt_state *st) { return st->n_bands > 1 ? (size_t)
 /* One band's counts. */
 static size_t nee_per_band(const lsqt_state *st) { return (size_t)st->n_slices * LSQT_BATCHES * (size_t)st->n_wi; }
 static size_t scalars_per_band(const lsqt_state *st) { return (size_t)st->n_slices * LSQT_BATCHES * LSQT_T_COUNT; }
-static size_t hist_per_band(const lsqt_state *st) { return (size_t)st->n_slices * LSQT_BATCHES * LSQT_HIST_BINS; }
+static size_t hist_group(const lsqt_state *st) { return st->hist_group > 1 ? st->hist_group : 1; }
+static size_t hist_per_band(const lsqt_state *st)
+{
+    return (size_t)st->n_slices / hist_group(st) * LSQT_BATCHES * LSQT_HIST_BINS;
+}
 
 size_t lsqt_state_nee_count(const lsqt_state *st) { return bands_of(st) * nee_per_band(st); }
 size_t lsqt_state_scalar_count(const lsqt_state *st) { return bands_of(st) * scalars_per_band(st); }
@@ -26,6 +30,26 @@ lsqt_state lsqt_state_band(const lsqt_state *st, int b)
     return v;
 }
 
+lsqt_u128 *lsqt_state_hist_of(const lsqt_state *st, int s)
+{
+    return st->hist + (size_t)s / hist_group(st) * LSQT_BATCHES * LSQT_HIST_BINS;
+}
+
+int lsqt_state_group_hist(lsqt_state *st, int g)
+{
+    if (g < 1 || st->n_slices % g || hist_group(st) != 1) return -1;
+    /* calloc's untouched pages cost nothing: the full-size one is dropped before it is used */
+    st->hist_group = (uint32_t)g;
+    lsqt_u128 *h = calloc(lsqt_state_hist_count(st), sizeof *h);
+    if (!h) {
+        st->hist_group = 1;
+        return -1;
+    }
+    free(st->hist);
+    st->hist = h;
+    return 0;
+}
+
 void lsqt_state_copy_slice_tallies(lsqt_state *dst, int ds, const lsqt_state *src, int ss)
 {
     const size_t B = LSQT_BATCHES, nw = (size_t)src->n_wi;
@@ -34,8 +58,7 @@ void lsqt_state_copy_slice_tallies(lsqt_state *dst, int ds, const lsqt_state *sr
         memcpy(d.nee + (size_t)ds * B * nw, s.nee + (size_t)ss * B * nw, B * nw * sizeof *s.nee);
         memcpy(d.scalars + (size_t)ds * B * LSQT_T_COUNT, s.scalars + (size_t)ss * B * LSQT_T_COUNT,
                B * LSQT_T_COUNT * sizeof *s.scalars);
-        memcpy(d.hist + (size_t)ds * B * LSQT_HIST_BINS, s.hist + (size_t)ss * B * LSQT_HIST_BINS,
-               B * LSQT_HIST_BINS * sizeof *s.hist);
+        memcpy(lsqt_state_hist_of(&d, ds), lsqt_state_hist_of(&s, ss), B * LSQT_HIST_BINS * sizeof *s.hist);
     }
 }
 

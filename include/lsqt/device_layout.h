@@ -60,7 +60,8 @@ typedef struct lsqt_u128 {
 
 /* Exit histogram: per hemisphere LSQT_HIST_NMU bins in |cos theta| times LSQT_HIST_NPHI in
  * phi folded to [0, pi] (equal solid angle). Upper hemisphere first. Tallied per
- * (slice, batch), as the point estimates, so that every bin has a standard error. */
+ * (simulated slice, batch), as the point estimates, so that every bin has a standard
+ * error; a slice group (the RRSS pilot's blocks of a slice) has one, its paths' exits. */
 #define LSQT_HIST_NMU 32
 #define LSQT_HIST_NPHI 16
 #define LSQT_HIST_BINS (2 * LSQT_HIST_NMU * LSQT_HIST_NPHI)

@@ -31,7 +31,10 @@ typedef struct lsqt_state {
     uint32_t *slice_flags;  /* n_slices: LSQT_SLICE_* */
     lsqt_u128 *nee;         /* [slice][LSQT_BATCHES][n_wi] fixed point */
     lsqt_u128 *scalars;     /* [slice][LSQT_BATCHES][LSQT_T_COUNT] */
-    lsqt_u128 *hist;        /* [slice][LSQT_BATCHES][LSQT_HIST_BINS] fixed point */
+    lsqt_u128 *hist;        /* [slice / hist_group][LSQT_BATCHES][LSQT_HIST_BINS] fixed point */
+    uint32_t hist_group;    /* slices that share one histogram (lsqt_state_hist_of; 0 reads as 1):
+                             * the RRSS pilot's rx blocks of a slice, whose exits are the same
+                             * paths'. An LSS holds every slice's (the group's, repeated). */
     uint32_t flags;         /* LSQT_FLAG_* raised so far */
     uint32_t dir_method;    /* LSQT_DIRS_*: how the directions were chosen */
     uint32_t rx;            /* RRSS: candidates per direction (0 otherwise) */
@@ -60,6 +63,11 @@ int lsqt_state_init_bands(lsqt_state *st, const char *canonical, uint64_t hash, 
 /* Band b of ST as a one-band state: the same fields, its tallies (and its wavelength, if
  * any) pointing into ST's (not to be freed; valid while ST is). */
 lsqt_state lsqt_state_band(const lsqt_state *st, int b);
+/* Slices of ST share their histograms in groups of G (hist_group), tallies kept if G
+ * divides n_slices and the histograms are zero (a fresh pilot state). Returns 0 or -1. */
+int lsqt_state_group_hist(lsqt_state *st, int g);
+/* Slice s's histogram in ST (or in a band view of it): [LSQT_BATCHES][LSQT_HIST_BINS]. */
+lsqt_u128 *lsqt_state_hist_of(const lsqt_state *st, int s);
 /* Slice ss's tallies of SRC, in every band, into slice ds of DST (same bands, n_wi). */
 void lsqt_state_copy_slice_tallies(lsqt_state *dst, int ds, const lsqt_state *src, int ss);
 void lsqt_state_free(lsqt_state *st);
