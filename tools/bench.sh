@@ -19,6 +19,9 @@
 #        the speed/accuracy study (tools/bench_study.py): error against a known answer
 #        and CPU time over -p, float/double, iter_count, multiple scattering, -wi, -rp;
 #        CSV and plots in build/study, or with --doc docs/speed-accuracy.md and its plots.
+#        tools/bench.sh original ORIGINAL_BIN [--doc]: beside the original layered-sqt (built by
+#        tools/original/build.sh DEST; tools/bench_original.py): CPU-s per path and error per
+#        CPU-second on the tutorial and a slab; --doc adds its section to docs/speed-accuracy.md.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if [ "${1:-}" = targets ]; then
@@ -40,6 +43,11 @@ if [ "${1:-}" = study ]; then
   shift
   [ -x ./build/lsqt-cl ] || bash tools/build.sh
   exec /usr/bin/python3 tools/bench_study.py "$@"
+fi
+if [ "${1:-}" = original ]; then
+  [ $# -ge 2 ] || { echo "usage: tools/bench.sh original ORIGINAL_BIN [--doc]" >&2; exit 2; }
+  [ -x ./build/lsqt-cl ] || bash tools/build.sh
+  exec python3 tools/bench_original.py "$2" ./build/lsqt-cl "${@:3}"
 fi
 P=${1:-1e6}
 shift || true

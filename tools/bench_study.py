@@ -393,7 +393,12 @@ bars, its paths.
 ### RRSS: −wi and −rp on Substr (own errors only)
 {table(by['rrss'])}
 """
-    with open(os.path.join(ROOT, "docs", "speed-accuracy.md"), "w") as f:
+    path = os.path.join(ROOT, "docs", "speed-accuracy.md")
+    old = open(path).read() if os.path.exists(path) else ""
+    b, e = old.find("<!-- original:begin -->"), old.find("<!-- original:end -->")
+    if 0 <= b < e:  # tools/bench_original.py's section (the original layered-sqt): kept as it is
+        text = text.rstrip("\n") + "\n\n" + old[b:e + len("<!-- original:end -->")] + "\n"
+    with open(path, "w") as f:
         f.write(text)
     print("wrote docs/speed-accuracy.md")
 
