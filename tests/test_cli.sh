@@ -38,7 +38,10 @@ done <<'TABLE'
 -t 0|bad value '0' for -t
 --time-limit -3|bad value '-3' for --time-limit
 --wo-angles=10,95|bad value '10,95' for --wo-angles
---bogus|unknown option '--bogus'
+--bogus|unknown option '--bogus' (see --help)
+--wi-cont 80|unknown option '--wi-cont' (did you mean '--wi-count'? see --help)
+--pathcount 80|unknown option '--pathcount' (did you mean '--path-count'? see --help)
+--time-limt 80|unknown option '--time-limt' (did you mean '--time-limit'? see --help)
 -R=1|-R takes no value
 --wi-spread --wi-file x.txt|--wi-spread and --wi-file both choose the incident directions: give one of them
 -rx 3 --wi-file x.txt|-rx sets RRSS's pilot, and --wi-file chooses the directions without RRSS
@@ -66,12 +69,41 @@ Medium eta=0.5\nLayer z=0 LambertianBsdf\nMedium\n|bad.lsqt:1:
 Medium mus=1\nLayer z=0 LambertianBsdf\nMedium\n|bad.lsqt:1:
 Medium\nLayer LambertianBsdf\nMedium\n|bad.lsqt:2:
 Medium\nLayer z=0 FancyBsdf\nMedium\n|FancyBsdf
+Medium\nLayer z=0 LambertianBdsf\nMedium\n|bad.lsqt:2: error: unknown word at 'LambertianBdsf'; expected one of: z or a BSDF model
+Medium\nLayer z=0 LambertianBdsf\nMedium\n|did you mean 'LambertianBsdf'?
+Medium\nLayer z=0 LambertianBsdf fr=0.5\nMedium\n|keys of LambertianBsdf); did you mean 'fR'?
+Medium mus=1 HenyeyGreenstienPhase\nLayer z=0 LambertianBsdf\nMedium\n|did you mean 'HenyeyGreensteinPhase'?
+Medium\nLayer z=0 Lambertain\nMedium\n|did you mean 'Lambertian'?
 Medium\nLayer z=0 LambertianBsdf fR=0.5 fR=0.5\nMedium\n|fR
 Medium\nLayer z=0 NullBsdf\nMedium\nLayer z=1 LambertianBsdf\nMedium\n|bad.lsqt:4:
 Medium\nLayer z=0 MicrosurfaceLambertianBrdf iter_count=0\nMedium\n|iter_count
 Medium\nLayer z=0 MicrosurfaceDielectricBsdf use_multiple_scattering=yes\nMedium\n|use_multiple_scattering
 Medium\nLayer z=0 NullBsdf\nMedium mus=1 HenyeyGreensteinPhase g=1\nLayer z=-1 NullBsdf\nMedium\n|bad.lsqt:3:
 TABLE
+
+# A slip far from every flag gets no guess (a wrong guess misleads more than none).
+"$BIN" --zzzzz L.lsqt 2>&1 | grep -q "did you mean" && bad "--zzzzz got a guess" || ok
+
+# --version: the version and the commit on every program, and lsqt-cl's devices.
+expect 0 "lsqt-cl 0.1.0 (git " -- "$BIN" --version
+expect 0 "OpenCL devices (float on every one; --double on those marked fp64):" -- "$BIN" --version
+expect 0 "lsqt-cl info 0.1.0 (git " -- "$BIN" info --version
+expect 0 "lsqt-cl merge 0.1.0 (git " -- "$BIN" merge --version
+expect 0 "lsqt-cl export 0.1.0 (git " -- "$BIN" export --version
+for prog in lssinfo lssmerge lssview; do
+  p="$(dirname "$BIN")/$prog"
+  [ -x "$p" ] || p="$(dirname "$BIN")/tools/$prog/$prog"
+  if [ -x "$p" ]; then expect 0 "$prog 0.1.0 (git " -- "$p" --version; fi
+done
+
+# A file the programs write, given where LSQT text belongs: what it is and what reads it.
+"$BIN" -q -R -p 300 -wo 4 -wi 16 --wi-spread -o w.raw --lss w.lss L.lsqt && ok || bad "run for the wrong-input checks"
+expect 2 "w.lss is an LSS file (the state of a run), not an LSQT input: 'lsqt-cl info w.lss'" -- "$BIN" w.lss
+expect 2 "<stdin> is an LSS file" -- bash -c "\"$BIN\" - < w.lss"
+expect 2 "w.raw is a RAW file" -- "$BIN" w.raw
+printf 'CDF\001\000\000\000\000' > w.nc
+expect 2 "w.nc is a NetCDF file (what 'lsqt-cl export' writes)" -- "$BIN" w.nc
+ls w.lss.* w.raw.* w.nc.* >/dev/null 2>&1 && bad "a refused input wrote output" || ok
 
 # The tutorial example: RAW header, line count, 0.6/pi everywhere, and an LSS.
 expect 0 "R +- 1 s.e." -- "$BIN" -p 2000 -wo 4 -wi 16 L.lsqt

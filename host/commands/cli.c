@@ -110,6 +110,8 @@ static void help_stops_and_notes(FILE *f)
           "  -q, --quiet                 print errors only\n"
           "  -v, --verbose               print more (device, kernel build options, launches)\n"
           "  -h, --help                  this text\n"
+          "      --version               the version, the commit it was built from, and the\n"
+          "                              OpenCL devices (fp64: those that run --double)\n"
           "lsqt-cl merge OUT.lss IN.lss... adds the tallies of parts of one run (shards) and\n"
           "writes OUT.lss and its RAW; see lsqt-cl merge --help.\n"
           "lsqt-cl export writes the BSDF of a --grid LSS with its standard errors as NetCDF\n"
@@ -141,7 +143,7 @@ void lsqt_cli_help(FILE *f)
 
 enum flag_id {
     F_PATHS, F_WO, F_WO_ANGLES, F_WI, F_WI_FILE, F_RX, F_RP, F_RESTART, F_SEED, F_THREADS, F_OUTPUT,
-    F_HEMI, F_SPREAD, F_GRID, F_RGL_GRID, F_WAVELENGTHS, F_BELOW, F_CHECKPOINT, F_SHARD, F_REFINE, F_DEVICE, F_LIST, F_DOUBLE, F_TIME, F_TARGET, F_LSS, F_JSON, F_QUIET, F_VERBOSE, F_HELP
+    F_HEMI, F_SPREAD, F_GRID, F_RGL_GRID, F_WAVELENGTHS, F_BELOW, F_CHECKPOINT, F_SHARD, F_REFINE, F_DEVICE, F_LIST, F_DOUBLE, F_TIME, F_TARGET, F_LSS, F_JSON, F_QUIET, F_VERBOSE, F_HELP, F_VERSION
 };
 
 static const struct flag {
@@ -163,7 +165,7 @@ static const struct flag {
     {NULL, "--checkpoint", F_CHECKPOINT, 1}, {NULL, "--shard", F_SHARD, 1},
     {NULL, "--refine", F_REFINE, 0}, {NULL, "--from-below", F_BELOW, 0},
     {NULL, "--grid", F_GRID, 1},             {NULL, "--rgl-grid", F_RGL_GRID, 1},
-    {NULL, "--wavelengths", F_WAVELENGTHS, 1},
+    {NULL, "--wavelengths", F_WAVELENGTHS, 1}, {NULL, "--version", F_VERSION, 0},
 };
 
 /* --grid NO,NI,NPHI or --grid N (= N,N,4(N-1)): NO, NI in 2-1024, NPHI even in 2-2048
@@ -272,6 +274,7 @@ static int apply(const struct flag *fl, const char *name, const char *v, lsqt_cl
     case F_QUIET: c->quiet = 1; break;
     case F_VERBOSE: c->verbose = 1; break;
     case F_HELP: c->help = 1; break;
+    case F_VERSION: c->version = 1; break;
     default: break;
     }
     if (expect) {
@@ -307,7 +310,15 @@ static int read_flag(int argc, char **argv, int *i, lsqt_cli *c, char wi_name[16
             strcmp(name, flags[k].long_name) == 0)
             fl = &flags[k];
     if (!fl) {
-        snprintf(err, errcap, "unknown option '%.64s' (see --help)", a);
+        const char *names[2 * sizeof flags / sizeof *flags];
+        int nn = 0;
+        for (size_t k = 0; k < sizeof flags / sizeof *flags; k++) {
+            if (flags[k].short_name) names[nn++] = flags[k].short_name;
+            names[nn++] = flags[k].long_name;
+        }
+        const char *near = lsqt_closest(name, strlen(name), names, nn);
+        if (near) snprintf(err, errcap, "unknown option '%.64s' (did you mean '%s'? see --help)", a, near);
+        else snprintf(err, errcap, "unknown option '%.64s' (see --help)", a);
         return 2;
     }
     const char *v = NULL;

@@ -56,6 +56,7 @@ static void usage(FILE *f, const char *prog)
             "                        run's wavelengths; one band: 360 and 830 nm)\n"
             "  -q, --quiet           print errors only\n"
             "  -h, --help            this text\n"
+            "      --version         the version and the commit it was built from\n"
             "Exit status: 0 success, 1 the output could not be written, 2 bad flags or an LSS\n"
             "that cannot be exported (unreadable, not on a grid; bands an RGL file cannot hold).\n",
             prog, prog);
@@ -408,6 +409,9 @@ static int parse_args(const char *prog, int argc, char **argv, export_args *x)
         const char *a = argv[i];
         if (strcmp(a, "-h") == 0 || strcmp(a, "--help") == 0) {
             usage(stdout, prog);
+            return 0;
+        } else if (strcmp(a, "--version") == 0) {
+            printf("%s %s\n", prog, lsqt_version());
             return 0;
         } else if (strcmp(a, "-q") == 0 || strcmp(a, "--quiet") == 0) {
             x->quiet = 1;

@@ -34,6 +34,7 @@ static void usage(FILE *f, const char *prog)
             "                    \"bsdf\": [[x, y, z, f, f_err], ...] (y >= 0; the BSDF is mirror\n"
             "                    symmetric in y; null for a value or error not known)\n"
             "  -h, --help        this text\n"
+            "      --version     the version and the commit it was built from\n"
             "FILE - reads stdin. Exit status: 0 success, 1 an output could not be written,\n"
             "2 bad flags or a file that is not a readable LSS (missing, not a regular file,\n"
             "corrupt, truncated, another version).\n",
@@ -267,6 +268,10 @@ int lsqt_info_main(const char *prog, int argc, char **argv)
         const char *a = argv[i];
         if (strcmp(a, "-h") == 0 || strcmp(a, "--help") == 0) {
             usage(stdout, prog);
+            return 0;
+        }
+        if (strcmp(a, "--version") == 0) {
+            printf("%s %s\n", prog, lsqt_version());
             return 0;
         }
         if (strcmp(a, "--json") == 0 || strncmp(a, "--json=", 7) == 0) {

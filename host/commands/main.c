@@ -9,6 +9,7 @@
 #include "lsqt/export.h"
 #include "lsqt/info.h"
 #include "lsqt/merge.h"
+#include "lsqt/util.h"
 #include "run_cmd.h"
 
 /* --list-devices: exit 3 when there is none. */
@@ -44,6 +45,11 @@ int main(int argc, char **argv)
     if (lsqt_cli_parse(argc, argv, &c, err, sizeof err)) return fail(2, "%s%s", err, "");
     if (c.help) {
         lsqt_cli_help(stdout);
+        return 0;
+    }
+    if (c.version) {
+        printf("lsqt-cl %s\nOpenCL devices (float on every one; --double on those marked fp64):\n", lsqt_version());
+        lsqt_devices_print(stdout);
         return 0;
     }
     if (c.threads) {

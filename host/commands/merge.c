@@ -32,6 +32,7 @@ static void merge_help(FILE *f, const char *prog)
             "      --partial       allow missing shards: OUT holds the ranges it has (lsqt-cl\n"
             "                      info shows them; continuing runs the missing tail, not a gap)\n"
             "  -q, --quiet         print errors only\n"
+            "      --version       the version and the commit it was built from\n"
             "Exit status: 0 success, 1 failure, 2 bad input (incompatible, overlapping or\n"
             "missing parts).\n",
             prog);
@@ -96,6 +97,11 @@ static int parse_args(const char *prog, int argc, char **argv, merge_args *g)
         size_t nl = eq && a[0] == '-' ? (size_t)(eq - a) : strlen(a);
         int takes = (nl == 2 && strncmp(a, "-o", 2) == 0) || (nl == 8 && strncmp(a, "--output", 8) == 0) ||
                     (nl == 6 && strncmp(a, "--json", 6) == 0);
+        if (strcmp(a, "--version") == 0) {
+            printf("%s %s\n", prog, lsqt_version());
+            free(g->in);
+            return 0;
+        }
         if (strcmp(a, "-h") == 0 || strcmp(a, "--help") == 0) {
             merge_help(stdout, prog);
             free(g->in);

@@ -30,6 +30,27 @@ static int write_checkpoint(const lsqt_state *st, void *arg)
     return 0;
 }
 
+/* What a file given as input is when it is one of the files the programs write, not
+ * LSQT text, and which command reads it, into msg; 0 when it is none of them. */
+static int other_file(const char *text, size_t len, const char *name, char *msg, size_t cap)
+{
+    if (len >= 8 && memcmp(text, "LSQTLSS", 8) == 0)
+        snprintf(msg, cap, "%s is an LSS file (the state of a run), not an LSQT input: 'lsqt-cl info %s' shows "
+                 "what it holds; to go on with its run, give the LSQT file it was made from (with --lss %s if "
+                 "the LSS is not beside it)", name, name, name);
+    else if (len >= 8 && memcmp(text, "RAWB", 4) == 0 && (text[4] == 'S' || text[4] == 'H') &&
+             memcmp(text + 5, "10A", 3) == 0)
+        snprintf(msg, cap, "%s is a RAW file (a run's BSDF values, for DIRSIG5's raw2sqt), not an LSQT input: "
+                 "give the LSQT file of the run", name);
+    else if (len >= 4 && (memcmp(text, "CDF\x01", 4) == 0 || memcmp(text, "CDF\x02", 4) == 0 ||
+                          memcmp(text, "CDF\x05", 4) == 0 || (len >= 8 && memcmp(text, "\x89HDF\r\n\x1a\n", 8) == 0)))
+        snprintf(msg, cap, "%s is a NetCDF file (what 'lsqt-cl export' writes), not an LSQT input: give the "
+                 "LSQT file of the run", name);
+    else
+        return 0;
+    return 1;
+}
+
 /* Input -> assembly: parsed, its notes printed, a model this version cannot simulate
  * refused. Returns 0, or an exit status (printed; nothing to free). */
 static int read_assembly(const lsqt_cli *c, int from_stdin, lsqt_assembly *a)
@@ -38,6 +59,10 @@ static int read_assembly(const lsqt_cli *c, int from_stdin, lsqt_assembly *a)
     size_t len = 0;
     char *text = lsqt_read_text(c->input, LSQT_INPUT_MAX, &len, err, sizeof err);
     if (!text) return fail(2, "%s%s", err, "");
+    if (other_file(text, len, from_stdin ? "<stdin>" : c->input, err, sizeof err)) {
+        free(text);
+        return fail(2, "%s%s", err, "");
+    }
     lsqt_diag diag;
     memset(&diag, 0, sizeof diag);
     double *wl = NULL;

@@ -301,6 +301,22 @@ static void list_models(const lsqt_line_desc *d, lsqt_sb *sb)
         lsqt_sb_printf(sb, "%s%s", i ? ", " : "", d->models[i].name);
 }
 
+/* "; did you mean 'X'?" after SB when TOK is close to a key of the line's model or (with
+ * models) to a model name (a slip of the keyboard, not a misunderstanding). */
+static void did_you_mean(const line_state *ls, span tok, int models, lsqt_sb *sb)
+{
+    const lsqt_model *m = current_model(ls);
+    const char *names[64];
+    int n = 0;
+    for (int i = 0; i < m->n_keys && n < 64; i++) names[n++] = m->keys[i].name;
+    for (int i = 0; models && i < ls->desc->n_models && n < 63; i++) {
+        names[n++] = ls->desc->models[i].name;
+        if (ls->desc->models[i].alias) names[n++] = ls->desc->models[i].alias;
+    }
+    const char *near = lsqt_closest(tok.p, tok.n, names, n);
+    if (near) lsqt_sb_printf(sb, "; did you mean '%s'?", near);
+}
+
 /* What may come next on the line: "one of: eta mua mus or a phase model (...)". */
 static void expected_words(const line_state *ls, lsqt_sb *sb)
 {
@@ -577,6 +593,8 @@ static int read_key(parser *P, line_state *ls, span tok, const char *eq)
         const lsqt_model *owner = name.n ? key_owner(name) : NULL;
         if (owner)
             lsqt_sb_printf(&sb, " ('%s' is a key of %s)", show(name, shown), owner->name);
+        else
+            did_you_mean(ls, name, 0, &sb);
         return fail(P, P->line, &tok, name.n ? "unknown key" : "missing key name before '='",
                     "%s", buf);
     }
@@ -623,6 +641,7 @@ static int read_word(parser *P, line_state *ls, span tok)
     else
         snprintf(what, sizeof what, "unknown word");
     expected_words(ls, &sb);
+    if (!model) did_you_mean(ls, tok, !ls->model, &sb);
     return fail(P, P->line, &tok, what, "%s", buf);
 }
 

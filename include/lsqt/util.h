@@ -23,6 +23,15 @@ char *lsqt_read_text(const char *path, size_t max, size_t *len, char *err, size_
 
 uint32_t lsqt_crc32(uint32_t crc, const void *data, size_t len);
 
+/* Of the n candidates, the one the first len characters of WORD were most likely meant
+ * to be (case-insensitive edit distance, a swap of neighbours counting one): at most one
+ * edit away for a word of up to 4 characters, two up to 8, three beyond; NULL when none
+ * is that close or two different ones are equally close. */
+const char *lsqt_closest(const char *word, size_t len, const char *const *cand, int n);
+/* "0.1.0 (git 4fbc73c1a2b3)": the version and the commit it was built from ("+changes"
+ * after it for a work tree with uncommitted changes, "git unknown" outside a checkout). */
+const char *lsqt_version(void);
+
 #define LSQT_PATH_CAP 4096
 
 /* Every output file (RAW, LSS, JSON, and what later tools write) goes through these, so

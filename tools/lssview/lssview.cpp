@@ -127,6 +127,7 @@ void usage(FILE *f)
                  "                       instead of held from the last slice\n"
                  "  -q, --quiet          no summary line\n"
                  "  -h, --help           this text\n"
+                 "      --version        the version and the commit it was built from\n"
                  "The slices end short of grazing (θo_max = 0.99·90°·(N-1)/N for N default slices, 81.7° for\n"
                  "12): beyond θo_max, on the sphere's rim, the last slice's values (and, with --error, its\n"
                  "errors) are held as they are, and the summary line says how many pixels that is. Pixels\n"
@@ -176,6 +177,9 @@ Options parse_args(int argc, char **argv)
         };
         if (a == "-h" || a == "--help") {
             usage(stdout);
+            std::exit(0);
+        } else if (a == "--version") {
+            std::printf("lssview %s\n", lsqt_version());
             std::exit(0);
         } else if (a == "-o" || a == "--output") {
             o.out = need();
