@@ -78,7 +78,18 @@ for line in ("seed: %d" % seed, "assembly hash: %s" % run["assembly_hash"], "pre
              "format: LSS version 6; chunk 256 paths, 32 batches, 40 fixed-point bits, histogram 2 x 32 x 16 = 1024 bins"):
     if not re.search("^" + re.escape(line), text, re.M): p.append("text lacks '%s'" % line)
 asm = re.search(r"^assembly:\n((?:  .*\n)+)", text, re.M)
-if not asm or "\n".join(l[2:] for l in asm.group(1).splitlines()) + "\n" != info.get("assembly"):
+def same_token(a, b):  # the text prints numbers in their shortest form, the JSON as stored
+    if a == b:
+        return True
+    ka, _, va = a.partition("=")
+    kb, _, vb = b.partition("=")
+    try:
+        return ka == kb and float(va) == float(vb)
+    except ValueError:
+        return False
+shown = [l[2:].split(" ") for l in asm.group(1).splitlines()] if asm else []
+stored = [l.split(" ") for l in info.get("assembly", "").rstrip("\n").split("\n")]
+if len(shown) != len(stored) or not all(len(x) == len(y) and all(map(same_token, x, y)) for x, y in zip(shown, stored)):
     p.append("text assembly differs from the JSON's")
 # the JSON: every stable field, equal to the run's
 for k in ("version", "seed", "hash", "double", "transmits", "n_wi", "assembly", "flags", "ranges", "slices"):
@@ -117,6 +128,14 @@ expect 0 "precision: double" -- "$INFO" D.lsqt.lss
 expect 0 "transmits: no" -- "$INFO" D.lsqt.lss
 "$INFO" D.lsqt.lss --json - 2>/dev/null | python3 -c 'import json, sys; j = json.load(sys.stdin); sys.exit(not (j["double"] is True and j["transmits"] is False))' \
   && ok || bad "double reflector: JSON double/transmits"
+# The assembly's numbers in their shortest form (alpha=0.2, eta=1.33), the JSON's canonical
+# text as stored (its hash is of it: 0.20000000000000001).
+printf 'Medium\nLayer z=0 MicrosurfaceDielectricBsdf alpha=0.2\nMedium eta=1.33\n' > A.lsqt
+"$BIN" -q -p 100 -wo 4 -wi 16 --wi-spread A.lsqt && ok || bad "alpha 0.2 run"
+expect 0 "  Layer z=0 MicrosurfaceDielectricBsdf alpha=0.2 kR=1 kT=1 iter_count=2 use_multiple_scattering=true" -- "$INFO" A.lsqt.lss
+expect 0 "  Medium eta=1.33 mua=0 mus=0" -- "$INFO" A.lsqt.lss
+"$INFO" A.lsqt.lss | grep -q "0000000" && bad "info prints a number longer than it needs: $("$INFO" A.lsqt.lss | grep 0000000)" || ok
+"$INFO" A.lsqt.lss --json - 2>/dev/null | grep -q "alpha=0.20000000000000001" && ok || bad "JSON canonical text changed"
 # stdin is read when FILE is -.
 "$INFO" - <S.lsqt.lss | grep -q "^file: <stdin>" && ok || bad "lssinfo - (stdin)"
 

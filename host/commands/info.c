@@ -18,6 +18,39 @@
 #include "lsqt/tally.h"
 #include "lsqt/util.h"
 
+/* One line of the canonical assembly, each key=number with the number in its shortest
+ * form that reads back to the same double (alpha=0.2, not the stored 0.20000000000000001;
+ * the stored text, which the assembly's hash is of, is unchanged: --json gives it). */
+static void print_shortest(FILE *f, const char *line, size_t n)
+{
+    char tok[128], num[40];
+    for (size_t i = 0; i < n;) {
+        size_t j = i;
+        while (j < n && line[j] != ' ') j++;
+        const size_t len = j - i;
+        const char *eq = memchr(line + i, '=', len);
+        int done = 0;
+        if (eq && len < sizeof tok) {
+            memcpy(tok, line + i, len);
+            tok[len] = '\0';
+            const char *v = tok + (eq - (line + i)) + 1;
+            char *end = NULL;
+            const double d = *v ? strtod(v, &end) : 0.0;
+            if (end && *end == '\0' && isfinite(d)) {
+                for (int prec = 1; prec <= 17; prec++) {
+                    snprintf(num, sizeof num, "%.*g", prec, d);
+                    if (strtod(num, NULL) == d) break;
+                }
+                fprintf(f, " %.*s%s", (int)(v - tok), tok, num);
+                done = 1;
+            }
+        }
+        if (!done) fprintf(f, " %.*s", (int)len, line + i);
+        i = j;
+        while (i < n && line[i] == ' ') i++;
+    }
+}
+
 static void usage(FILE *f, const char *prog)
 {
     fprintf(f,
@@ -168,7 +201,9 @@ static void print_text(FILE *f, const char *path, const lsqt_state *st, const ls
     for (const char *p = st->canonical; *p;) {
         const char *nl = strchr(p, '\n');
         size_t n = nl ? (size_t)(nl - p) : strlen(p);
-        fprintf(f, "  %.*s\n", (int)n, p);
+        fputs(" ", f);
+        print_shortest(f, p, n);
+        fputs("\n", f);
         p += n + (nl ? 1 : 0);
     }
     for (int s = 0; s < st->n_slices; s++) {

@@ -10,7 +10,7 @@
  * alignment): "LambertianBdsf" is one from "LambertianBsdf", "fr" none from "fR". */
 static int distance(const char *a, size_t n, const char *b, size_t m)
 {
-    static int d[SUGGEST_MAX + 1][SUGGEST_MAX + 1];
+    int d[SUGGEST_MAX + 1][SUGGEST_MAX + 1]; /* 17 KB of stack */
     for (size_t i = 0; i <= n; i++) d[i][0] = (int)i;
     for (size_t j = 0; j <= m; j++) d[0][j] = (int)j;
     for (size_t i = 1; i <= n; i++)
