@@ -159,4 +159,14 @@ for v in 4/4 1 a/b 0/0 -1/2 1/70000; do expect 2 "bad value '$v' for --shard" --
 expect 2 "give --shard K/N too" -- "$BIN" --refine r.lsqt
 expect 2 "cannot stop a shard" -- "$BIN" --shard 0/2 --target-error 0.1 r.lsqt
 expect 2 "give a file" -- "$BIN" --shard 0/2 --lss - r.lsqt
+# submit.sh without SLURM's commands says which are missing and the command that runs the
+# same shards here (exit 2, nothing written: no FILE.slurm folder).
+fresh z
+mkdir -p nobin && ln -sf "$(command -v dirname)" nobin/dirname
+SUB="$(dirname "$SH")/submit.sh"
+PATH="$PWD/nobin" "$(command -v bash)" "$SUB" --wait 3 z.lsqt -p 100 >z.out 2>&1
+rc=$?
+[ "$rc" = 2 ] && grep -q "sbatch scancel squeue not found: this needs a SLURM cluster's client commands" z.out &&
+  grep -q "the same shards run one after another on this machine, with the same result: bash .*local-shards.sh 3 z.lsqt -p 100" z.out &&
+  [ ! -e z.lsqt.slurm ] && ok || bad "submit.sh without SLURM: exit $rc, $(cat z.out)"
 finish test_shards

@@ -43,7 +43,17 @@ file=$2
 shift 2
 [[ $n =~ ^[1-9][0-9]*$ ]] || die "N must be a positive integer, not '$n'"
 [ -f "$file" ] || die "no such file: $file"
-command -v sbatch >/dev/null || die "sbatch not found (is SLURM installed, SLURM_CONF set?)"
+# What this needs of SLURM, checked before anything is submitted; without it the same
+# shards run on this machine with local-shards.sh (installed: lsqt-local-shards).
+local_cmd=lsqt-local-shards
+[ "${BASH_SOURCE[0]##*/}" = submit.sh ] && local_cmd="bash $(dirname "${BASH_SOURCE[0]}")/local-shards.sh"
+need=(sbatch scancel)
+[ "$wait_end" = 0 ] || need+=(squeue)
+missing=()
+for c in "${need[@]}"; do command -v "$c" >/dev/null || missing+=("$c"); done
+[ ${#missing[@]} -eq 0 ] || die "${missing[*]} not found: this needs a SLURM cluster's client commands (Debian: \
+slurm-client, with SLURM_CONF or /etc/slurm/slurm.conf naming the cluster). Without SLURM, the same shards run \
+one after another on this machine, with the same result: $local_cmd $n $file $*"
 
 # Absolute paths: a job may start in another folder, on another machine with the same mounts.
 abspath() { echo "$(cd "$(dirname "$1")" && pwd -P)/$(basename "$1")"; }
