@@ -31,6 +31,12 @@ if ! out=$("$CMAKE" --install "$BUILD" --prefix "$P" 2>&1); then
 fi
 
 # 1. The layout.
+for f in $(find "$P/bin" "$P/share/lsqt-cl" -type f -name '*.sh' -o -type f -name '*.py'); do
+  [ -x "$f" ] && ok || bad "installed script without its run bit: $f"
+done
+for f in "$REPO"/tools/*.py "$REPO"/tools/lssplot; do
+  [ "$(head -c 2 "$f")" != "#!" ] || [ -x "$f" ] || bad "$f has a #! line but no run bit"
+done
 for f in lsqt-cl lssview lssinfo lssmerge lssplot lsqt-slurm-submit lsqt-slurm-steps lsqt-local-shards; do
   [ -f "$P/bin/$f" ] && [ -x "$P/bin/$f" ] && ok || bad "not installed as a program: bin/$f"
 done
@@ -40,8 +46,13 @@ for a in layered-sqt=lsqt-cl layered-sqt-lssview=lssview layered-sqt-lssinfo=lss
 done
 [ -x "$P/share/lsqt-cl/slurm/single-node.sh" ] && ok || bad "not installed: share/lsqt-cl/slurm/single-node.sh"
 expect 2 "usage:" -- "$P/share/lsqt-cl/slurm/single-node.sh"
-diff -r "$REPO/examples" "$P/share/lsqt-cl/examples" >/dev/null && ok ||
-  bad "share/lsqt-cl/examples is not the source's examples/"
+# The example inputs, as in the source, and nothing else: a run in the source tree leaves
+# outputs beside them (.raw, .lss, .json), which must not be installed.
+want=$(cd "$REPO/examples" && find . -type f \( -name '*.lsqt' -o -path './tables/*.txt' \) | sort)
+have=$(cd "$P/share/lsqt-cl/examples" && find . -type f | sort)
+[ -n "$want" ] && [ "$want" = "$have" ] && ok ||
+  bad "share/lsqt-cl/examples holds other files than the source's example inputs: $(diff <(echo "$want") <(echo "$have") | tr '\n' ' ')"
+for f in $want; do cmp -s "$REPO/examples/$f" "$P/share/lsqt-cl/examples/$f" || bad "installed example $f differs"; done
 MAN=$P/share/man/man1/lsqt-cl.1
 [ -s "$MAN" ] && ok || bad "not installed: share/man/man1/lsqt-cl.1"
 
@@ -149,6 +160,19 @@ if command -v man >/dev/null; then
   done
   MANWIDTH=80 man -M "$P/share/man" lsqt-cl 2>/dev/null | grep -qF -- "--path-count" && ok ||
     bad "man -M PREFIX/share/man lsqt-cl does not find the page"
+  # Every installed program has a page (the seed guide's names too), and SEE ALSO names
+  # only pages that are installed.
+  for pg in lsqt-cl:--path-count layered-sqt:--path-count lssview:--image-dim layered-sqt-lssview:--image-dim \
+            lssinfo:--bsdf layered-sqt-lssinfo:--bsdf lssmerge:--partial lssplot:--channel; do
+    MANWIDTH=80 man -M "$P/share/man" "${pg%%:*}" 2>/dev/null | grep -qF -- "${pg#*:}" && ok ||
+      bad "man -M PREFIX/share/man ${pg%%:*} does not show its page (${pg#*:})"
+  done
+  for f in "$P"/share/man/man1/*.1; do
+    for ref in $(sed -n '/^\.SH SEE ALSO/,$p' "$f" | sed -n 's/^\.BR \([^ ]*\) (1).*/\1/p' | sed 's/\\-/-/g'); do
+      [ -f "$P/share/man/man1/$ref.1" ] || bad "$(basename "$f") names $ref(1), which is not installed"
+    done
+  done
+  ok
 else
   echo "SKIP (this part only): man is not installed (man-db)"
   grep -qF -- '\-\-path\-count' "$MAN" && ok || bad "lsqt-cl.1 lacks --path-count"
