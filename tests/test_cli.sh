@@ -129,6 +129,23 @@ cmp -s once.lss S.lsqt.lss && ok || bad "split run LSS differs from single run"
   || bad "same seed and -p give different RAW"
 "$BIN" -q -R -p 5000 -wo 4 -wi 16 --wi-spread -s 1 -o seed1.raw --lss seed1.lss S.lsqt && ! cmp -s once.raw seed1.raw && ok \
   || bad "another seed gives the same RAW: the determinism checks above could not fail"
+# --total-paths N brings the LSS to N paths per slice: fresh it is -p N; continued it adds
+# what is missing (the bytes of one -p N run); holding N it adds none and says so.
+"$BIN" -q -R -wo 4 -wi 16 --wi-spread --total-paths 2000 -o tp.raw --lss tp.lss S.lsqt &&
+  "$BIN" -q -R -wo 4 -wi 16 --wi-spread -p 2000 -o tq.raw --lss tq.lss S.lsqt && cmp -s tp.lss tq.lss && ok ||
+  bad "fresh --total-paths 2000 is not -p 2000"
+"$BIN" -q --total-paths 5000 -o tp.raw --lss tp.lss S.lsqt && cmp -s tp.lss once.lss && cmp -s tp.raw once.raw && ok ||
+  bad "--total-paths 5000 after 2000 is not one run of 5000"
+expect 0 "note: 'tp.lss' holds 5000 paths per slice, --total-paths 5000: none to add" -- \
+  "$BIN" --total-paths 5000 -o tp.raw --lss tp.lss S.lsqt
+expect 0 "paths: 0 added per slice (5000 per slice in all)" -- "$BIN" --total-paths 3000 -o tp.raw --lss tp.lss S.lsqt
+cmp -s tp.lss once.lss && ok || bad "--total-paths below what the LSS holds changed it"
+expect 2 "--total-paths sets how many paths the LSS is to hold, and -p how many to add: give one of them" -- \
+  "$BIN" --total-paths 5000 -p 10 S.lsqt
+expect 2 "--total-paths sets how many paths the LSS is to hold, and --shard splits a run of -p paths" -- \
+  "$BIN" --total-paths 5000 --shard 0/2 S.lsqt
+expect 2 "bad value '0' for --total-paths" -- "$BIN" --total-paths 0 S.lsqt
+
 # Each estimate is written twice, at (x, y, z) with y >= 0 and then at (x, -y, z), same value.
 awk 'NR > 3 && NR % 2 == 0 { s = $1; x = $2; y = $3; z = $4; v = $5 }
      NR > 3 && NR % 2 == 1 { if ($1 != s || $2 != x || $3 + y != 0 || $4 != z || $5 != v || y < 0) bad++; n++ }

@@ -73,4 +73,7 @@ expect 0 "note: the run stopped in its RRSS pilot: 'P.lss' holds" -- \
 expect 0 "Continuing without -p finishes the pilot and then this run (1000000000 paths per slice in all)" -- \
   "$BIN" -R -wo 4 -wi 16 -p 1e9 --time-limit 1 -o P.raw --lss P.lss S.lsqt
 "$BIN" info P.lss | grep -q "^stage: RRSS pilot" && ok || bad "the time-limited pilot's LSS: $("$BIN" info P.lss | grep stage)"
+# --total-paths of the whole run continues a stopped pilot as the same command without -p.
+expect 0 "this run finishes it, then the run (1000000000 paths per slice)" -- \
+  "$BIN" --total-paths 1e9 --time-limit 1 -o P.raw --lss P.lss S.lsqt
 finish test_stop_rules

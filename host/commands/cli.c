@@ -20,7 +20,12 @@ static void help_usage_and_sampling(FILE *f)
           "adds paths to it, with the sampling it was made with: a flag that contradicts it is an\n"
           "error, -R starts over; one run at a time owns it, through FILE.lss.lock).\n"
           "\n"
-          "  -p, --path-count N          paths per outgoing direction (default 10000; 1e7 is fine)\n"
+          "  -p, --path-count N          paths per outgoing direction (default 10000; 1e7 is fine);\n"
+          "                              continuing an LSS, the paths to add\n"
+          "      --total-paths N         instead of -p: the paths per slice the LSS is to hold; a\n"
+          "                              fresh run does N, a continued one adds what is missing\n"
+          "                              (none when it holds N), so rerunning a stopped command\n"
+          "                              finishes it\n"
           "  -wo, --wo-count N           outgoing directions (slices), 4-1024 (default 12)\n"
           "      --wo-angles=A,B,...     explicit outgoing angles in degrees, [0, 90)\n"
           "  -wi, --wi-count N           incident directions per slice, 16-1024 (default 80), chosen\n"
@@ -143,7 +148,7 @@ void lsqt_cli_help(FILE *f)
 
 enum flag_id {
     F_PATHS, F_WO, F_WO_ANGLES, F_WI, F_WI_FILE, F_RX, F_RP, F_RESTART, F_SEED, F_THREADS, F_OUTPUT,
-    F_HEMI, F_SPREAD, F_GRID, F_RGL_GRID, F_WAVELENGTHS, F_BELOW, F_CHECKPOINT, F_SHARD, F_REFINE, F_DEVICE, F_LIST, F_DOUBLE, F_TIME, F_TARGET, F_LSS, F_JSON, F_QUIET, F_VERBOSE, F_HELP, F_VERSION
+    F_HEMI, F_SPREAD, F_GRID, F_RGL_GRID, F_WAVELENGTHS, F_BELOW, F_CHECKPOINT, F_SHARD, F_REFINE, F_DEVICE, F_LIST, F_DOUBLE, F_TIME, F_TARGET, F_LSS, F_JSON, F_QUIET, F_VERBOSE, F_HELP, F_VERSION, F_TOTAL
 };
 
 static const struct flag {
@@ -166,6 +171,7 @@ static const struct flag {
     {NULL, "--refine", F_REFINE, 0}, {NULL, "--from-below", F_BELOW, 0},
     {NULL, "--grid", F_GRID, 1},             {NULL, "--rgl-grid", F_RGL_GRID, 1},
     {NULL, "--wavelengths", F_WAVELENGTHS, 1}, {NULL, "--version", F_VERSION, 0},
+    {NULL, "--total-paths", F_TOTAL, 1},
 };
 
 /* --grid NO,NI,NPHI or --grid N (= N,N,4(N-1)): NO, NI in 2-1024, NPHI even in 2-2048
@@ -275,6 +281,7 @@ static int apply(const struct flag *fl, const char *name, const char *v, lsqt_cl
     case F_VERBOSE: c->verbose = 1; break;
     case F_HELP: c->help = 1; break;
     case F_VERSION: c->version = 1; break;
+    case F_TOTAL: if (lsqt_parse_count(v, 1, 9.0e15, &c->total_paths)) expect = "an integer path count from 1 to 9e15 (e.g. 10000 or 1e7)"; break;
     default: break;
     }
     if (expect) {
@@ -370,6 +377,11 @@ static int check_choices(const lsqt_cli *c, const char *wi_name, char *err, size
                                   "of them", c->grid_rgl ? "--rgl-grid" : "--grid", other);
             return 2;
         }
+    }
+    if (c->total_paths && (c->paths_given || c->shard_n)) {
+        snprintf(err, errcap, "--total-paths sets how many paths the LSS is to hold, and %s %s: give one of them",
+                 c->paths_given ? "-p" : "--shard", c->paths_given ? "how many to add" : "splits a run of -p paths");
+        return 2;
     }
     if (c->refine && !c->shard_n) {
         snprintf(err, errcap, "--refine is for the refinement shards of a sharded run: give --shard K/N too");

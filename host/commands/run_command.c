@@ -136,12 +136,24 @@ static int read_wi_file(const lsqt_cli *c, const lsqt_assembly *a, float **wi_di
     return wrc ? fail(wrc < 0 ? 1 : 2, "--wi-file: %s%s", err, "") : 0;
 }
 
-/* The run plan of the stages (stages.h): what the flags ask of the paths. */
-static lsqt_run_plan run_plan(const lsqt_cli *c)
+/* The run plan of the stages (stages.h): what the flags ask of the paths. --total-paths N
+ * becomes the -p that brings ST to N: N fresh, N less what it holds continued (0 when it
+ * holds N or more, said in a note); an RRSS pilot that N is the run of is finished as the
+ * same command without -p would. */
+static lsqt_run_plan run_plan(const lsqt_cli *c, const lsqt_state *st, const char *lss)
 {
     lsqt_run_plan p;
     memset(&p, 0, sizeof p);
     p.paths = c->paths, p.paths_given = c->paths_given, p.target_error = c->target_error;
+    if (c->total_paths) {
+        const int pilot = st->stage == LSQT_STAGE_PILOT;
+        p.paths_given = !(pilot && c->total_paths == st->span_end);
+        p.paths = c->total_paths > st->paths ? c->total_paths - st->paths : 0;
+        if (!p.paths_given) p.paths = c->total_paths;
+        if (!p.paths && !c->quiet)
+            fprintf(stderr, "note: '%s' holds %llu paths per slice, --total-paths %llu: none to add\n", lss,
+                    (unsigned long long)st->paths, (unsigned long long)c->total_paths);
+    }
     p.rp = c->rp, p.rx = c->rx;
     p.shard_k = c->shard_k, p.shard_n = c->shard_n, p.refine = c->refine, p.restart = c->restart;
     p.quiet = c->quiet;
@@ -257,7 +269,7 @@ static int simulate(const lsqt_cli *c, const lsqt_assembly *a, lsqt_state *st, c
     lsqt_sim_opts so = {isatty(STDERR_FILENO) && !c->quiet, c->time_limit, 0, &g_stop, NULL, c->verbose,
                         c->target_error, can_checkpoint ? c->checkpoint : 0.0,
                         can_checkpoint ? write_checkpoint : NULL, &ck};
-    const lsqt_run_plan plan = run_plan(c);
+    const lsqt_run_plan plan = run_plan(c, st, out->base);
     lsqt_stages sg;
     char err[LSQT_PATH_CAP + 1024];
     rc = lsqt_run_stages(&cx, a, st, &plan, out->base, out->path[OUT_LSS], &so, &sg, err, sizeof err);

@@ -35,6 +35,7 @@ typedef struct lsqt_cli {
     double target_error;      /* --target-error, 0 = none */
     double checkpoint;        /* --checkpoint seconds, 0 = never (default 300) */
     int paths_given;          /* -p was given */
+    uint64_t total_paths;     /* --total-paths N: the paths per slice the LSS is to hold (0: not given) */
     const char *lss;          /* --lss */
     const char *json;         /* --json */
     int quiet, verbose;
