@@ -76,4 +76,22 @@ expect 0 "Continuing without -p finishes the pilot and then this run (1000000000
 # --total-paths of the whole run continues a stopped pilot as the same command without -p.
 expect 0 "this run finishes it, then the run (1000000000 paths per slice)" -- \
   "$BIN" --total-paths 1e9 --time-limit 1 -o P.raw --lss P.lss S.lsqt
+# A run that ends short of its target says so, with the paths the 1/sqrt(paths) law says
+# it needs (checked here from the JSON's own largest error: N = ceil(paths (err/goal)^2)),
+# and the command that gets them; one that reaches it says met.
+expect 0 "target error 0.001: not met (largest relative error" -- \
+  "$BIN" -R -wo 4 -wi 16 --wi-spread -p 20000 --target-error 0.001 --json short.json -o short.raw --lss short.lss S.lsqt
+json short.json "j['target_met'] is False and j['target_error'] == 0.001 and j['paths_needed'] == __import__('math').ceil(20000 * (max(s['max_rel_err'] for s in j['slices']) / 0.001) ** 2)" \
+  && ok || bad "short of the target: $(cat short.json | head -c 600)"
+n=$(python3 -c "import json, sys; print(json.load(open(sys.argv[1]))['paths_needed'])" short.json)
+expect 0 "continue with --total-paths $n" -- \
+  "$BIN" -R -wo 4 -wi 16 --wi-spread -p 20000 --target-error 0.001 -o s2.raw --lss s2.lss S.lsqt
+expect 0 "target error 0.5: met (largest relative error" -- \
+  "$BIN" -R -wo 4 -wi 16 --wi-spread -p 20000 --target-error 0.5 --json met.json -o met.raw --lss met.lss S.lsqt
+json met.json "j['target_met'] is True and j['paths_needed'] == 16384" && ok || bad "met: $(head -c 300 met.json)"
+expect 0 "target error 0.001: not met (no error bars yet" -- \
+  "$BIN" -R -wo 4 -wi 16 --wi-spread -p 3000 --target-error 0.001 -o few.raw --lss few.lss S.lsqt
+"$BIN" -R -wo 4 -wi 16 --wi-spread -p 3000 --json none.json -o none.raw --lss none.lss S.lsqt >/dev/null &&
+  json none.json "j['target_met'] is None and j['paths_needed'] is None and j['target_error'] is None" && ok ||
+  bad "without --target-error the JSON's target fields are not null"
 finish test_stop_rules

@@ -2,6 +2,7 @@
  * LSS, RAW, summary. Each step is a function, in the order of a run. */
 #include "run_cmd.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -197,12 +198,20 @@ static lsqt_run_info run_info(const lsqt_cli *c, const lsqt_state *st, const lsq
     const lsqt_work before = sg->before;
     lsqt_run_info ri = {devname, stats.seconds,
                         stats.seconds > 0 ? (double)stats.paths_added * st->n_slices / stats.seconds : 0.0,
-                        (unsigned long long)stats.paths_added, NULL, lsqt_work_totals(st)};
+                        (unsigned long long)stats.paths_added, NULL, lsqt_work_totals(st), 0.0, NAN, 0ULL};
     ri.work.paths -= before.paths, ri.work.layer_events -= before.layer_events;
     ri.work.medium_events -= before.medium_events, ri.work.nee_evaluations -= before.nee_evaluations;
     static const char *const why[] = {"the path count (-p)", "the target error (--target-error)",
                                       "the time limit (--time-limit)", "an interrupt"};
-    if (c->target_error > 0 || c->time_limit > 0) ri.stopped_by = why[stats.stop_reason];
+    if (c->target_error > 0 || c->time_limit > 0)
+        ri.stopped_by = stats.stop_reason == 0 && c->total_paths ? "the path count (--total-paths)" : why[stats.stop_reason];
+    if (c->target_error > 0) {
+        ri.target_error = c->target_error;
+        ri.max_rel_err = lsqt_max_rel_err(st);
+        const double r = ri.max_rel_err / c->target_error;
+        if (r > 1 && isfinite(r) && st->paths * r * r < 9e15) ri.paths_needed = (unsigned long long)ceil(st->paths * r * r);
+        else if (r <= 1) ri.paths_needed = st->paths; /* NaN (no error bars yet): not known */
+    }
     return ri;
 }
 

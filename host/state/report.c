@@ -62,6 +62,15 @@ void lsqt_report_summary(FILE *f, const lsqt_state *st, const lsqt_slice_est *es
         fprintf(f, "note: errors need paths in 2 of the %d batches (more than %d paths per slice): n/a\n",
                 LSQT_BATCHES, LSQT_CHUNK);
     if (ri->stopped_by) fprintf(f, "stopped by %s\n", ri->stopped_by);
+    if (ri->target_error > 0 && ri->max_rel_err <= ri->target_error)
+        fprintf(f, "target error %g: met (largest relative error %.3g)\n", ri->target_error, ri->max_rel_err);
+    else if (ri->target_error > 0 && ri->paths_needed)
+        fprintf(f, "target error %g: not met (largest relative error %.3g); about %llu paths per slice in all "
+                   "would reach it (1/sqrt(paths)): continue with --total-paths %llu\n",
+                ri->target_error, ri->max_rel_err, ri->paths_needed, ri->paths_needed);
+    else if (ri->target_error > 0)
+        fprintf(f, "target error %g: not met (no error bars yet: they need paths in 2 of the %d batches)\n",
+                ri->target_error, LSQT_BATCHES);
     const lsqt_work *w = &ri->work;
     if (w->paths > 0) {
         double ev = w->layer_events + w->medium_events;
@@ -173,6 +182,12 @@ int lsqt_report_json(const char *path, const lsqt_state *st, const lsqt_slice_es
     fprintf(f, ", \"assembly_hash\": \"%016llx\", \"flags\": %u, \"paths_added\": %llu, \"stopped_by\": ",
             (unsigned long long)st->hash, st->flags, ri->paths_added);
     if (ri->stopped_by) fprintf(f, "\"%s\"", ri->stopped_by);
+    else fprintf(f, "null");
+    fprintf(f, ", \"target_error\": ");
+    json_num(f, ri->target_error > 0 ? ri->target_error : NAN);
+    fprintf(f, ", \"target_met\": %s, \"paths_needed\": ",
+            !(ri->target_error > 0) ? "null" : ri->max_rel_err <= ri->target_error ? "true" : "false");
+    if (ri->target_error > 0 && ri->paths_needed) fprintf(f, "%llu", ri->paths_needed);
     else fprintf(f, "null");
     const lsqt_work *w = &ri->work;
     const double ev = w->layer_events + w->medium_events, np = w->paths > 0 ? w->paths : NAN;

@@ -18,6 +18,10 @@ typedef struct lsqt_run_info {
     unsigned long long paths_added;
     const char *stopped_by;  /* what ended the run (NULL: not said) */
     lsqt_work work;          /* the work of this run (the state's counters after minus before) */
+    /* --target-error (0: not given): the largest relative error reached (NaN: not known
+     * yet) and the paths per slice in all the 1/sqrt(paths) law says the target needs */
+    double target_error, max_rel_err;
+    unsigned long long paths_needed;
 } lsqt_run_info;
 
 void lsqt_report_summary(FILE *f, const lsqt_state *st, const lsqt_slice_est *est,
