@@ -226,7 +226,7 @@ static inline void fixture_state(const char *text, int n_slices, int n_wi, uint6
  * then frees *a; ends the test on an error. */
 static inline void fixture_simulate(lsqt_assembly *a, lsqt_state *st, uint64_t paths)
 {
-    lsqt_sim_opts o = {0, 0.0, 0, NULL, NULL, 0, 0.0, 0.0, NULL, NULL};
+    lsqt_sim_opts o = {0, 0.0, 0, NULL, NULL, 0, 0.0, 0.0, NULL, NULL, NULL};
     lsqt_sim_stats stats;
     char err[1024];
     if (lsqt_simulate(&fixture_cx, a, st, paths, &o, &stats, err, sizeof err)) {

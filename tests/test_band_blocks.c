@@ -226,7 +226,7 @@ static lsqt_slice_est *run_bands(const band_case *c, const char *text, int n_wi,
     }
     st->seed += seed_offset;
     /* a failed run (e.g. weights beyond the tallies' range) is a failed check of this stack */
-    lsqt_sim_opts o = {0, 0.0, 0, NULL, NULL, 0, 0.0, 0.0, NULL, NULL};
+    lsqt_sim_opts o = {0, 0.0, 0, NULL, NULL, 0, 0.0, 0.0, NULL, NULL, NULL};
     lsqt_sim_stats stats;
     char err[1024];
     const int rc = lsqt_simulate(&fixture_cx, &a, st, paths, &o, &stats, err, sizeof err);

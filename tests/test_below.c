@@ -100,7 +100,7 @@ static void make_state(lsqt_state *st, const lsqt_assembly *a, const double *deg
 
 static void run(const lsqt_assembly *a, lsqt_state *st, uint64_t paths, size_t local)
 {
-    lsqt_sim_opts o = {0, 0.0, local, NULL, NULL, 0, 0.0, 0.0, NULL, NULL};
+    lsqt_sim_opts o = {0, 0.0, local, NULL, NULL, 0, 0.0, 0.0, NULL, NULL, NULL};
     lsqt_sim_stats stats;
     char err[1024];
     if (lsqt_simulate_sides(&fixture_cx, a, st, paths, &o, &stats, err, sizeof err)) {

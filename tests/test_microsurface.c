@@ -254,7 +254,7 @@ static void run_case(mrun *r, const char *text, int ns, const double *deg, const
     }
     free(wf);
     free(wc);
-    lsqt_sim_opts o = {0, 0.0, 0, NULL, NULL, 0, 0.0, 0.0, NULL, NULL};
+    lsqt_sim_opts o = {0, 0.0, 0, NULL, NULL, 0, 0.0, 0.0, NULL, NULL, NULL};
     lsqt_sim_stats stats;
     char err[1024];
     double t0 = now();

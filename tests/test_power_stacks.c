@@ -122,7 +122,7 @@ static void run_case(const stack_case *c)
         lsqt_wi_spread(NWI, st.transmits, st.wi + (size_t)s * NWI * 4);
     }
     if (lsqt_state_add_below(&st)) exit(1);
-    lsqt_sim_opts o = {0, 0.0, 0, NULL, NULL, 0, 0.0, 0.0, NULL, NULL};
+    lsqt_sim_opts o = {0, 0.0, 0, NULL, NULL, 0, 0.0, 0.0, NULL, NULL, NULL};
     lsqt_sim_stats stats;
     char err[1024];
     if (lsqt_simulate_sides(&fixture_cx, &a, &st, PATHS, &o, &stats, err, sizeof err)) {

@@ -210,7 +210,7 @@ static void fresh(run_t *r, const char *text, int n_slices, const double *deg, i
 static void rrss_run(run_t *r, int rx, uint64_t pilot, uint64_t rest, size_t local_size)
 {
     char err[1024];
-    lsqt_sim_opts o = {0, 0.0, local_size, NULL, NULL, 0, 0.0, 0.0, NULL, NULL};
+    lsqt_sim_opts o = {0, 0.0, local_size, NULL, NULL, 0, 0.0, 0.0, NULL, NULL, NULL};
     lsqt_rrss_info info;
     lsqt_sim_stats stats;
     CHECK(lsqt_rrss(&fixture_cx, &r->a, &r->st, rx, pilot, &o, &info, err, sizeof err) == 0, "%s", err);
@@ -256,7 +256,7 @@ static void test_device(void)
         fresh(&plain, text, 3, deg, 24, 5);
         memcpy(plain.st.wi, a.st.wi, (size_t)3 * 24 * 4 * sizeof *a.st.wi);
         char err[1024];
-        lsqt_sim_opts o = {0, 0.0, 0, NULL, NULL, 0, 0.0, 0.0, NULL, NULL};
+        lsqt_sim_opts o = {0, 0.0, 0, NULL, NULL, 0, 0.0, 0.0, NULL, NULL, NULL};
         lsqt_sim_stats stats;
         CHECK(lsqt_simulate(&fixture_cx, &plain.a, &plain.st, 4000, &o, &stats, err, sizeof err) == 0, "%s", err);
         CHECK(same_state(&a.st, &plain.st), "%s: RRSS state != a plain run with its directions", t ? "dusty" : "smooth");
@@ -303,7 +303,7 @@ static void test_pilot_blocks(void)
     fresh(&r, DUSTY, 2, deg, NWI, 9);
     fresh(&plain, DUSTY, 2, deg, NWI, 9);
     char err[1024];
-    lsqt_sim_opts o = {0, 0.0, 0, NULL, NULL, 0, 0.0, 0.0, NULL, NULL};
+    lsqt_sim_opts o = {0, 0.0, 0, NULL, NULL, 0, 0.0, 0.0, NULL, NULL, NULL};
     lsqt_state ps;
     lsqt_rrss_info info;
     lsqt_sim_stats stats;

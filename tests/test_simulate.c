@@ -253,7 +253,7 @@ static void test_reproducible(void)
     lsqt_diag d;
     memset(&d, 0, sizeof d);
     lsqt_parse(text, strlen(text), "t", &a, &d);
-    lsqt_sim_opts o = {0, 0.0, 32, NULL, NULL, 0, 0.0, 0.0, NULL, NULL};
+    lsqt_sim_opts o = {0, 0.0, 32, NULL, NULL, 0, 0.0, 0.0, NULL, NULL, NULL};
     lsqt_sim_stats stats;
     char err[512];
     CHECK(lsqt_simulate(&fixture_cx, &a, &split, 5000 - 1234, &o, &stats, err, sizeof err) == 0, "%s", err);
@@ -267,7 +267,7 @@ static void test_reproducible(void)
     lsqt_state_init(&st32, one.canonical, one.hash, one.seed, 2, 16, one.transmits);
     memcpy(st32.theta_o, one.theta_o, sizeof(double) * 2);
     memcpy(st32.wi, one.wi, sizeof(float) * 2 * 16 * 4);
-    lsqt_sim_opts o32 = {0, 0.0, 0, NULL, "-DLSQT_NO_INT64_ATOMICS=1", 0, 0.0, 0.0, NULL, NULL};
+    lsqt_sim_opts o32 = {0, 0.0, 0, NULL, "-DLSQT_NO_INT64_ATOMICS=1", 0, 0.0, 0.0, NULL, NULL, NULL};
     CHECK(lsqt_simulate(&fixture_cx, &a, &st32, 5000, &o32, &stats, err, sizeof err) == 0, "%s", err);
     CHECK(memcmp(one.nee, st32.nee, lsqt_state_nee_count(&one) * sizeof *one.nee) == 0, "32-bit atomics: tallies differ");
     CHECK(memcmp(one.scalars, st32.scalars, lsqt_state_scalar_count(&one) * sizeof *one.scalars) == 0, "32-bit atomics: R/T differ");

@@ -94,4 +94,33 @@ expect 0 "target error 0.001: not met (no error bars yet" -- \
 "$BIN" -R -wo 4 -wi 16 --wi-spread -p 3000 --json none.json -o none.raw --lss none.lss S.lsqt >/dev/null &&
   json none.json "j['target_met'] is None and j['paths_needed'] is None and j['target_error'] is None" && ok ||
   bad "without --target-error the JSON's target fields are not null"
+# --plan: calibrates in a temporary folder (TMPDIR; left empty), writes nothing beside the
+# input, and predicts by 1/sqrt(paths): a run of the paths it gives for 1 % has its
+# largest relative error near 1 % (within 0.7-1.4: the largest of 64 errors is noisy).
+mkdir -p plantmp && cp S.lsqt PL.lsqt
+TMPDIR=$PWD/plantmp "$BIN" --plan -wo 4 -wi 16 --wi-spread PL.lsqt >plan.out 2>plan.err && ok || bad "--plan failed: $(cat plan.err)"
+grep -q "^time per 1e6 paths per slice: .* s wall, .* CPU-s" plan.out && [ "$(grep -cE '^ +[0-3] +[0-9.]+d ' plan.out)" = 4 ] &&
+  ok || bad "--plan output: $(cat plan.out)"
+ls PL.lsqt.* >/dev/null 2>&1 && bad "--plan wrote beside its input: $(ls PL.lsqt.*)" || ok
+[ -z "$(ls -A plantmp)" ] && ok || bad "--plan left files in TMPDIR: $(ls -A plantmp)"
+n=$(sed -n 's/^  target 0.01 *\([0-9.e+]*\) paths per slice.*/\1/p' plan.out)
+n=$(python3 -c "import sys; print(int(float(sys.argv[1])))" "$n")
+"$BIN" -q -R -wo 4 -wi 16 --wi-spread --total-paths "$n" --json plan.json -o PL.raw --lss PL.lss PL.lsqt &&
+  json plan.json "0.7 < max(s['max_rel_err'] for s in j['slices']) / 0.01 < 1.4" && ok ||
+  bad "--plan's paths for 1 % ($n) gave a largest error of $(python3 -c "import json; print(max(s['max_rel_err'] for s in json.load(open('plan.json'))['slices']))")"
+expect 2 "--plan runs the input twice: give a file, not stdin" -- bash -c "\"$BIN\" --plan - < S.lsqt"
+expect 2 "--plan predicts a whole run: drop --shard" -- "$BIN" --plan --shard 0/2 S.lsqt
+# The progress line (drawn on a terminal: script(1) gives one) names the phase, and with a
+# target error the time 1/sqrt(paths) predicts to it.
+if command -v script >/dev/null; then
+  script -qec "\"$BIN\" -R -wo 4 -wi 16 -p 3e5 -o pg.raw --lss pg.lss S.lsqt" /dev/null | tr '\r' '\n' >pg.out
+  grep -aq "^RRSS pilot: \[" pg.out && grep -aq "^refining the chosen directions: \[" pg.out && ok ||
+    bad "the progress line does not name the RRSS pilot and the refinement: $(head -c 300 pg.out)"
+  script -qec "\"$BIN\" -R -wo 4 -wi 16 --wi-spread --target-error 0.003 -p 1e6 -o pg.raw --lss pg.lss S.lsqt" /dev/null |
+    tr '\r' '\n' >pt.out
+  grep -aqE "max rel err [0-9.e-]+ \(target 0.003, about [0-9]+ s to it\)" pt.out && ok ||
+    bad "the progress line does not predict the time to the target: $(tail -c 300 pt.out)"
+else
+  echo "SKIP (this part only): script(1) is not installed"
+fi
 finish test_stop_rules

@@ -22,6 +22,9 @@ static void help_usage_and_sampling(FILE *f)
           "\n"
           "  -p, --path-count N          paths per outgoing direction (default 10000; 1e7 is fine);\n"
           "                              continuing an LSS, the paths to add\n"
+          "      --plan                  two short runs (seconds) in a temporary folder, then the\n"
+          "                              time per 1e6 paths and, per slice, the paths a target\n"
+          "                              error needs (error ~ 1/sqrt(paths)); writes nothing here\n"
           "      --total-paths N         instead of -p: the paths per slice the LSS is to hold; a\n"
           "                              fresh run does N, a continued one adds what is missing\n"
           "                              (none when it holds N), so rerunning a stopped command\n"
@@ -148,7 +151,7 @@ void lsqt_cli_help(FILE *f)
 
 enum flag_id {
     F_PATHS, F_WO, F_WO_ANGLES, F_WI, F_WI_FILE, F_RX, F_RP, F_RESTART, F_SEED, F_THREADS, F_OUTPUT,
-    F_HEMI, F_SPREAD, F_GRID, F_RGL_GRID, F_WAVELENGTHS, F_BELOW, F_CHECKPOINT, F_SHARD, F_REFINE, F_DEVICE, F_LIST, F_DOUBLE, F_TIME, F_TARGET, F_LSS, F_JSON, F_QUIET, F_VERBOSE, F_HELP, F_VERSION, F_TOTAL
+    F_HEMI, F_SPREAD, F_GRID, F_RGL_GRID, F_WAVELENGTHS, F_BELOW, F_CHECKPOINT, F_SHARD, F_REFINE, F_DEVICE, F_LIST, F_DOUBLE, F_TIME, F_TARGET, F_LSS, F_JSON, F_QUIET, F_VERBOSE, F_HELP, F_VERSION, F_TOTAL, F_PLAN
 };
 
 static const struct flag {
@@ -171,7 +174,7 @@ static const struct flag {
     {NULL, "--refine", F_REFINE, 0}, {NULL, "--from-below", F_BELOW, 0},
     {NULL, "--grid", F_GRID, 1},             {NULL, "--rgl-grid", F_RGL_GRID, 1},
     {NULL, "--wavelengths", F_WAVELENGTHS, 1}, {NULL, "--version", F_VERSION, 0},
-    {NULL, "--total-paths", F_TOTAL, 1},
+    {NULL, "--total-paths", F_TOTAL, 1},     {NULL, "--plan", F_PLAN, 0},
 };
 
 /* --grid NO,NI,NPHI or --grid N (= N,N,4(N-1)): NO, NI in 2-1024, NPHI even in 2-2048
@@ -281,6 +284,7 @@ static int apply(const struct flag *fl, const char *name, const char *v, lsqt_cl
     case F_VERBOSE: c->verbose = 1; break;
     case F_HELP: c->help = 1; break;
     case F_VERSION: c->version = 1; break;
+    case F_PLAN: c->plan = 1; break;
     case F_TOTAL: if (lsqt_parse_count(v, 1, 9.0e15, &c->total_paths)) expect = "an integer path count from 1 to 9e15 (e.g. 10000 or 1e7)"; break;
     default: break;
     }
@@ -377,6 +381,10 @@ static int check_choices(const lsqt_cli *c, const char *wi_name, char *err, size
                                   "of them", c->grid_rgl ? "--rgl-grid" : "--grid", other);
             return 2;
         }
+    }
+    if (c->plan && c->shard_n) {
+        snprintf(err, errcap, "--plan predicts a whole run: drop --shard");
+        return 2;
     }
     if (c->total_paths && (c->paths_given || c->shard_n)) {
         snprintf(err, errcap, "--total-paths sets how many paths the LSS is to hold, and %s %s: give one of them",

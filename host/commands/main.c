@@ -63,5 +63,5 @@ int main(int argc, char **argv)
     }
     if (c.list_devices) return list_devices();
     if (!c.input) return fail(2, "no input file given (use - for stdin; see --help)%s%s", "", "");
-    return run_command(&c);
+    return c.plan ? plan_command(&c) : run_command(&c);
 }

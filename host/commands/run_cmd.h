@@ -34,6 +34,8 @@ const char *signal_name(int sig);
 /* run_command.c: everything lsqt-cl does with an input once its flags are read; returns
  * the exit status. */
 int run_command(const lsqt_cli *c);
+/* plan.c: --plan (two calibration runs through run_command, then the prediction). */
+int plan_command(const lsqt_cli *c);
 
 /* run_outputs.c */
 /* The files a run writes. RAW is one file, or with -H two (R and T; no T when nothing is

@@ -277,7 +277,7 @@ static int simulate(const lsqt_cli *c, const lsqt_assembly *a, lsqt_state *st, c
     const int can_checkpoint = ck.lss && strcmp(ck.lss, "-") != 0 && c->checkpoint > 0;
     lsqt_sim_opts so = {isatty(STDERR_FILENO) && !c->quiet, c->time_limit, 0, &g_stop, NULL, c->verbose,
                         c->target_error, can_checkpoint ? c->checkpoint : 0.0,
-                        can_checkpoint ? write_checkpoint : NULL, &ck};
+                        can_checkpoint ? write_checkpoint : NULL, &ck, NULL};
     const lsqt_run_plan plan = run_plan(c, st, out->base);
     lsqt_stages sg;
     char err[LSQT_PATH_CAP + 1024];

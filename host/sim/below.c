@@ -411,7 +411,8 @@ int lsqt_simulate_range_sides(lsqt_context *cx, const lsqt_assembly *a, lsqt_sta
         pos += s1.paths_added;
         seg = next_segment(seg, lsqt_now() - t);
         if (o->progress)
-            fprintf(stderr, "\r%llu of %llu paths per slice, both sides   ", (unsigned long long)(pos - begin),
+            fprintf(stderr, "\r%s%s%llu of %llu paths per slice, both sides (from above and below)   ",
+                    o->phase ? o->phase : "", o->phase ? ": " : "", (unsigned long long)(pos - begin),
                     (unsigned long long)(target - begin));
         if (s1.interrupted) {
             stats->stop_reason = LSQT_STOP_INTERRUPT, stats->interrupted = 1;

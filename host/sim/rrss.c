@@ -351,6 +351,7 @@ static int pilot_run(lsqt_session *sess, lsqt_state *ps, uint64_t begin, uint64_
 {
     lsqt_sim_opts po = *o;
     po.target_error = 0.0; /* the pilot's length is fixed: the directions depend on it */
+    po.phase = "RRSS pilot";
     lsqt_sim_stats stats;
     if (o->verbose)
         fprintf(stderr, "RRSS: %d candidates per slice, pilot paths [%llu, %llu) of [0, %llu)\n",

@@ -44,14 +44,23 @@ uint64_t lsqt_next_check(uint64_t paths, double err, double target)
     return n > paths ? n : paths + CHECK_STEP;
 }
 
-static void progress_draw(uint64_t done, uint64_t total, double elapsed, int n_slices, double err, double target)
+/* The progress line: the phase, then a bar and ETA, or with a target error the error so
+ * far and the time 1/sqrt(paths) predicts to the target (held: the state's paths, which
+ * the error is of). */
+static void progress_draw(const char *phase, uint64_t done, uint64_t total, uint64_t held, double elapsed,
+                          int n_slices, double err, double target)
 {
     double rate = elapsed > 0 ? (double)done * n_slices / elapsed : 0.0;
+    if (phase) fprintf(stderr, "\r%s: ", phase);
+    else fprintf(stderr, "\r");
     if (target > 0) {
-        char e[32] = "n/a";
+        char e[32] = "n/a", eta[48] = "";
         if (isfinite(err)) snprintf(e, sizeof e, "%.3g", err);
-        fprintf(stderr, "\r%llu paths per slice  %.3g paths/s  max rel err %s (target %.3g)   ",
-                (unsigned long long)done, rate, e, target);
+        const double need = isfinite(err) ? (double)held * (err / target) * (err / target) : NAN;
+        if (need > held && rate > 0)
+            snprintf(eta, sizeof eta, ", about %.0f s to it", (need - (double)held) * n_slices / rate);
+        fprintf(stderr, "%llu paths per slice  %.3g paths/s  max rel err %s (target %.3g%s)   ",
+                (unsigned long long)done, rate, e, target, eta);
         fflush(stderr);
         return;
     }
@@ -61,7 +70,7 @@ static void progress_draw(uint64_t done, uint64_t total, double elapsed, int n_s
     int fill = (int)(frac * 30.0);
     for (int i = 0; i < 30; i++) bar[i] = i < fill ? '#' : '.';
     bar[30] = '\0';
-    fprintf(stderr, "\r[%s] %5.1f%%  %.3g paths/s  ETA %.0f s   ", bar, 100.0 * frac, rate, eta);
+    fprintf(stderr, "[%s] %5.1f%%  %.3g paths/s  ETA %.0f s   ", bar, 100.0 * frac, rate, eta);
     fflush(stderr);
 }
 
@@ -203,7 +212,8 @@ int lsqt_run_range(lsqt_session *sp, lsqt_state *st, uint64_t begin, uint64_t ad
             o->checkpoint(st, o->checkpoint_ctx);
             last_ck = lsqt_now();
         }
-        if (o->progress) progress_draw(pos - first, target - first, lsqt_now() - t0, st->n_slices, cur_err, goal);
+        if (o->progress)
+            progress_draw(o->phase, pos - first, target - first, pos, lsqt_now() - t0, st->n_slices, cur_err, goal);
         if (stop_asked(o, stats, t0, pos, target)) break;
     }
     if (o->progress) fprintf(stderr, "\n");

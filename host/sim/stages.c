@@ -203,7 +203,9 @@ static int run_whole(const stage_ctx *k, lsqt_state *st, lsqt_stages *o, char *e
         rc = resume_pilot(k, st, &finish_pilot, o, err, errcap);
     }
     if (o->have_ps && !rc) rc = choose(k, st, finish_pilot, &add, o, err, errcap);
-    if (!rc && !o->rinfo.interrupted) rc = lsqt_simulate_sides(k->cx, k->a, st, add, k->so, &o->stats, err, errcap);
+    lsqt_sim_opts ro = *k->so; /* the progress bar says which part of the run it is */
+    ro.phase = o->have_ps ? "refining the chosen directions" : NULL;
+    if (!rc && !o->rinfo.interrupted) rc = lsqt_simulate_sides(k->cx, k->a, st, add, &ro, &o->stats, err, errcap);
     o->stats.seconds += o->rinfo.seconds;
     o->stats.paths_added = st->paths - paths_before;
     if (o->rinfo.interrupted)

@@ -41,6 +41,7 @@ typedef struct lsqt_cli {
     int quiet, verbose;
     int help;
     int version;            /* --version */
+    int plan;               /* --plan: calibrate and predict, simulate nothing to keep */
     int sampling_given;       /* a flag that fixes the sampling (-wo, -wi, -s, ...) was given */
     int shard_k, shard_n;     /* --shard K/N (shard_n 0: not sharded) */
     int refine;               /* --refine: a shard does only what its state owes */

@@ -31,6 +31,7 @@ typedef struct lsqt_sim_opts {
     double checkpoint_every;      /* > 0: call checkpoint with the state this often (seconds) */
     int (*checkpoint)(const lsqt_state *st, void *ctx); /* e.g. writes the LSS; 0 = ok */
     void *checkpoint_ctx;
+    const char *phase;            /* the progress bar's label ("RRSS pilot", ...), NULL: none */
 } lsqt_sim_opts;
 
 enum {
