@@ -212,6 +212,7 @@ Both programs read the original's dialect of the input (short model names, no co
 `use_multiple_scattering` written out, since the original's MicrosurfaceDielectric defaults
 to false and lsqt-cl's to true). Commands, per case in a temporary folder:
 
+<!-- doc-test: skip it needs the original layered-sqt (tools/original/build.sh) and an hour -->
 ```sh
 tools/original/build.sh /tmp/orig
 python3 tools/bench_original.py {orig} build/lsqt-cl --doc --k {k} --ref {ref} --cases {','.join(cases)}
