@@ -90,6 +90,7 @@ expect 0 "OpenCL devices (float on every one; --double on those marked fp64):" -
 expect 0 "lsqt-cl info 0.1.0 (git " -- "$BIN" info --version
 expect 0 "lsqt-cl merge 0.1.0 (git " -- "$BIN" merge --version
 expect 0 "lsqt-cl export 0.1.0 (git " -- "$BIN" export --version
+LSQT_CL="$BIN" expect 0 "lssplot 0.1.0 (git " -- python3 "$(dirname "${BASH_SOURCE[0]}")/../tools/lssplot" --version
 for prog in lssinfo lssmerge lssview; do
   p="$(dirname "$BIN")/$prog"
   [ -x "$p" ] || p="$(dirname "$BIN")/tools/$prog/$prog"
