@@ -63,6 +63,11 @@ cd "$W" || exit 1
 # §1.2: the help, with -h or with no file; the same text through the alias as by lsqt-cl.
 expect 0 "--path-count" -- layered-sqt
 expect 0 "--path-count" -- layered-sqt -h
+# --version on every installed program, through PATH (the scripts report the lsqt-cl they run)
+for prog in lsqt-cl lssview lssinfo lssmerge lssplot lsqt-slurm-submit lsqt-slurm-steps lsqt-local-shards; do
+  expect 0 "$prog 0.1.0 (git " -- "$prog" --version
+done
+expect 0 "lsqt-cl 0.1.0 (git " -- layered-sqt --version # the seed guide's name for it
 [ "$(layered-sqt --help)" = "$(lsqt-cl --help)" ] && ok || bad "layered-sqt --help differs from lsqt-cl --help"
 mkdir tutorial1 && cd tutorial1 || exit 1
 cp "$P/share/lsqt-cl/examples/tutorial/Lambertian.lsqt" .

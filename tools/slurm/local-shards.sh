@@ -6,6 +6,13 @@
 # and runs lsqt-slurm-steps beside it (symlinks to it are followed), else steps.sh (the
 # source tree). LSQT_CL names the binary; unset, steps.sh chooses (see there).
 set -euo pipefail
+if [ "${1:-}" = --version ]; then # the lsqt-cl the steps run: its version and commit
+  here=$(dirname "$(readlink -f "${BASH_SOURCE[0]}")")
+  s=$here/lsqt-slurm-steps
+  [ -f "$s" ] || s=$here/steps.sh
+  v=$(bash "$s" --version) && echo "${0##*/} ${v#* }"
+  exit
+fi
 n=${1:?usage: ${0##*/} N FILE [lsqt-cl flags]}
 file=${2:?usage: ${0##*/} N FILE [lsqt-cl flags]}
 shift 2

@@ -26,6 +26,10 @@ if [ -z "${LSQT_CL:-}" ]; then
   fi
 fi
 me=${0##*/}
+if [ "${1:-}" = --version ]; then # the lsqt-cl it runs: its version and commit
+  v=$("$LSQT_CL" info --version) && echo "$me ${v#lsqt-cl info }"
+  exit
+fi
 step=${1:?usage: $me shard|refine K N FILE [flags] | $me merge N FILE [flags]}
 shift
 if [ "$step" = merge ]; then

@@ -31,6 +31,12 @@ die() {
   exit 2
 }
 usage() { die "usage: $0 [--wait] N FILE [lsqt-cl flags...]"; }
+if [ "${1:-}" = --version ]; then # the lsqt-cl the steps run: its version and commit
+  s=$(dirname "$(readlink -f "${BASH_SOURCE[0]}")")/lsqt-slurm-steps
+  [ -f "$s" ] || s=$(dirname "$(readlink -f "${BASH_SOURCE[0]}")")/steps.sh
+  v=$(bash "$s" --version) && echo "${0##*/} ${v#* }"
+  exit
+fi
 
 wait_end=0
 if [ "${1:-}" = --wait ]; then
