@@ -108,6 +108,11 @@ n=$(python3 -c "import sys; print(int(float(sys.argv[1])))" "$n")
 "$BIN" -q -R -wo 4 -wi 16 --wi-spread --total-paths "$n" --json plan.json -o PL.raw --lss PL.lss PL.lsqt &&
   json plan.json "0.7 < max(s['max_rel_err'] for s in j['slices']) / 0.01 < 1.4" && ok ||
   bad "--plan's paths for 1 % ($n) gave a largest error of $(python3 -c "import json; print(max(s['max_rel_err'] for s in json.load(open('plan.json'))['slices']))")"
+# with bands the runs write a RAW per band: all removed with the folder
+mkdir -p plantmp2
+TMPDIR=$PWD/plantmp2 "$BIN" --plan -wo 4 -wi 16 --wi-spread --wavelengths 500,600 PL.lsqt >planb.out 2>&1 &&
+  grep -q "4 slices x 16 directions, 2 bands" planb.out && [ -z "$(ls -A plantmp2)" ] && ok ||
+  bad "--plan with bands: $(head -3 planb.out), left: $(ls -A plantmp2)"
 expect 2 "--plan runs the input twice: give a file, not stdin" -- bash -c "\"$BIN\" --plan - < S.lsqt"
 expect 2 "--plan predicts a whole run: drop --shard" -- "$BIN" --plan --shard 0/2 S.lsqt
 # The progress line (drawn on a terminal: script(1) gives one) names the phase, and with a

@@ -4,6 +4,7 @@
  * difference: start-up drops out) and every slice's largest relative error at the longer
  * one, n; Monte Carlo error falls as 1/sqrt(paths), so a target error E needs
  * n (e / E)^2 paths (docs/speed-accuracy.md measures that law). */
+#include <dirent.h>
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
@@ -41,16 +42,18 @@ static int calibrate(const lsqt_cli *c, const char *dir, uint64_t n, double *wal
     return rc;
 }
 
-/* Removes the files of DIR (the calibration's own) and DIR. */
+/* Removes DIR, the calibration's own folder, and the files the runs wrote in it (one
+ * RAW per band with bands, the sides from below, -H's R and T files, the LSS). */
 static void remove_dir(const char *dir)
 {
-    static const char *const names[] = {"c.raw", "c.R.raw", "c.T.raw", "c.below.raw", "c.below.R.raw",
-                                        "c.below.T.raw", "c.lss", "c.lss.lock"};
-    char p[LSQT_PATH_CAP + 32];
-    for (size_t i = 0; i < sizeof names / sizeof *names; i++) {
-        snprintf(p, sizeof p, "%s/%s", dir, names[i]);
+    DIR *d = opendir(dir);
+    char p[LSQT_PATH_CAP + 300];
+    for (struct dirent *e; d && (e = readdir(d));) {
+        if (strcmp(e->d_name, ".") == 0 || strcmp(e->d_name, "..") == 0) continue;
+        snprintf(p, sizeof p, "%s/%s", dir, e->d_name);
         unlink(p);
     }
+    if (d) closedir(d);
     if (rmdir(dir)) fprintf(stderr, "note: --plan left its folder %s (%s)\n", dir, strerror(errno));
 }
 
