@@ -213,4 +213,20 @@ expect 0 "band 3 (B):" -- "$BIN" paint-rgb.lsqt -p 2000 -wo 4 -wi 16
 cp "$EX/gold-coat.lsqt" .
 expect 0 "band 3 (700 nm):" -- "$BIN" gold-coat.lsqt -p 1000 -wo 4 -wi 16 --wavelengths 500:700:100
 expect 2 "a table without wavelengths" -- "$BIN" gold-coat.lsqt -p 1000 -R
+# Many bands: the summary gives a line a band (R and T over the slices, from the same
+# numbers as the JSON), -v every band's table.
+"$BIN" -R gold-coat.lsqt -p 1000 -wo 4 -wi 16 --wavelengths 400:650:50 --json six.json -o six.raw --lss six.lss >six.out &&
+  grep -q "^6 bands, over the slices" six.out && [ "$(grep -c '^band [1-6] ([0-9]* nm) ' six.out)" = 6 ] &&
+  ! grep -q "^slice " six.out && ok || bad "six bands' summary: $(head -12 six.out)"
+python3 - six.json six.out <<'PY' && ok || bad "six bands' summary lines differ from the JSON"
+import json, re, sys
+j = json.load(open(sys.argv[1]))
+lines = [l for l in open(sys.argv[2]) if re.match(r"^band \d+ \(", l)]
+for b, l in enumerate(lines):
+    r = [s["R"][b] for s in j["slices"]]
+    nums = re.findall(r"\d+\.\d{6}", l)
+    assert nums[:2] == ["%.6f" % min(r), "%.6f" % max(r)], (l, r)
+PY
+"$BIN" -v -R gold-coat.lsqt -p 1000 -wo 4 -wi 16 --wavelengths 400:650:50 -o six.raw --lss six.lss 2>/dev/null | grep -q "^band 6 (650 nm):" &&
+  ok || bad "-v does not give every band's table"
 finish test_bands.sh

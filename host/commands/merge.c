@@ -359,7 +359,7 @@ static int write_outputs(merge_job *j, const merge_outs *o)
          !(side_est[1] = lsqt_estimates(&sides[1]))))
         rc = lsqt_prog_error(j->prog, 1, "out of memory");
     int skipped = 0;
-    lsqt_run_info ri = {"(merged: no device)", 0.0, 0.0, 0ULL, NULL, lsqt_work_totals(sum), 0.0, 0.0, 0ULL};
+    lsqt_run_info ri = {"(merged: no device)", 0.0, 0.0, 0ULL, NULL, lsqt_work_totals(sum), 0.0, 0.0, 0ULL, 0};
     for (int i = 0; i < O_N && !rc; i++) {
         const char *p = o->path[i];
         if (!p) continue;

@@ -198,7 +198,7 @@ static lsqt_run_info run_info(const lsqt_cli *c, const lsqt_state *st, const lsq
     const lsqt_work before = sg->before;
     lsqt_run_info ri = {devname, stats.seconds,
                         stats.seconds > 0 ? (double)stats.paths_added * st->n_slices / stats.seconds : 0.0,
-                        (unsigned long long)stats.paths_added, NULL, lsqt_work_totals(st), 0.0, NAN, 0ULL};
+                        (unsigned long long)stats.paths_added, NULL, lsqt_work_totals(st), 0.0, NAN, 0ULL, c->verbose};
     ri.work.paths -= before.paths, ri.work.layer_events -= before.layer_events;
     ri.work.medium_events -= before.medium_events, ri.work.nee_evaluations -= before.nee_evaluations;
     static const char *const why[] = {"the path count (-p)", "the target error (--target-error)",

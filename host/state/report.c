@@ -29,11 +29,34 @@ void lsqt_report_summary(FILE *f, const lsqt_state *st, const lsqt_slice_est *es
     fprintf(f, "paths: %llu added per slice (%llu per slice in all) in %.3g s: %.4g paths/s\n",
             ri->paths_added, (unsigned long long)st->paths, ri->seconds, ri->paths_per_second);
     const int nbands = st->n_bands > 1 ? st->n_bands : 1;
+    /* Many bands: one line a band (a spectrum of 32 printed 452 lines); -v, or lsqt-cl
+     * info, gives every band's table. */
+    const int compact = nbands > LSQT_SUMMARY_BANDS && !ri->all_bands;
     unsigned long long cut = 0;
     int nonfinite = 0, no_err = 0, n_below = 0;
+    if (compact)
+        fprintf(f, "%d bands, over the slices (every slice's table: -v, or lsqt-cl info FILE.lss):\n"
+                   "%-18s %-22s %-22s %s\n", nbands, "band", "R min .. max", "T min .. max", "max rel err");
     for (int i = 0; i < nbands * st->n_slices; i++) {
         const int s = i % st->n_slices;
         char bt[64];
+        if (compact) {
+            if (s) continue;
+            double r0 = INFINITY, r1 = -INFINITY, t0 = INFINITY, t1 = -INFINITY, m = 0;
+            for (int k = i; k < i + st->n_slices; k++) {
+                r0 = fmin(r0, est[k].R.mean), r1 = fmax(r1, est[k].R.mean);
+                t0 = fmin(t0, est[k].T.mean), t1 = fmax(t1, est[k].T.mean);
+                m = isnan(est[k].max_rel_err) || isnan(m) ? NAN : fmax(m, est[k].max_rel_err);
+                no_err |= isnan(est[k].max_rel_err);
+                cut += est[k].cut;
+                nonfinite += est[k].n_nonfinite;
+                n_below += (st->slice_flags[k - i] & LSQT_SLICE_BELOW) && i == 0;
+            }
+            char em[32];
+            fprintf(f, "%-18s %.6f .. %.6f  %.6f .. %.6f  %s\n", band_text(st, i / st->n_slices, bt, sizeof bt), r0,
+                    r1, t0, t1, isnan(m) ? "n/a" : (snprintf(em, sizeof em, "%.3g", m), em));
+            continue;
+        }
         if (s == 0 && nbands > 1) fprintf(f, "%s:\n", band_text(st, i / st->n_slices, bt, sizeof bt));
         if (s == 0)
             fprintf(f, "%5s %9s  %-21s %-21s %-10s %s\n", "slice", "theta_o", "R +- 1 s.e.", "T +- 1 s.e.",

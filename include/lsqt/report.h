@@ -22,7 +22,10 @@ typedef struct lsqt_run_info {
      * yet) and the paths per slice in all the 1/sqrt(paths) law says the target needs */
     double target_error, max_rel_err;
     unsigned long long paths_needed;
+    int all_bands; /* every band's table even when there are many (-v) */
 } lsqt_run_info;
+/* Above this many bands the summary gives one line a band (all_bands: every table). */
+#define LSQT_SUMMARY_BANDS 4
 
 void lsqt_report_summary(FILE *f, const lsqt_state *st, const lsqt_slice_est *est,
                          const lsqt_run_info *ri);
