@@ -93,6 +93,7 @@ int plan_command(const lsqt_cli *c)
     memset(&st, 0, sizeof st);
     char err[LSQT_PATH_CAP + 1024], lss[LSQT_PATH_CAP + 16];
     snprintf(lss, sizeof lss, "%s/c.lss", dir);
+    if (!rc && g_stop) rc = fprintf(stderr, "lsqt-cl: --plan interrupted (%s): no plan\n", signal_name(g_stop)) > 0;
     if (!rc && lsqt_lss_read(lss, &st, err, sizeof err)) rc = fprintf(stderr, "lsqt-cl: error: %s\n", err) > 0;
     remove_dir(dir);
     if (rc) return rc;
