@@ -14,6 +14,7 @@
 #include <unistd.h>
 
 #include "lsqt/lss.h"
+#include "lsqt/simulate.h"
 #include "lsqt/util.h"
 #include "run_cmd.h"
 
@@ -112,29 +113,32 @@ int plan_command(const lsqt_cli *c)
     fprintf(f, "largest relative error of a slice's BSDF values at %llu paths (error ~ 1/sqrt(paths)):\n",
             (unsigned long long)n);
     fprintf(f, "  slice  theta_o  max_rel_err  paths for 1%%  paths for 0.1%%\n");
+    double *err_s = calloc((size_t)st.n_slices, sizeof *err_s); /* the largest over the bands */
+    for (int b = 0; err_s && b < nb; b++) {
+        const lsqt_state v = lsqt_state_band(&st, b);
+        lsqt_slice_est *est = lsqt_estimates(&v);
+        for (int s = 0; est && s < st.n_slices; s++) err_s[s] = fmax(err_s[s], est[s].max_rel_err);
+        if (est) lsqt_estimates_free(est, st.n_slices);
+        else free(err_s), err_s = NULL;
+    }
+    if (!err_s) {
+        lsqt_state_free(&st);
+        fprintf(stderr, "lsqt-cl: error: out of memory\n");
+        return 1;
+    }
     for (int s = 0; s < st.n_slices; s++) {
-        double e = 0;
-        for (int b = 0; b < nb; b++) {
-            const lsqt_state v = lsqt_state_band(&st, b);
-            lsqt_slice_est *est = lsqt_estimates(&v);
-            if (!est) {
-                lsqt_state_free(&st);
-                fprintf(stderr, "lsqt-cl: error: out of memory\n");
-                return 1;
-            }
-            if (est[s].max_rel_err > e) e = est[s].max_rel_err;
-            lsqt_estimates_free(est, st.n_slices);
-        }
+        const double e = err_s[s];
         worst = fmax(worst, e);
         fprintf(f, "  %5d  %6.2fd  %11.3g  %12.3g  %14.3g\n", s, st.theta_o[s] * 180 / LSQT_PI, e,
-                ceil((double)n * (e / 0.01) * (e / 0.01)), ceil((double)n * (e / 0.001) * (e / 0.001)));
+                ceil(lsqt_paths_for_error(n, e, 0.01)), ceil(lsqt_paths_for_error(n, e, 0.001)));
     }
+    free(err_s);
     const double targets[] = {c->target_error, 0.01, 0.003, 0.001};
     fprintf(f, "for the worst slice (what --target-error E waits for):\n");
     for (int i = 0; i < 4; i++) {
         const double E = targets[i];
         if (!(E > 0) || (i > 0 && E == c->target_error)) continue;
-        const double need = ceil((double)n * (worst / E) * (worst / E));
+        const double need = ceil(lsqt_paths_for_error(n, worst, E));
         fprintf(f, "  target %-6g %10.3g paths per slice: about ", E, need);
         print_time(f, start + need * wall_pp);
         fprintf(f, " wall, ");

@@ -147,10 +147,9 @@ static lsqt_run_plan run_plan(const lsqt_cli *c, const lsqt_state *st, const cha
     memset(&p, 0, sizeof p);
     p.paths = c->paths, p.paths_given = c->paths_given, p.target_error = c->target_error;
     if (c->total_paths) {
-        const int pilot = st->stage == LSQT_STAGE_PILOT;
-        p.paths_given = !(pilot && c->total_paths == st->span_end);
-        p.paths = c->total_paths > st->paths ? c->total_paths - st->paths : 0;
-        if (!p.paths_given) p.paths = c->total_paths;
+        /* a pilot of this very run: finished as without -p (paths_given 0, paths its run) */
+        p.paths_given = !(st->stage == LSQT_STAGE_PILOT && c->total_paths == st->span_end);
+        p.paths = !p.paths_given ? c->total_paths : c->total_paths > st->paths ? c->total_paths - st->paths : 0;
         if (!p.paths && !c->quiet)
             fprintf(stderr, "note: '%s' holds %llu paths per slice, --total-paths %llu: none to add\n", lss,
                     (unsigned long long)st->paths, (unsigned long long)c->total_paths);
@@ -208,9 +207,9 @@ static lsqt_run_info run_info(const lsqt_cli *c, const lsqt_state *st, const lsq
     if (c->target_error > 0) {
         ri.target_error = c->target_error;
         ri.max_rel_err = lsqt_max_rel_err(st);
-        const double r = ri.max_rel_err / c->target_error;
-        if (r > 1 && isfinite(r) && st->paths * r * r < 9e15) ri.paths_needed = (unsigned long long)ceil(st->paths * r * r);
-        else if (r <= 1) ri.paths_needed = st->paths; /* NaN (no error bars yet): not known */
+        const double need = lsqt_paths_for_error(st->paths, ri.max_rel_err, c->target_error);
+        if (need > st->paths && need < 9e15) ri.paths_needed = (unsigned long long)ceil(need);
+        else if (need <= st->paths) ri.paths_needed = st->paths; /* NaN (no error bars yet): not known */
     }
     return ri;
 }

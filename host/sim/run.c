@@ -32,10 +32,15 @@ double lsqt_max_rel_err(const lsqt_state *st)
 /* The next path count at which to check the error: where 1/sqrt(N) predicts the target
  * (5 % beyond), at least 1.1 and at most 4 times the current count, on a CHECK_STEP
  * multiple. A function of the tallies only, so runs stop at the same count anywhere. */
+double lsqt_paths_for_error(uint64_t paths, double err, double target)
+{
+    return (double)paths * (err / target) * (err / target);
+}
+
 uint64_t lsqt_next_check(uint64_t paths, double err, double target)
 {
     double want = (double)paths * 4.0;
-    if (isfinite(err) && err > 0) want = (double)paths * (err / target) * (err / target) * 1.05;
+    if (isfinite(err) && err > 0) want = lsqt_paths_for_error(paths, err, target) * 1.05;
     if (want < (double)paths * 1.1) want = (double)paths * 1.1;
     if (want > (double)paths * 4.0) want = (double)paths * 4.0;
     uint64_t n = want > 1e18 ? (uint64_t)1e18 : (uint64_t)want;
@@ -56,7 +61,7 @@ static void progress_draw(const char *phase, uint64_t done, uint64_t total, uint
     if (target > 0) {
         char e[32] = "n/a", eta[48] = "";
         if (isfinite(err)) snprintf(e, sizeof e, "%.3g", err);
-        const double need = isfinite(err) ? (double)held * (err / target) * (err / target) : NAN;
+        const double need = lsqt_paths_for_error(held, err, target);
         if (need > held && rate > 0)
             snprintf(eta, sizeof eta, ", about %.0f s to it", (need - (double)held) * n_slices / rate);
         fprintf(stderr, "%llu paths per slice  %.3g paths/s  max rel err %s (target %.3g%s)   ",

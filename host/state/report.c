@@ -37,41 +37,34 @@ void lsqt_report_summary(FILE *f, const lsqt_state *st, const lsqt_slice_est *es
     if (compact)
         fprintf(f, "%d bands, over the slices (every slice's table: -v, or lsqt-cl info FILE.lss):\n"
                    "%-18s %-22s %-22s %s\n", nbands, "band", "R min .. max", "T min .. max", "max rel err");
+    double r0 = INFINITY, r1 = -INFINITY, t0 = INFINITY, t1 = -INFINITY, m = 0; /* a band's, compact */
     for (int i = 0; i < nbands * st->n_slices; i++) {
         const int s = i % st->n_slices;
-        char bt[64];
+        const lsqt_slice_est *e = &est[i];
+        char bt[64], er[32], et[32], em[32];
+        const int below = (st->slice_flags[s] & LSQT_SLICE_BELOW) != 0;
+        n_below += below && i < st->n_slices;
+        if (isnan(e->max_rel_err)) no_err = 1;
+        cut += e->cut;
+        nonfinite += e->n_nonfinite;
         if (compact) {
-            if (s) continue;
-            double r0 = INFINITY, r1 = -INFINITY, t0 = INFINITY, t1 = -INFINITY, m = 0;
-            for (int k = i; k < i + st->n_slices; k++) {
-                r0 = fmin(r0, est[k].R.mean), r1 = fmax(r1, est[k].R.mean);
-                t0 = fmin(t0, est[k].T.mean), t1 = fmax(t1, est[k].T.mean);
-                m = isnan(est[k].max_rel_err) || isnan(m) ? NAN : fmax(m, est[k].max_rel_err);
-                no_err |= isnan(est[k].max_rel_err);
-                cut += est[k].cut;
-                nonfinite += est[k].n_nonfinite;
-                n_below += (st->slice_flags[k - i] & LSQT_SLICE_BELOW) && i == 0;
-            }
-            char em[32];
-            fprintf(f, "%-18s %.6f .. %.6f  %.6f .. %.6f  %s\n", band_text(st, i / st->n_slices, bt, sizeof bt), r0,
-                    r1, t0, t1, isnan(m) ? "n/a" : (snprintf(em, sizeof em, "%.3g", m), em));
+            if (s == 0) r0 = t0 = INFINITY, r1 = t1 = -INFINITY, m = 0;
+            r0 = fmin(r0, e->R.mean), r1 = fmax(r1, e->R.mean);
+            t0 = fmin(t0, e->T.mean), t1 = fmax(t1, e->T.mean);
+            m = isnan(e->max_rel_err) || isnan(m) ? NAN : fmax(m, e->max_rel_err);
+            if (s == st->n_slices - 1)
+                fprintf(f, "%-18s %.6f .. %.6f  %.6f .. %.6f  %s\n", band_text(st, i / st->n_slices, bt, sizeof bt),
+                        r0, r1, t0, t1, isnan(m) ? "n/a" : (snprintf(em, sizeof em, "%.3g", m), em));
             continue;
         }
         if (s == 0 && nbands > 1) fprintf(f, "%s:\n", band_text(st, i / st->n_slices, bt, sizeof bt));
         if (s == 0)
             fprintf(f, "%5s %9s  %-21s %-21s %-10s %s\n", "slice", "theta_o", "R +- 1 s.e.", "T +- 1 s.e.",
                     "delta_T", "max rel err");
-        const lsqt_slice_est *e = &est[i];
-        char er[32], et[32], em[32];
-        const int below = (st->slice_flags[s] & LSQT_SLICE_BELOW) != 0;
-        n_below += below && i < st->n_slices;
         fprintf(f, "%5d %8.3fd  %.6f +- %-9s %.6f +- %-9s %-10.4g %s%s\n", s, e->theta_o * 180.0 / LSQT_PI,
                 e->R.mean, err_text(e->R.err, er, sizeof er), e->T.mean, err_text(e->T.err, et, sizeof et),
                 e->delta_T.mean, isnan(e->max_rel_err) ? "n/a" : (snprintf(em, sizeof em, "%.3g", e->max_rel_err), em),
                 below ? "  from below" : "");
-        if (isnan(e->max_rel_err)) no_err = 1;
-        cut += e->cut;
-        nonfinite += e->n_nonfinite;
     }
     for (int s = 0; s < nbands * st->n_slices; s++)
         if (est[s].delta_T.mean > 0) {
@@ -92,8 +85,8 @@ void lsqt_report_summary(FILE *f, const lsqt_state *st, const lsqt_slice_est *es
                    "would reach it (1/sqrt(paths)): continue with --total-paths %llu\n",
                 ri->target_error, ri->max_rel_err, ri->paths_needed, ri->paths_needed);
     else if (ri->target_error > 0)
-        fprintf(f, "target error %g: not met (no error bars yet: they need paths in 2 of the %d batches)\n",
-                ri->target_error, LSQT_BATCHES);
+        fprintf(f, "target error %g: not met (not judged yet: the largest error counts from %llu paths per "
+                   "slice on)\n", ri->target_error, (unsigned long long)LSQT_STOP_ERR_PATHS);
     const lsqt_work *w = &ri->work;
     if (w->paths > 0) {
         double ev = w->layer_events + w->medium_events;

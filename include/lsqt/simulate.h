@@ -71,6 +71,10 @@ double lsqt_max_rel_err(const lsqt_state *st);
 /* With --target-error: the path count at which to check the error next, after PATHS with
  * error ERR (NaN: unknown); a function of the tallies only, so a stop is reproducible. */
 uint64_t lsqt_next_check(uint64_t paths, double err, double target);
+/* The paths at which an error err at `paths` paths falls to target, by 1/sqrt(paths):
+ * paths (err / target)^2; NaN when err is (no error bars yet). The stop rule, the
+ * progress line, the summary and --plan all predict with it. */
+double lsqt_paths_for_error(uint64_t paths, double err, double target);
 
 #ifdef __cplusplus
 }
