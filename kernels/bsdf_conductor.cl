@@ -12,17 +12,19 @@
  * closed form of the complex-index Fresnel equations)
  *   Rs = (a2b2 - 2 a c + c^2) / (a2b2 + 2 a c + c^2),
  *   Rp = Rs (a2b2 c^2 - 2 a c s^2 + s^4) / (a2b2 c^2 + 2 a c s^2 + s^4). */
-LSQT_INLINE realv fresnel_conductor_lanes(realv eta, realv k, realv c)
-{
-    c = clamp(c, (realv)(R(0.0)), (realv)(R(1.0)));
-    realv c2 = c * c, s2 = R(1.0) - c2;
-    realv t = eta * eta - k * k - s2;
-    realv a2b2 = sqrt(t * t + R(4.0) * eta * eta * k * k);
-    realv a = safe_sqrtv(R(0.5) * (a2b2 + t));
-    realv rs = (a2b2 - R(2.0) * a * c + c2) / (a2b2 + R(2.0) * a * c + c2);
-    realv rp = rs * (a2b2 * c2 - R(2.0) * a * c * s2 + s2 * s2) / (a2b2 * c2 + R(2.0) * a * c * s2 + s2 * s2);
-    return R(0.5) * (rs + rp);
-}
+#define LSQT_FRESNEL_CONDUCTOR(T)                                                                    \
+    {                                                                                               \
+        c = clamp(c, (T)(R(0.0)), (T)(R(1.0)));                                                     \
+        const T c2 = c * c, s2 = R(1.0) - c2;                                                       \
+        const T t = eta * eta - k * k - s2;                                                         \
+        const T a2b2 = sqrt(t * t + R(4.0) * eta * eta * k * k);                                    \
+        const T a = sqrt(fmax(R(0.5) * (a2b2 + t), (T)(R(0.0))));                                   \
+        const T rs = (a2b2 - R(2.0) * a * c + c2) / (a2b2 + R(2.0) * a * c + c2);                   \
+        const T rp = rs * (a2b2 * c2 - R(2.0) * a * c * s2 + s2 * s2) / (a2b2 * c2 + R(2.0) * a * c * s2 + s2 * s2); \
+        return R(0.5) * (rs + rp);                                                                  \
+    }
+LSQT_INLINE realv fresnel_conductor_lanes(realv eta, realv k, realv c) LSQT_FRESNEL_CONDUCTOR(realv)
+LSQT_INLINE real fresnel_conductor(real eta, real k, real c) LSQT_FRESNEL_CONDUCTOR(real)
 
 /* One index, LSQT_VW cosines (a band block's walk takes LSQT_VW indices at one cosine). */
 LSQT_INLINE realv fresnel_conductorv(real eta, real k, realv c)
@@ -55,7 +57,7 @@ LSQT_INLINE real conductor_scatter(__global const lsqt_dev_layer *l, const ms_vt
 {
     real vm;
     *r = conductor_reflect(x, &vm);
-    return vm > R(0.0) ? fresnel_conductorv(l->p[1], l->p[2], (realv)(vm)).s0 : R(0.0);
+    return vm > R(0.0) ? fresnel_conductor(l->p[1], l->p[2], vm) : R(0.0);
 }
 
 /* The walk's step (microsurface.cl): no draw, never crosses. */

@@ -17,15 +17,17 @@
 
 /* Unpolarised Fresnel reflectance of a dielectric interface for cos(incidence) c >= 0 on
  * the incident side and relative index e = n2 / n1; 1 under total internal reflection. */
-LSQT_INLINE realv fresnel_dielectricv(real e, realv c)
-{
-    c = clamp(c, (realv)(R(0.0)), (realv)(R(1.0)));
-    realv g2 = e * e - R(1.0) + c * c;
-    realv g = safe_sqrtv(g2);
-    realv a = (g - c) / (g + c);
-    realv b = (c * (g + c) - R(1.0)) / (c * (g - c) + R(1.0));
-    return select(R(0.5) * a * a * (R(1.0) + b * b), (realv)(R(1.0)), g2 <= R(0.0));
-}
+#define LSQT_FRESNEL_DIELECTRIC(T)                                                                   \
+    {                                                                                               \
+        c = clamp(c, (T)(R(0.0)), (T)(R(1.0)));                                                     \
+        const T g2 = e * e - R(1.0) + c * c;                                                        \
+        const T g = sqrt(fmax(g2, (T)(R(0.0))));                                                    \
+        const T a = (g - c) / (g + c);                                                              \
+        const T b = (c * (g + c) - R(1.0)) / (c * (g - c) + R(1.0));                                \
+        return g2 <= R(0.0) ? (T)(R(1.0)) : R(0.5) * a * a * (R(1.0) + b * b);                      \
+    }
+LSQT_INLINE realv fresnel_dielectricv(real e, realv c) LSQT_FRESNEL_DIELECTRIC(realv)
+LSQT_INLINE real fresnel_dielectric(real e, real c) LSQT_FRESNEL_DIELECTRIC(real)
 
 /* The facets' phase function towards u, in the frame of the ray's side (z up): towards
  * this side reflection kR F D_v(m) / (4 v.m), towards the other side refraction
@@ -52,7 +54,7 @@ LSQT_INLINE real dielectric_scatter(__global const lsqt_dev_layer *l, const ms_v
 {
     const real e = x->e, vm = dot(x->v, x->m);
     if (!(vm > R(0.0))) return R(0.0);
-    real fr = fresnel_dielectricv(e, (realv)(vm)).s0;
+    real fr = fresnel_dielectric(e, vm);
     real pr = l->p[2] * fr, tot = pr + l->p[3] * (R(1.0) - fr);
     if (u * tot < pr) {
         *r = normalize(R(2.0) * vm * x->m - x->v);
@@ -92,7 +94,7 @@ LSQT_INLINE realv dielectric_evalv(__global const lsqt_dev_layer *l, real3 wo, d
     ms_vtx x = ms_vertex_single(alpha, make_real3(wo.x, wo.y, s * wo.z), dielectric_index(l, s));
     wi.z *= s;
     realv lam = ggx_lambdav(alpha, wi.z);
-    return dielectric_firstv(l, &x, wi, lam, lgamma(R(1.0) + lam));
+    return dielectric_firstv(l, &x, wi, lam, lgamma_ge1_v(R(1.0) + lam));
 }
 
 /* Density of dielectric_sample's directions: both branches (a reflection may point into
@@ -111,7 +113,7 @@ LSQT_INLINE real dielectric_pdf(__global const lsqt_dev_layer *l, real3 wo, real
         real3 m = q * (rsqrt(n2) * (q.z < R(0.0) ? R(-1.0) : R(1.0)));
         real vm = dot(v, m), um = dot(u, m);
         if (!(vm > R(0.0)) || (branch && !(um < R(0.0)))) continue;
-        real fr = fresnel_dielectricv(e, (realv)(vm)).s0;
+        real fr = fresnel_dielectric(e, vm);
         real pr = l->p[2] * fr, pt = l->p[3] * (R(1.0) - fr);
         if (!(pr + pt > R(0.0))) continue;
         real d = ggx_dv(alpha, (realv)(m.x), (realv)(m.y), (realv)(m.z)).s0 * vm * inv_area;
@@ -127,12 +129,12 @@ LSQT_INLINE real dielectric_sample(__global const lsqt_dev_layer *l, real3 wo, r
     const real s = ms_side(wo), alpha = l->p[0];
     ms_vtx x = ms_vertex(alpha, make_real3(wo.x, wo.y, s * wo.z), R(1.0), dielectric_index(l, s), u1, u2);
     x.lam_v = ggx_lambda(alpha, x.v.z);
-    x.lg_v = lgamma(R(1.0) + x.lam_v);
+    x.lg_v = lgamma_ge1(R(1.0) + x.lam_v);
     real3 r;
     int cross;
     real w = dielectric_scatter(l, &x, u0, &r, &cross);
     *wi = make_real3(r.x, r.y, s * r.z);
     if (!(w > R(0.0)) || (cross ? !(r.z < R(0.0)) : !(r.z > R(0.0)))) return R(0.0);
     real lam = ggx_lambda(alpha, r.z);
-    return w * ms_single_escapev(&x, (maskv)(cross ? 0 : -1), (realv)(lam), (realv)(lgamma(R(1.0) + lam))).s0;
+    return w * ms_single_escape(&x, !cross, lam, lgamma_ge1(R(1.0) + lam));
 }

@@ -164,6 +164,15 @@ LSQT_INLINE dirv dirv_broadcast(real3 d)
 
 LSQT_INLINE real sqr(real x) { return x * x; }
 
+/* Scalar twins. A model's formula serves both the LSQT_VW directions of next-event
+ * estimation (realv) and the one direction a path samples (real): one macro body over a
+ * type T, instantiated twice, whose selections are ?: (componentwise for a vector
+ * condition). Lane 0 of a broadcast vector would do, but clang keeps every lane of such
+ * a call through selects and divisions: on gfx90a that was four lanes of Fresnel terms
+ * live in the walk, some 20 VGPRs. */
+#define LSQT_ALL1(m) (m)
+#define LSQT_ANY1(m) (m)
+
 /* sqrt that never returns NaN for round-off negatives */
 LSQT_INLINE real safe_sqrt(real x) { return sqrt(fmax(x, R(0.0))); }
 LSQT_INLINE realv safe_sqrtv(realv x) { return sqrt(fmax(x, (realv)(R(0.0)))); }
@@ -182,19 +191,23 @@ LSQT_INLINE realv safe_sqrtv(realv x) { return sqrt(fmax(x, (realv)(R(0.0)))); }
 #endif
 #define LSQT_GROUP_PAD LSQT_PAD(LSQT_GROUP_NWI, LSQT_VW)
 
-/* lgamma(x) for x >= 1, LSQT_VW at once, without the library's general (and, on PoCL,
- * scalar) lgamma: the Stirling series to 1/x^7 for x >= 8, error below 3e-11, after
- * lgamma(x) = lgamma(x + 6) - log(x (x+1) ... (x+5)) for smaller x. */
-LSQT_INLINE realv lgamma_ge1_v(realv x)
-{
-    maskv small = x < R(8.0);
-    realv p = x * (x + R(1.0)) * (x + R(2.0)) * (x + R(3.0)) * (x + R(4.0)) * (x + R(5.0));
-    realv y = select(x, x + R(6.0), small);
-    realv r = R(1.0) / y, r2 = r * r;
-    realv series = r * (R(1.0) / R(12.0) - r2 * (R(1.0) / R(360.0) - r2 * (R(1.0) / R(1260.0) - r2 * (R(1.0) / R(1680.0)))));
-    realv lg = (y - R(0.5)) * log(y) - y + R(0.91893853320467274178) + series;
-    return lg - select((realv)(R(0.0)), log(p), small);
-}
+/* lgamma(x) for x >= 1 without the library's general lgamma (scalar on PoCL, some 40
+ * VGPRs on gfx90a): the Stirling series to 1/x^7 for x >= 8, error below 3e-11, after
+ * lgamma(x) = lgamma(x + 6) - log(x (x+1) ... (x+5)) for smaller x. One text for the
+ * LSQT_VW-wide form and the scalar one (SEL: select, or ?: for a scalar, whose select
+ * would want a long condition in double). */
+#define LSQT_LGAMMA_GE1(T, SEL, x)                                                                            \
+    {                                                                                                         \
+        const T p = x * (x + R(1.0)) * (x + R(2.0)) * (x + R(3.0)) * (x + R(4.0)) * (x + R(5.0));               \
+        const T y = SEL(x, x + R(6.0), x < R(8.0));                                                             \
+        const T r = R(1.0) / y, r2 = r * r;                                                                   \
+        const T series = r * (R(1.0) / R(12.0) - r2 * (R(1.0) / R(360.0) - r2 * (R(1.0) / R(1260.0) - r2 * (R(1.0) / R(1680.0))))); \
+        const T lg = (y - R(0.5)) * log(y) - y + R(0.91893853320467274178) + series;                          \
+        return lg - SEL((T)(R(0.0)), log(p), x < R(8.0));                                                     \
+    }
+#define LSQT_SEL_SCALAR(a, b, c) ((c) ? (b) : (a))
+LSQT_INLINE realv lgamma_ge1_v(realv x) LSQT_LGAMMA_GE1(realv, select, x)
+LSQT_INLINE real lgamma_ge1(real x) LSQT_LGAMMA_GE1(real, LSQT_SEL_SCALAR, x)
 
 /* What a phase function fixes at a vertex for every direction it is evaluated towards and
  * for its sample (models.cl phase_vertex): a diffuse SGGX flake's visible normal. */

@@ -5,14 +5,14 @@
  * unit vectors in the layer frame (z the macro normal), on the side of +z. */
 
 /* Lambda(w) = (-1 + sqrt(1 + alpha^2 tan^2 theta)) / 2, LSQT_VW directions at once (z = cos). */
-LSQT_INLINE realv ggx_lambdav(real alpha, realv z)
-{
-    realv z2 = fmax(z * z, (realv)(R(1e-30)));
-    realv t2 = fmax(R(1.0) - z2, (realv)(R(0.0))) / z2; /* tan^2 */
-    return R(0.5) * (sqrt(R(1.0) + alpha * alpha * t2) - R(1.0));
-}
-
-LSQT_INLINE real ggx_lambda(real alpha, real z) { return ggx_lambdav(alpha, (realv)(z)).s0; }
+#define LSQT_GGX_LAMBDA(T, alpha, z)                                                                \
+    {                                                                                               \
+        const T z2 = fmax(z * z, (T)(R(1e-30)));                                                    \
+        const T t2 = fmax(R(1.0) - z2, (T)(R(0.0))) / z2; /* tan^2 */                               \
+        return R(0.5) * (sqrt(R(1.0) + alpha * alpha * t2) - R(1.0));                               \
+    }
+LSQT_INLINE realv ggx_lambdav(real alpha, realv z) LSQT_GGX_LAMBDA(realv, alpha, z)
+LSQT_INLINE real ggx_lambda(real alpha, real z) LSQT_GGX_LAMBDA(real, alpha, z)
 
 /* D(h) = alpha^2 / (pi ((alpha^2 - 1) cos^2 + 1)^2) for a unit normal h on the upper side,
  * written as alpha^2 / (pi (alpha^2 hz^2 + hx^2 + hy^2)^2): the same for unit h, but with
@@ -34,8 +34,10 @@ LSQT_INLINE real3 ggx_sample_vndf(real alpha, real3 wo, real u1, real u2)
     real lensq = vh.x * vh.x + vh.y * vh.y;
     real3 t1 = lensq > R(0.0) ? make_real3(-vh.y, vh.x, R(0.0)) * rsqrt(lensq) : make_real3(R(1.0), R(0.0), R(0.0));
     real3 t2 = cross(vh, t1);
-    real r = sqrt(u1), phi = R(2.0) * LSQT_PI * u2;
-    real p1 = r * cos(phi), p2 = r * sin(phi);
+    const real r = sqrt(u1);
+    const real2 cs = azimuth_cs(u2); /* not cos and sin of 2 pi u2: their reduction of a
+                                        radian argument takes 40 VGPRs on gfx90a */
+    real p1 = r * cs.x, p2 = r * cs.y;
     real s = R(0.5) * (R(1.0) + vh.z);
     p2 = (R(1.0) - s) * safe_sqrt(R(1.0) - p1 * p1) + s * p2;
     real3 nh = p1 * t1 + p2 * t2 + safe_sqrt(R(1.0) - p1 * p1 - p2 * p2) * vh;
@@ -106,20 +108,25 @@ LSQT_INLINE ms_vtx ms_vertex_single(real alpha, real3 v, real e)
 {
     ms_vtx x = ms_vertex(alpha, v, R(1.0), e, R(0.5), R(0.5));
     x.lam_v = ggx_lambda(alpha, v.z);
-    x.lg_v = lgamma(R(1.0) + x.lam_v);
+    x.lg_v = lgamma_ge1(R(1.0) + x.lam_v);
     return x;
 }
 
 /* Escape of the single-scattered light, averaged over the first hit's height:
  * (1 + Lv) / (1 + Lv + Lu) to this side, (1 + Lv) B(1 + Lv, 1 + Lu) to the other
  * (lg_u = lgamma(1 + Lu), from the per-direction table). */
+#define LSQT_MS_SINGLE_ESCAPE(T, ALL, LGAMMA)                                                        \
+    {                                                                                               \
+        const T a = R(1.0) + x->lam_v;                                                              \
+        T r = a / (a + lam_u);                                                                      \
+        if (!ALL(up)) /* the Beta function only where some light goes through */                   \
+            r = up ? r : a * exp(x->lg_v + lg_u - LGAMMA(R(2.0) + x->lam_v + lam_u));               \
+        return r;                                                                                   \
+    }
 LSQT_INLINE realv ms_single_escapev(const ms_vtx *x, maskv up, realv lam_u, realv lg_u)
-{
-    realv a = R(1.0) + x->lam_v, r = a / (a + lam_u);
-    if (!allv(up)) /* the Beta function only where some light goes through */
-        r = select(a * exp(x->lg_v + lg_u - lgamma_ge1_v(R(2.0) + x->lam_v + lam_u)), r, up);
-    return r;
-}
+    LSQT_MS_SINGLE_ESCAPE(realv, allv, lgamma_ge1_v)
+LSQT_INLINE real ms_single_escape(const ms_vtx *x, int up, real lam_u, real lg_u)
+    LSQT_MS_SINGLE_ESCAPE(real, LSQT_ALL1, lgamma_ge1)
 
 /* Half vector of wo and u for reflection (k = 1) or refraction (k = relative index),
  * oriented up: q = v + k u, m = q / |q|; returns |q|^2. LSQT_VW directions at once. */

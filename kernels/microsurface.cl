@@ -23,7 +23,7 @@ typedef struct {
     __local real *sum;
     __global const real *wi;
     __global const real *tab;
-    ulong *count; /* vertices evaluated (work counter), or 0 */
+    work_t *count; /* vertices evaluated (work counter), or 0 */
     nee_out *out;
     int layer;
 } ms_sink;
@@ -163,7 +163,7 @@ LSQT_INLINE real ms_walk(__global const lsqt_dev_layer *l, real3 d, rng_t *rng, 
         ms_vtx x = ms_vertex(alpha, -r, c, ms_index(l, s), u1, u2);
         if (order == 1 && nee_from == 1) {
             x.lam_v = ggx_lambda(alpha, x.v.z);
-            x.lg_v = lgamma(R(1.0) + x.lam_v);
+            x.lg_v = lgamma_ge1(R(1.0) + x.lam_v);
             ms_nee_first(l, &x, s, w, k);
         } else if (order >= nee_from) {
             ms_nee_vertex(l, &x, s, w * weight, k);

@@ -33,8 +33,9 @@ LSQT_INLINE real3 sggx_sample_vndf(real sxx, real szz, real3 w, real u1, real u2
     const real sp = sqrt(sxx), sn = sqrt(szz);
     real3 v = normalize(make_real3(sp * w.x, sp * w.y, sn * w.z)), t, b;
     make_frame(v, &t, &b);
-    real r = sqrt(u1), phi = R(2.0) * LSQT_PI * u2;
-    real x = r * cos(phi), y = r * sin(phi);
+    const real r = sqrt(u1);
+    const real2 cs = azimuth_cs(u2);
+    real x = r * cs.x, y = r * cs.y;
     real3 p = x * t + y * b + safe_sqrt(R(1.0) - x * x - y * y) * v;
     return normalize(make_real3(sp * p.x, sp * p.y, sn * p.z));
 }

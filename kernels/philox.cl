@@ -136,10 +136,9 @@ __attribute__((always_inline)) inline uint rng_next_u32(rng_t *r)
 }
 #else
 typedef struct {
-    uint4 ctr;  /* the counter of the block after `next` */
+    uint4 ctr; /* the counter of the next block */
     uint2 key;
-    uint4 buf;  /* the block being drawn from */
-    uint4 next; /* the block after it, made ahead */
+    uint4 buf; /* the block being drawn from */
     int used;
 } rng_t;
 
@@ -149,22 +148,17 @@ LSQT_INLINE rng_t rng_init(uint seed_lo, uint seed_hi, uint slice, ulong path, u
     r.key = (uint2)(seed_lo, seed_hi);
     r.ctr = rng_counter(slice, path, purpose);
     r.buf = (uint4)(0u);
-    r.next = philox4x32_10(r.ctr, r.key);
-    r.ctr.x++;
     r.used = 4;
     return r;
 }
 
-/* The draws come block after block as before; the block after the current one is made
- * when the current one starts, not when it is first needed: nothing waits on it then,
- * so its 10 rounds of multiplies overlap the scattering event that uses the current
- * block, instead of heading its chain of dependent work (a path makes one block more
- * than it uses). */
+/* The draws come block after block, each made when it is first needed (the GPU path: a
+ * block made ahead, to overlap its rounds with other work, kept five more VGPRs live
+ * through the walk on gfx90a, and a GPU hides that latency with more waves instead). */
 LSQT_INLINE uint rng_next_u32(rng_t *r)
 {
     if (r->used == 4) {
-        r->buf = r->next;
-        r->next = philox4x32_10(r->ctr, r->key);
+        r->buf = philox4x32_10(r->ctr, r->key);
         r->ctr.x++;
         r->used = 0;
     }

@@ -23,52 +23,54 @@ typedef struct {
     ulong lo, hi;
 } fix1;
 
-/* LSQT_VW values at once, each rounded to the nearest unit (a float sum x + 0.5 that ties
- * may round up once more: at most one unit, 1e-7 relative, and the same every time);
- * non-finite or negative lanes raise a flag and count as 0. */
+/* Values rounded to the nearest unit (a float sum x + 0.5 that ties may round up once
+ * more: at most one unit, 1e-7 relative, and the same every time); non-finite or
+ * negative ones raise a flag and count as 0. One body for LSQT_VW values (fixv, to_fixedv)
+ * and for one (fix1, to_fixed; common.cl's scalar twins): FIX the result's type, T the
+ * value's, M a comparison's, ALL and ANY of a condition, LONG_BITS(x) x converted to a long and its bits
+ * taken as a ulong, ULONG(x) x converted to a ulong. */
+#define LSQT_TO_FIXED(FIX, T, M, ALL, ANY, LONG_BITS, ULONG)                                         \
+    {                                                                                                \
+        FIX r;                                                                                       \
+        /* The common case first, by two comparisons (NaN fails both): every value         \
+         * non-negative and below 2^63 units (8.4e6), where the general form below does the \
+         * same. The path sums' conversion was a fifth of a slab run. */                   \
+        if (ALL((v >= R(0.0)) & (v < R(0.5) * LSQT_TWO64 / (real)LSQT_FIX_SCALE))) {                  \
+            r.lo = LONG_BITS(v * (real)LSQT_FIX_SCALE + R(0.5));                                      \
+            r.hi = 0;                                                                                \
+            return r;                                                                                \
+        }                                                                                            \
+        const M bad = isnan(v) | isinf(v) | (v < R(0.0));                                            \
+        if (ANY(bad)) {                                                                              \
+            atomic_or(flags, LSQT_FLAG_NONFINITE);                                                   \
+            v = bad ? (T)(R(0.0)) : v;                                                               \
+        }                                                                                            \
+        if (ANY(v > LSQT_FIX_MAX_VALUE)) {                                                           \
+            atomic_or(flags, LSQT_FLAG_OVERFLOW);                                                    \
+            v = fmin(v, LSQT_FIX_MAX_VALUE);                                                         \
+        }                                                                                            \
+        const T x = v * (real)LSQT_FIX_SCALE;                                                        \
+        /* Almost every value is below 2^63 units (8e6): one signed conversion each (on x86 \
+         * the unsigned one branches). Larger ones are whole numbers of units and split into \
+         * words exactly: the scalings are powers of two and the remainder holds only low   \
+         * bits of x. */                                                                      \
+        if (ALL(x < R(0.5) * LSQT_TWO64)) {                                                          \
+            r.lo = LONG_BITS(x + R(0.5)); /* to nearest (rte costs 20 % here) */                    \
+            r.hi = 0;                                                                                \
+        } else {                                                                                     \
+            const T h = floor(x / LSQT_TWO64);                                                       \
+            r.hi = ULONG(h);                                                                         \
+            r.lo = ULONG(x - h * LSQT_TWO64);                                                        \
+        }                                                                                            \
+        return r;                                                                                    \
+    }
+#define LSQT_LONG_BITSV(x) as_ulongv(convert_longv(x))
+#define LSQT_LONG_BITS1(x) ((ulong)(long)(x))
+#define LSQT_ULONG1(x) ((ulong)(x))
 LSQT_INLINE fixv to_fixedv(realv v, volatile __global uint *flags)
-{
-    fixv r;
-    /* The common case first, by two comparisons (NaN fails both): every lane non-negative
-     * and below 2^63 units (8.4e6), where the general form below does the same. The path
-     * sums' conversion was a fifth of a slab run. */
-    if (allv((v >= R(0.0)) & (v < R(0.5) * LSQT_TWO64 / (real)LSQT_FIX_SCALE))) {
-        r.lo = as_ulongv(convert_longv(v * (real)LSQT_FIX_SCALE + R(0.5)));
-        r.hi = (ulongv)(0);
-        return r;
-    }
-    maskv bad = isnan(v) | isinf(v) | (v < R(0.0));
-    if (anyv(bad)) {
-        atomic_or(flags, LSQT_FLAG_NONFINITE);
-        v = select(v, (realv)(R(0.0)), bad);
-    }
-    if (anyv(v > LSQT_FIX_MAX_VALUE)) {
-        atomic_or(flags, LSQT_FLAG_OVERFLOW);
-        v = fmin(v, LSQT_FIX_MAX_VALUE);
-    }
-    realv x = v * (real)LSQT_FIX_SCALE;
-    /* Almost every value is below 2^63 units (8e6): one signed conversion per lane (on
-     * x86 the unsigned one branches). Larger ones are whole numbers of units and split
-     * into words exactly: the scalings are powers of two and the remainder holds only low
-     * bits of x. */
-    if (allv(x < R(0.5) * LSQT_TWO64)) {
-        r.lo = as_ulongv(convert_longv(x + R(0.5))); /* to nearest (rte costs 20 % here) */
-        r.hi = (ulongv)(0);
-    } else {
-        realv h = floor(x / LSQT_TWO64);
-        r.hi = convert_ulongv(h);
-        r.lo = convert_ulongv(x - h * LSQT_TWO64);
-    }
-    return r;
-}
-
-/* One value: lane 0 of the same conversion. */
+    LSQT_TO_FIXED(fixv, realv, maskv, allv, anyv, LSQT_LONG_BITSV, convert_ulongv)
 LSQT_INLINE fix1 to_fixed(real v, volatile __global uint *flags)
-{
-    fixv q = to_fixedv((realv)(v), flags);
-    fix1 r = {q.lo.s0, q.hi.s0};
-    return r;
-}
+    LSQT_TO_FIXED(fix1, real, int, LSQT_ALL1, LSQT_ANY1, LSQT_LONG_BITS1, LSQT_ULONG1)
 
 /* 128-bit add into four 32-bit words w[0..3] (low first) with atomics on each word: a
  * word that wraps carries one into the next, counted by the add that wrapped it, so the

@@ -55,7 +55,7 @@ typedef struct {
     __global const real *bw;           /* a band block's table (LSQT_BAND_AT), else unused */
     __local ulong *nee;                /* this work-item's point-estimate sums, low words (CPU path;
                                           a band block's: each band's, LSQT_NWI_PAD apart) */
-    ulong *work;                       /* this work-item's work counters (LSQT_T_LAYER_EVENTS ...) */
+    work_t *work;                      /* the work counters (LSQT_T_LAYER_EVENTS ...; work_t) */
     volatile __local acc_word *acc;    /* the work-group's scalar tallies, LSQT_ACC_WORDS each */
     __global ulong *nee_g;             /* the tallies of the chunk's batch (nee_word) */
     uint v;                            /* the first state slice of this walk */
@@ -147,7 +147,7 @@ __kernel void lsqt_prepare(__constant lsqt_dev_scene *scene, __global const lsqt
         __global real *t = st + LSQT_LAYER_TAB(li);
         t[k] = nee_transmittancev((realv)(z), (realv)(inv_az), tau_up, tau_down, up, down).s0;
         t[LSQT_NWI_PAD + k] = lam;
-        t[2 * LSQT_NWI_PAD + k] = lgamma(R(1.0) + lam);
+        t[2 * LSQT_NWI_PAD + k] = lgamma_ge1(R(1.0) + lam);
     }
 }
 
@@ -554,6 +554,16 @@ LSQT_INLINE void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulon
     }
 }
 
+/* Adds the work counters to the work-group's, every band's, and clears them. */
+LSQT_INLINE void add_work(volatile __local acc_word *acc, work_t *work, volatile __global uint *flags)
+{
+    for (int k = 0; k < WORK_N; k++) {
+        for (int band = 0; band < LSQT_NB; band++)
+            if (work[k]) local_add128(acc + LSQT_ACC_WORDS * (band * LSQT_T_COUNT + LSQT_T_LAYER_EVENTS + k), work[k], 0, flags);
+        work[k] = 0;
+    }
+}
+
 /* The RRSS candidates: analog walks (purpose RNG_PURPOSE_CANDIDATES, no point estimates)
  * of paths [path_begin, path_begin + n) of every simulated slice; out[slice][path] is the
  * direction of its scattered exit, w = 1, or all 0 (absorbed, unscattered, cut). Global
@@ -569,7 +579,7 @@ __kernel void lsqt_exits(__constant lsqt_dev_scene *scene, __global const lsqt_d
     const uint v = slice * (uint)max(scene->slice_group, 1);
     /* no point estimates, so no sums (they would fill a CPU worker's stack: a work-group
      * of 256 at the pilot's 4 x 300 directions is 3.7 MB) */
-    ulong work[WORK_N] = {0, 0, 0};
+    work_t work[WORK_N] = {0, 0, 0};
     walk_ctx c;
     c.scene = scene, c.media = media, c.layers = layers, c.wi = wi_dirs + 3 * LSQT_NWI_PAD * slice;
     c.tab = tab + (size_t)slice * LSQT_SLICE_TAB(scene->n_layers);
@@ -643,7 +653,7 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
     for (int k = s.lid; k < LSQT_ACC_WORDS * LSQT_T_COUNT * LSQT_NB; k += s.lsz) acc[k] = 0;
     barrier(CLK_LOCAL_MEM_FENCE);
 
-    ulong work[WORK_N] = {0, 0, 0};
+    work_t work[WORK_N] = {0, 0, 0};
     const uint g = (uint)max(scene->slice_group, 1), v = s.slice * g; /* v: the first state slice */
     walk_ctx c;
     c.scene = scene, c.media = media, c.layers = layers, c.wi = wi_dirs + 3 * LSQT_NWI_PAD * s.slice;
@@ -668,6 +678,7 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
         rng_t rng = rng_init(scene->seed_lo, scene->seed_hi, s.slice, p, RNG_PURPOSE_WALK | scene->rng_side);
         run_path(&c, wo, &rng, hist_b);
         if (count_only) rec_off[at] = out.n;
+        else add_work(acc, work, flags);
     }
     barrier(CLK_LOCAL_MEM_FENCE);
     if (count_only) return;
@@ -725,10 +736,7 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
         }
     }
 #endif
-    /* The work counters are every band's. */
-    for (int band = 0; band < LSQT_NB; band++)
-        for (int k = 0; k < WORK_N; k++)
-            if (work[k]) local_add128(acc + LSQT_ACC_WORDS * (band * LSQT_T_COUNT + LSQT_T_LAYER_EVENTS + k), work[k], 0, flags);
+    add_work(acc, work, flags);
     barrier(CLK_LOCAL_MEM_FENCE);
     for (int k = s.lid; k < LSQT_T_COUNT * LSQT_NB; k += s.lsz) {
         fix1 a = acc_read(acc + LSQT_ACC_WORDS * k);
