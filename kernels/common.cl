@@ -2,7 +2,7 @@
  * double when the host builds with -DLSQT_DOUBLE=1 (only on devices with fp64). */
 /* LSQT_VW directions at a time in the next-event loops (the host passes -DLSQT_VW: 16 on
  * CPUs, where the vector units are wide and PoCL does not vectorise these loops across
- * work-items; 4 on GPUs, where a work-item's vector is sequential work and registers).
+ * work-items; 2 on GPUs, where a work-item's vector is sequential work and registers).
  * `realv` holds LSQT_VW values (one per direction), `maskv` a comparison of two. */
 #ifndef LSQT_VW
 #define LSQT_VW 4

@@ -14,10 +14,9 @@
                          * (SINGLE_WALK) or its walk's first vertex (WALK) */
 
 /* A work counter (walk.cl's LSQT_T_LAYER_EVENTS ...): on the CPU path the work-item's,
- * 64-bit; on the GPU path one path's, 32-bit (a path has at most LSQT_MAX_EVENTS events,
- * and no more next-event vertices than records, which nee_out counts in 32 bits), added
- * to the work-group's after each path: three 64-bit counters live through the walk cost
- * some 20 VGPRs on gfx90a. */
+ * 64-bit; on the GPU path its one path's, 32-bit (a path has at most LSQT_MAX_EVENTS
+ * events, and no more next-event vertices than records, which nee_out counts in 32 bits):
+ * three 64-bit counters live through the walk cost some 20 VGPRs on gfx90a. */
 #ifdef LSQT_NEE_RECORDS
 typedef uint work_t;
 #else

@@ -628,11 +628,32 @@ LSQT_INLINE chunk_span chunk_of(ulong chunk_first, ulong path_begin, ulong path_
     return s;
 }
 
-/* The paths: a work-group runs those of its chunk (chunk_span) and adds its tallies once
- * per chunk to the batch's. In a grouped session (the RRSS pilot) one walk serves every
- * block of the slice: block b's directions are [b LSQT_GROUP_PAD, + LSQT_GROUP_NWI), and
- * its tallies are state slice slice * slice_group + b, whose R and T and work are the
- * walk's; the histogram is one a simulated slice (the host gives it to every block). The CPU path sums the next-event estimates in local memory and ignores rec,
+#ifdef LSQT_NEE_RECORDS
+/* The GPU path's walk: a path per work-item, LSQT_CHUNK work-items per chunk, in groups
+ * that divide it (the host sees to it), so that a group's paths are of one chunk and one
+ * batch; begin = the work-item's path and end = begin + 1, or end = begin where it falls
+ * outside [path_begin, path_end). A loop over several paths kept the state of a path's
+ * start and end live through the walk: some 10 VGPRs on gfx90a. */
+LSQT_INLINE chunk_span path_span(ulong chunk_first, ulong path_begin, ulong path_end)
+{
+    chunk_span s;
+    const ulong p = chunk_first * LSQT_CHUNK + get_global_id(0);
+    s.lid = (int)get_local_id(0), s.lsz = (int)get_local_size(0);
+    s.slice = (uint)get_global_id(1);
+    s.begin = p;
+    s.end = p >= path_begin && p < path_end ? p + 1 : p;
+    s.batch = (int)(p / LSQT_CHUNK % LSQT_BATCHES);
+    return s;
+}
+#endif
+
+/* The paths: a work-group runs those of its chunk (chunk_span; on the GPU path a part of
+ * a chunk, a path each, path_span) and adds its tallies once to the batch's. In a grouped
+ * session (the RRSS pilot) one walk serves every block of the slice: block b's directions
+ * are [b LSQT_GROUP_PAD, + LSQT_GROUP_NWI), and its tallies are state slice
+ * slice * slice_group + b, whose R and T and work are the walk's; the histogram is one a
+ * simulated slice (the host gives it to every block). The CPU path sums the next-event
+ * estimates in local memory and ignores rec,
  * rec_off and count_only. The GPU path (LSQT_NEE_RECORDS) makes none: path p's records
  * go to rec from rec_off[slice * (path_end - path_begin) + p - path_begin] on, and
  * lsqt_estimate evaluates them; with count_only it only writes each path's record count
@@ -648,7 +669,11 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
                         int count_only, __global const real *bandw)
 {
     __local acc_word acc[LSQT_ACC_WORDS * LSQT_T_COUNT * LSQT_NB];
+#ifdef LSQT_NEE_RECORDS
+    const chunk_span s = path_span(chunk_first, path_begin, path_end);
+#else
     const chunk_span s = chunk_of(chunk_first, path_begin, path_end);
+#endif
 
     for (int k = s.lid; k < LSQT_ACC_WORDS * LSQT_T_COUNT * LSQT_NB; k += s.lsz) acc[k] = 0;
     barrier(CLK_LOCAL_MEM_FENCE);
@@ -664,21 +689,20 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
     c.sum = 0, c.bsum = 0, c.nee = 0, c.bw = bandw;
     real3 wo = make_real3(wo_dirs[4 * v], wo_dirs[4 * v + 1], wo_dirs[4 * v + 2]);
     __global ulong *hist_b = hist + 2 * ((ulong)s.slice * LSQT_BATCHES + (ulong)s.batch) * LSQT_HIST_BINS * LSQT_NB;
-    /* The chunk's paths, one body per code path. The CPU path's local memory can only be
-     * declared in the kernel; the GPU path's loop stays here too (in a function of its
-     * own, clang-15 inlines the walk in another order, and lsqt_walk and lsqt_exits take
-     * a VGPR more on gfx90a). */
+    /* The paths, one body per code path. The CPU path's local memory can only be declared
+     * in the kernel; the GPU path's path stays here too (in a function of its own,
+     * clang-15 inlines the walk in another order, and lsqt_walk and lsqt_exits take a VGPR
+     * more on gfx90a). */
 #ifdef LSQT_NEE_RECORDS
     nee_out out;
     c.out = &out, c.count_only = count_only;
-    for (ulong p = s.begin + (ulong)s.lid; p < s.end; p += (ulong)s.lsz) {
-        const ulong at = (ulong)s.slice * (path_end - path_begin) + (p - path_begin);
+    if (s.begin < s.end) {
+        const ulong p = s.begin, at = (ulong)s.slice * (path_end - path_begin) + (p - path_begin);
         out.rec = count_only ? 0 : rec + rec_off[at];
         out.n = 0;
         rng_t rng = rng_init(scene->seed_lo, scene->seed_hi, s.slice, p, RNG_PURPOSE_WALK | scene->rng_side);
         run_path(&c, wo, &rng, hist_b);
         if (count_only) rec_off[at] = out.n;
-        else add_work(acc, work, flags);
     }
     barrier(CLK_LOCAL_MEM_FENCE);
     if (count_only) return;

@@ -1,8 +1,8 @@
 /* The program a GPU would build, for test_gpu_build's offline compiles:
  *   gpu_program --source OUT.cl                  the kernels' text, as the host builds it
  *   gpu_program FILE.lsqt N_WI GROUP DOUBLE      the build options of FILE's program on
- *                                                the GPU code path (vector width 4, one
- *                                                RNG block, 64-bit atomics), N_WI
+ *                                                the GPU code path (its vector width,
+ *                                                one RNG block, 64-bit atomics), N_WI
  *                                                directions in groups of GROUP (the RRSS
  *                                                pilot's rx; 1 for the main run)
  * Both come from the host's own functions, so the test compiles what a GPU gets. */
@@ -43,7 +43,7 @@ int main(int argc, char **argv)
     }
     free(text);
     char opt[1024];
-    int rc = lsqt_kernel_options(&a, atoi(argv[2]), atoi(argv[3]), 4, 1, atoi(argv[4]), 1, opt, sizeof opt);
+    int rc = lsqt_kernel_options(&a, atoi(argv[2]), atoi(argv[3]), LSQT_GPU_VECTOR_WIDTH, 1, atoi(argv[4]), 1, opt, sizeof opt);
     if (!rc) printf("%s\n", opt);
     lsqt_assembly_free(&a);
     return rc;

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # test_gpu_path: the GPU code path (LSQT_GPU_PATH=1: next-event records evaluated by
 # lsqt_estimate, work-groups of 64, one RNG block) against the CPU code path (per-path
-# sums in the walk, work-groups of 1, the four-block RNG) on PoCL, both at vector width 4
+# sums in the walk, work-groups of 1, the four-block RNG) on PoCL, both at vector width 2
 # and in double: every model family (slab, Dust, Rough, Substr with its RRSS pilot,
 # Dusty, Silver, SGGX, Rayleigh over Oren-Nayar, the MCX-like slab, a transmitting stack
 # from both sides) gives
@@ -21,12 +21,12 @@ cli_workdir
 printf 'Medium\nLayer z=20 MicrosurfaceDielectricBsdf alpha=1e-4 use_multiple_scattering=false\nMedium eta=1.37 mus=10 mua=0.01 HenyeyGreensteinPhase g=0.9\nLayer z=0 MicrosurfaceDielectricBsdf alpha=1e-4 use_multiple_scattering=false\nMedium\n' > mcx.lsqt
 printf 'Medium\nLayer z=1 LambertianBsdf fR=0.3 fT=0.5\nMedium\nLayer z=0 LambertianBsdf fR=0.2 fT=0.6\nMedium\n' > two.lsqt
 
-# same NAME FILE FLAGS...: both paths, double, width 4; RAW and info must match.
+# same NAME FILE FLAGS...: both paths, double, width 2 (the GPU's); RAW and info must match.
 same() {
   local name=$1 file=$2
   shift 2
   for g in 0 1; do
-    if ! LSQT_GPU_PATH=$g LSQT_VECTOR_WIDTH=4 "$BIN" -q -R "$file" --double -o "$name.$g.raw" --lss "$name.$g.lss" "$@"; then
+    if ! LSQT_GPU_PATH=$g LSQT_VECTOR_WIDTH=2 "$BIN" -q -R "$file" --double -o "$name.$g.raw" --lss "$name.$g.lss" "$@"; then
       bad "$name: the run with LSQT_GPU_PATH=$g failed"
       return
     fi

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# test_oclgrind: the GPU code path (LSQT_GPU_PATH=1: vector width 4, work-groups of 64,
+# test_oclgrind: the GPU code path (LSQT_GPU_PATH=1: vector width 2, work-groups of 64,
 # one RNG block) on oclgrind's simulated OpenCL 1.2 device, with its memory checks (every
 # out-of-bounds or unaligned access to global, local, constant or private memory; on by
 # default), its data-race checks (--data-races: unsynchronised accesses of two work-items
@@ -10,7 +10,7 @@
 # the CPU code path's slab, and its refusal on a device with too little local memory:
 #   - oclgrind reports nothing (any "Invalid ...", "data race" or error line fails);
 #   - in double the RAW is byte-identical to PoCL's CPU code path at the same vector
-#     width (4): the tallies are integers, so work-group size, the RNG form and where the
+#     width (2): the tallies are integers, so work-group size, the RNG form and where the
 #     estimates are summed change no bit, and oclgrind's double builtins round as PoCL's;
 #   - in float every RAW value is within 3e-4 relative (+1e-7 absolute) of PoCL's: the
 #     two implementations' float builtins (exp, log, sqrt) may round differently, and a
@@ -63,7 +63,7 @@ run() {
     else
       ok
     fi
-    if ! LSQT_GPU_PATH=0 LSQT_VECTOR_WIDTH=4 "$BIN" -R -q "$file" -o "$name.$prec.pocl.raw" --lss "$name.$prec.pocl.lss" \
+    if ! LSQT_GPU_PATH=0 LSQT_VECTOR_WIDTH=2 "$BIN" -R -q "$file" -o "$name.$prec.pocl.raw" --lss "$name.$prec.pocl.lss" \
         "${extra[@]}" "$@"; then
       bad "$name $prec: the PoCL run failed"
       continue

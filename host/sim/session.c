@@ -14,7 +14,8 @@ static cl_mem make_buffer(lsqt_context *cx, cl_mem_flags fl, size_t size, void *
 }
 
 /* The code path: a CPU's (wide vectors, one work-item per work-group, the four-block
- * RNG) or a GPU's (vector width 4, work-groups of 64, one RNG block at a time).
+ * RNG) or a GPU's (vector width 2, work-groups of 64, a path per work-item in the walk,
+ * one RNG block at a time).
  * LSQT_GPU_PATH=1 takes the GPU's on any device, so the tests run it on a CPU;
  * LSQT_GPU_PATH=0 the CPU's. Returns 1 (GPU), 0 (CPU) or -1 (bad value, err set). */
 static int gpu_path(const lsqt_context *cx, char *err, size_t errcap)
@@ -27,13 +28,15 @@ static int gpu_path(const lsqt_context *cx, char *err, size_t errcap)
 }
 
 /* The next-event loops take vw directions at a time: 16 on a CPU (AVX-512 holds 16
- * floats; at 4, Substr's next-event work took 1.6x the time), 4 on a GPU, where a
- * work-item's vector is sequential work and registers. Per-direction values do not
- * depend on it; the vector maths of some builtins may round differently per width. */
+ * floats; at 4, Substr's next-event work took 1.6x the time), 2 on a GPU, where a
+ * work-item's vector is sequential work and registers (at 4, lsqt_estimate of the
+ * microsurface families takes 135-138 VGPRs on gfx90a, 3 waves per SIMD; at 2, 93-116).
+ * Per-direction values do not depend on it; the vector maths of some builtins may round
+ * differently per width. */
 static int vector_width(int gpu, char *err, size_t errcap)
 {
     const char *env = getenv("LSQT_VECTOR_WIDTH"); /* for tuning a device, and the tests */
-    if (!env || !*env) return gpu ? 4 : 16;
+    if (!env || !*env) return gpu ? LSQT_GPU_VECTOR_WIDTH : LSQT_CPU_VECTOR_WIDTH;
     if (!strcmp(env, "2") || !strcmp(env, "4") || !strcmp(env, "8") || !strcmp(env, "16")) return atoi(env);
     snprintf(err, errcap, "LSQT_VECTOR_WIDTH is '%s': expected 2, 4, 8 or 16", env);
     return 0;
@@ -427,6 +430,12 @@ static int open_block(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a,
     }
     clGetKernelWorkGroupInfo(s->walk, cx->dev.id, CL_KERNEL_WORK_GROUP_SIZE, sizeof kmax, &kmax, NULL);
     if (kmax && ls > kmax) ls = kmax;
+    if (gpu) /* the walk's groups divide a chunk (run_chunks): a power of two up to LSQT_CHUNK */
+        for (size_t p = LSQT_CHUNK;; p /= 2)
+            if (p <= ls || p == 1) {
+                ls = p;
+                break;
+            }
     s->local_size = ls;
     if (check_kernel_memory(s, verbose && !prog, err, errcap)) {
         lsqt_session_close(s);
@@ -506,15 +515,17 @@ int lsqt_session_open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_asse
 }
 
 /* Enqueues kernel k over the chunks of paths [begin, end) of every simulated slice
- * (arguments 6, 7, 8 of lsqt_walk; 5, 6, 7 of lsqt_estimate) and waits for it. */
-static cl_int run_chunks(lsqt_session *s, cl_kernel k, cl_uint arg0, uint64_t begin, uint64_t end)
+ * (arguments 6, 7, 8 of lsqt_walk; 5, 6, 7 of lsqt_estimate) and waits for it: items
+ * work-items per chunk, a work-group's (s->local_size) where a group runs a chunk,
+ * LSQT_CHUNK for the GPU path's walk (a path each, in groups that divide the chunk). */
+static cl_int run_chunks(lsqt_session *s, cl_kernel k, cl_uint arg0, uint64_t begin, uint64_t end, size_t items)
 {
     cl_ulong b = begin, en = end, chunk0 = begin / LSQT_CHUNK;
     cl_ulong nchunks = (end - 1) / LSQT_CHUNK - chunk0 + 1;
     cl_int e = clSetKernelArg(k, arg0, sizeof b, &b);
     e |= clSetKernelArg(k, arg0 + 1, sizeof en, &en);
     e |= clSetKernelArg(k, arg0 + 2, sizeof chunk0, &chunk0);
-    size_t global[2] = {(size_t)nchunks * s->local_size, (size_t)(s->n_slices / s->slice_group)}, local[2] = {s->local_size, 1};
+    size_t global[2] = {(size_t)nchunks * items, (size_t)(s->n_slices / s->slice_group)}, local[2] = {s->local_size, 1};
     if (e == CL_SUCCESS) e = clEnqueueNDRangeKernel(s->cx->queue, k, 2, NULL, global, local, 0, NULL, NULL);
     if (e == CL_SUCCESS) e = clFinish(s->cx->queue);
     return e;
@@ -575,7 +586,7 @@ static cl_int launch_records(lsqt_session *s, uint64_t begin, uint64_t end, int 
             e |= clSetKernelArg(s->walk, 14, sizeof(cl_mem), &s->rec_off);
             e |= clSetKernelArg(s->walk, 15, sizeof one, &one);
         }
-        if (e == CL_SUCCESS) e = run_chunks(s, s->walk, 6, pos, stop);
+        if (e == CL_SUCCESS) e = run_chunks(s, s->walk, 6, pos, stop, LSQT_CHUNK);
         if (e == CL_SUCCESS)
             e = clEnqueueReadBuffer(s->cx->queue, s->rec_off, CL_TRUE, 0, n * n_sim * sizeof *counts, counts, 0, NULL, NULL);
         for (size_t i = 0; i < n; i++) {
@@ -603,8 +614,8 @@ static cl_int launch_records(lsqt_session *s, uint64_t begin, uint64_t end, int 
                 e |= clSetKernelArg(s->estimate, 8, sizeof(cl_mem), &s->rec);
                 e |= clSetKernelArg(s->estimate, 9, sizeof(cl_mem), &s->rec_off);
             }
-            if (e == CL_SUCCESS) e = run_chunks(s, s->walk, 6, pos + p0, pos + p1);
-            if (e == CL_SUCCESS) e = run_chunks(s, s->estimate, 5, pos + p0, pos + p1);
+            if (e == CL_SUCCESS) e = run_chunks(s, s->walk, 6, pos + p0, pos + p1, LSQT_CHUNK);
+            if (e == CL_SUCCESS) e = run_chunks(s, s->estimate, 5, pos + p0, pos + p1, s->local_size);
             p0 = p1;
         }
         pos = stop;
@@ -635,7 +646,7 @@ int lsqt_session_launch(lsqt_session *s, uint64_t begin, uint64_t end, char *err
     }
     if (end <= begin) return 0;
     int no_memory = 0;
-    cl_int e = s->records ? launch_records(s, begin, end, &no_memory) : run_chunks(s, s->walk, 6, begin, end);
+    cl_int e = s->records ? launch_records(s, begin, end, &no_memory) : run_chunks(s, s->walk, 6, begin, end, s->local_size);
     if (e != CL_SUCCESS) {
         if (no_memory) snprintf(err, errcap, "out of memory for the next-event records' offsets");
         else snprintf(err, errcap, "kernel launch failed: %s (%d)", lsqt_cl_error_name(e), (int)e);

@@ -45,6 +45,10 @@ typedef struct lsqt_session {
     struct lsqt_session *blocks;
 } lsqt_session;
 
+/* The vector widths (LSQT_VW) of the two code paths by default (session.c says why). */
+#define LSQT_CPU_VECTOR_WIDTH 16
+#define LSQT_GPU_VECTOR_WIDTH 2
+
 /* The OpenCL build options of A's program for n_wi directions per slice in groups of
  * GROUP (1; rx for the RRSS pilot), vw directions per vector, the GPU code path or the
  * CPU's, the precision, and whether the device has 64-bit atomics (the kernels' text is
