@@ -302,7 +302,7 @@ expect 0 "" -- "$BIN" --list-devices
 "$BIN" -q -R -p 3000 -wo 4 -wi 21 -o vw16.raw --lss vw16.lss "$EX/tutorial/Dusty.lsqt" &&
   LSQT_VECTOR_WIDTH=4 "$BIN" -q -R -p 3000 -wo 4 -wi 21 -o vw4.raw --lss vw4.lss "$EX/tutorial/Dusty.lsqt" &&
   cmp -s vw16.raw vw4.raw && cmp -s vw16.lss vw4.lss && ok || bad "vector widths 16 and 4 give different RAW or LSS"
-LSQT_VECTOR_WIDTH=2 "$BIN" -q -R -p 3000 -wo 4 -wi 21 -o vw2.raw "$EX/tutorial/Dusty.lsqt" && python3 - vw16.raw vw2.raw <<'PY' && ok || bad "vector widths 16 and 2 differ by more than rounding"
+LSQT_VECTOR_WIDTH=2 "$BIN" -q -R -p 3000 -wo 4 -wi 21 -o vw2.raw --lss vw2.lss "$EX/tutorial/Dusty.lsqt" && python3 - vw16.raw vw2.raw <<'PY' && ok || bad "vector widths 16 and 2 differ by more than rounding"
 import sys
 a, b = (open(p).read().split() for p in sys.argv[1:3])
 assert len(a) == len(b) and a[:3] == b[:3], "different shapes"
