@@ -554,16 +554,6 @@ LSQT_INLINE void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulon
     }
 }
 
-/* Adds the work counters to the work-group's, every band's, and clears them. */
-LSQT_INLINE void add_work(volatile __local acc_word *acc, work_t *work, volatile __global uint *flags)
-{
-    for (int k = 0; k < WORK_N; k++) {
-        for (int band = 0; band < LSQT_NB; band++)
-            if (work[k]) local_add128(acc + LSQT_ACC_WORDS * (band * LSQT_T_COUNT + LSQT_T_LAYER_EVENTS + k), work[k], 0, flags);
-        work[k] = 0;
-    }
-}
-
 /* The RRSS candidates: analog walks (purpose RNG_PURPOSE_CANDIDATES, no point estimates)
  * of paths [path_begin, path_begin + n) of every simulated slice; out[slice][path] is the
  * direction of its scattered exit, w = 1, or all 0 (absorbed, unscattered, cut). Global
@@ -760,7 +750,10 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
         }
     }
 #endif
-    add_work(acc, work, flags);
+    /* The work counters are every band's. */
+    for (int band = 0; band < LSQT_NB; band++)
+        for (int k = 0; k < WORK_N; k++)
+            if (work[k]) local_add128(acc + LSQT_ACC_WORDS * (band * LSQT_T_COUNT + LSQT_T_LAYER_EVENTS + k), work[k], 0, flags);
     barrier(CLK_LOCAL_MEM_FENCE);
     for (int k = s.lid; k < LSQT_T_COUNT * LSQT_NB; k += s.lsz) {
         fix1 a = acc_read(acc + LSQT_ACC_WORDS * k);
