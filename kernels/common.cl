@@ -194,20 +194,18 @@ LSQT_INLINE realv safe_sqrtv(realv x) { return sqrt(fmax(x, (realv)(R(0.0)))); }
 /* lgamma(x) for x >= 1 without the library's general lgamma (scalar on PoCL, some 40
  * VGPRs on gfx90a): the Stirling series to 1/x^7 for x >= 8, error below 3e-11, after
  * lgamma(x) = lgamma(x + 6) - log(x (x+1) ... (x+5)) for smaller x. One text for the
- * LSQT_VW-wide form and the scalar one (SEL: select, or ?: for a scalar, whose select
- * would want a long condition in double). */
-#define LSQT_LGAMMA_GE1(T, SEL, x)                                                                            \
+ * LSQT_VW-wide form and the scalar one (the scalar twins above). */
+#define LSQT_LGAMMA_GE1(T)                                                                                    \
     {                                                                                                         \
         const T p = x * (x + R(1.0)) * (x + R(2.0)) * (x + R(3.0)) * (x + R(4.0)) * (x + R(5.0));               \
-        const T y = SEL(x, x + R(6.0), x < R(8.0));                                                             \
+        const T y = x < R(8.0) ? x + R(6.0) : x;                                                              \
         const T r = R(1.0) / y, r2 = r * r;                                                                   \
         const T series = r * (R(1.0) / R(12.0) - r2 * (R(1.0) / R(360.0) - r2 * (R(1.0) / R(1260.0) - r2 * (R(1.0) / R(1680.0))))); \
         const T lg = (y - R(0.5)) * log(y) - y + R(0.91893853320467274178) + series;                          \
-        return lg - SEL((T)(R(0.0)), log(p), x < R(8.0));                                                     \
+        return lg - (x < R(8.0) ? log(p) : (T)(R(0.0)));                                                      \
     }
-#define LSQT_SEL_SCALAR(a, b, c) ((c) ? (b) : (a))
-LSQT_INLINE realv lgamma_ge1_v(realv x) LSQT_LGAMMA_GE1(realv, select, x)
-LSQT_INLINE real lgamma_ge1(real x) LSQT_LGAMMA_GE1(real, LSQT_SEL_SCALAR, x)
+LSQT_INLINE realv lgamma_ge1_v(realv x) LSQT_LGAMMA_GE1(realv)
+LSQT_INLINE real lgamma_ge1(real x) LSQT_LGAMMA_GE1(real)
 
 /* What a phase function fixes at a vertex for every direction it is evaluated towards and
  * for its sample (models.cl phase_vertex): a diffuse SGGX flake's visible normal. */

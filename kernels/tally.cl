@@ -27,8 +27,8 @@ typedef struct {
  * more: at most one unit, 1e-7 relative, and the same every time); non-finite or
  * negative ones raise a flag and count as 0. One body for LSQT_VW values (fixv, to_fixedv)
  * and for one (fix1, to_fixed; common.cl's scalar twins): FIX the result's type, T the
- * value's, M a comparison's, ALL and ANY of a condition, LONG_BITS(x) x converted to a long and its bits
- * taken as a ulong, ULONG(x) x converted to a ulong. */
+ * value's, M a comparison's, ALL and ANY of a condition, LONG_BITS(x) x converted to a
+ * long and its bits taken as a ulong, ULONG(x) x converted to a ulong. */
 #define LSQT_TO_FIXED(FIX, T, M, ALL, ANY, LONG_BITS, ULONG)                                         \
     {                                                                                                \
         FIX r;                                                                                       \

@@ -430,12 +430,11 @@ static int open_block(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a,
     }
     clGetKernelWorkGroupInfo(s->walk, cx->dev.id, CL_KERNEL_WORK_GROUP_SIZE, sizeof kmax, &kmax, NULL);
     if (kmax && ls > kmax) ls = kmax;
-    if (gpu) /* the walk's groups divide a chunk (run_chunks): a power of two up to LSQT_CHUNK */
-        for (size_t p = LSQT_CHUNK;; p /= 2)
-            if (p <= ls || p == 1) {
-                ls = p;
-                break;
-            }
+    if (gpu) { /* the walk's groups divide a chunk (run_chunks): a power of two up to LSQT_CHUNK */
+        size_t p = LSQT_CHUNK;
+        while (p > ls) p /= 2;
+        ls = p;
+    }
     s->local_size = ls;
     if (check_kernel_memory(s, verbose && !prog, err, errcap)) {
         lsqt_session_close(s);
