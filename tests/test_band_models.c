@@ -27,7 +27,7 @@
  *               (a Lambertian's is), as a walk step and as next-event terms.
  *   metal-ss, metal-ms  a GGX dielectric interface (alpha 0.2, single scattering: its
  *               terms are analytic) into a thin HG medium of index 1.5 (optical thickness
- *               0.1 to 0.25 per band) over a GGX conductor whose n + i k differ per band
+ *               0.15 to 0.22 per band) over a GGX conductor whose n + i k differ per band
  *               (single scattering alpha 0.2; multiple scattering alpha 0.5). The
  *               conductor is hidden (no next-event terms of its own), but the interface
  *               keeps its lobe: a lobe turned about the normal (specular into
