@@ -38,10 +38,13 @@
  *                            about 35 s on two busy cores). Median relative standard
  *                            errors of a band's difference: 0.2-2.4 % per direction,
  *                            0.15-1.5 % per theta_i, 0.03-0.5 % per side (inverse-variance
- *                            means), R 0.14-0.8 %: one band's terms 1 % too large fail
- *                            (z up to 16), a walk step 1.3 % short fails by its R (z 7.7).
- *   test_band_models power   power (CI): 2^21 paths a slice (175 CPU-s, 200-300 s): about
- *                            3 times finer.
+ *                            means), R 0.14-0.8 %: one band's terms 0.5 % too large fail
+ *                            (z 9), a walk step 1.3 % short fails by its R (z 7.7), a
+ *                            conductor's exit tilted 10 % to the normal at grazing
+ *                            directions (z 16).
+ *   test_band_models power   power (CI): 2^21 paths a slice (172 CPU-s; 90 s on two idle
+ *                            cores, up to 300 s on busy ones): about 3 times finer; one
+ *                            band's terms 0.5 % too large fail with z 10.
  *   Each prints, per band, the median relative standard error of the differences it
  *   tests: a bias of about ZA times that in one band fails.
  *
