@@ -49,10 +49,10 @@
  *   tests: a bias of about ZA times that in one band fails.
  *
  * Checks, per band and slice: per direction z = (a - b) / sqrt(ea^2 + eb^2) within ZD; per
- * (side, theta_i) the mean over the azimuths and per side the mean over every direction,
- * each direction weighed by 1 / (the two runs' mean f there), as ratio estimates with
- * their batch-means errors from each run (tests/family_stats.h), and R, T, delta_T: z
- * within ZA. ZD and ZA: Student t with 31 degrees of freedom (the difference of two runs
+ * (side, theta_i) the mean over the azimuths and per side the mean over every direction
+ * (plain, and weighed by each direction's inverse relative variance), of f / (the two
+ * runs' mean f there), as ratio estimates with their batch-means errors from each run
+ * (tests/family_stats.h), and R, T, delta_T: z within ZA. ZD and ZA: Student t with 31 degrees of freedom (the difference of two runs
  * has more: conservative) for a family-wise false alarm rate of 1e-3 per section. A band's
  * standard errors of R and of the means over every direction are at most ERR_CAP times
  * its own run's: weights that run wild (estimates too noisy for any z to fail) are caught
@@ -71,8 +71,6 @@
  * two batch-means errors of 31 degrees of freedom each differ by a factor 2.3 once in
  * 1e5. */
 #define ERR_CAP 5.0
-
-enum { MAX_BANDS = 3 };
 
 /* A stack's text with {v1,v2,v3} where a value differs by band: the multi-band text keeps
  * the list, band b's own text takes its b-th value. */
