@@ -171,7 +171,7 @@ static const band_case THREE_THROUGH = {.name = "three media through",
                                         .nb = 3,
                                         .nm = 3,
                                         .d = {0.4, 0.6, 0.5},
-                                        .g = {0.5, 0.0, 0.8},
+                                        .g = {0.5, 0.0, 0.6},
                                         .tau = {{0.3, 0.05, 0.6}, {0.2, 0.9, 0.4}, {0.8, 0.3, 0.1}},
                                         .om = {{0.8, 0.95, 0.5}, {0.9, 0.6, 0.99}, {0.7, 0.9, 0.85}}};
 /* Neighbouring bands of a smooth spectrum: extinctions 0.5 % and 1 % apart (and albedos
