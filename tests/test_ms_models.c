@@ -389,6 +389,9 @@ static void gof(const gof_case *gc)
     L.p[0] = (float)gc->alpha, L.p[1] = (float)gc->p1, L.p[2] = (float)gc->p2, L.p[3] = (float)gc->p3;
     cl_mem bl = fixture_mem(sizeof L, &L);
     const int analytic = gc->kind != LSQT_BSDF_MS_LAMBERTIAN;
+    /* Lambertian facets have no analytic part: even in single scattering the evaluation
+     * is the walk's (its first vertex's next-event terms, harness_ms_eval) */
+    const int walked = gc->ms || !analytic;
     const double N = (double)gc->n;
     char name[80];
     snprintf(name, sizeof name, "%s%s a=%.2g th=%g%s", gc->name, gc->ms ? "" : " single", gc->alpha, gc->theta,
@@ -470,7 +473,7 @@ static void gof(const gof_case *gc)
      * evaluation's layer runs ic walks per vertex (iter_count): the analytic single
      * scattering, the same for all, is then computed once per ic walks. */
     double tot_var_e = 0;
-    if (gc->ms) {
+    if (walked) {
         const int most = 2 * nc * gc->qm * gc->qm;
         double(*d)[3] = malloc((size_t)most * sizeof *d), *wt = malloc((size_t)most * sizeof *wt);
         static int off[NCELL + 1];
@@ -544,12 +547,41 @@ static void gof(const gof_case *gc)
         for (int c = 0; c < nc; c++) OC[k][coarse_of(c)] += t[k].O[c], SC[k][coarse_of(c)] += t[k].S2[c];
     for (int k = 0; k < 2; k++) {
         chi[k] = gof_chi2(nc, t[k].O, t[k].S2, E, VEF, rg, NULL, &dof[k], NULL);
-        chic[k] = coarse_chi2(ncc, OC[k], SC[k], EC, QC, gc->ms ? CI : NULL, N, rg, &dofc[k], k ? NULL : &lam_c,
+        chic[k] = coarse_chi2(ncc, OC[k], SC[k], EC, QC, walked ? CI : NULL, N, rg, &dofc[k], k ? NULL : &lam_c,
                               OC[1]);
         double var_t = fmax(sw2[k] - sw[k] * sw[k] / N, 0.0) + var_et;
         z[k] = var_t > 0 ? (sw[k] - et) / sqrt(var_t) : (fabs(sw[k] - et) <= 1e-9 * N ? 0 : 1e9);
         pf[k] = chi2_p(chi[k], dof[k]), pc[k] = chi2_p(chic[k], dofc[k]), pz[k] = erfc(fabs(z[k]) / sqrt(2.0));
         pmin[k] = fmin(pf[k], fmin(pc[k], pz[k]));
+    }
+    /* Lambertian facets that transmit: the albedo of each hemisphere on its own (the sum
+     * of the exits' weights there against N x the integral of f over it), since an error
+     * that moves light between reflection and transmission (the fR : fT branch, the
+     * escape after a crossing) can leave the total nearly as it was. Variance: the
+     * sampling's (N var of w 1{h}) + the items' spread of the hemisphere's integral. */
+    double za[2][2] = {{0, 0}, {0, 0}}, ea[2] = {0, 0}, oa[2] = {0, 0};
+    const int albedo = !analytic && g.nh == 2;
+    if (albedo) {
+        double vea[2] = {0, 0};
+        for (int h = 0; h < 2; h++) {
+            double m1 = 0, m2 = 0;
+            for (int it = 0; it < ITEMS; it++) {
+                double v = 0;
+                for (int cc = h * NCOARSE / 2; cc < (h + 1) * NCOARSE / 2; cc++) v += CI[it][cc];
+                m1 += v / ITEMS, m2 += v * v / ITEMS;
+            }
+            vea[h] = N * N * fmax(m2 - m1 * m1, 0.0) / (ITEMS - 1);
+            for (int c = h * NMU * NPHI; c < (h + 1) * NMU * NPHI; c++) ea[h] += E[c];
+        }
+        for (int k = 0; k < 2; k++)
+            for (int h = 0; h < 2; h++) {
+                double o = 0, o2 = 0;
+                for (int c = h * NMU * NPHI; c < (h + 1) * NMU * NPHI; c++) o += t[k].O[c], o2 += t[k].S2[c];
+                const double var = fmax(o2 - o * o / N, 0.0) + vea[h] + 1e-12 * ea[h] * ea[h];
+                za[k][h] = var > 0 ? (o - ea[h]) / sqrt(var) : 0;
+                if (!k) oa[h] = o;
+                pmin[k] = fmin(pmin[k], erfc(fabs(za[k][h]) / sqrt(2.0)));
+            }
     }
     char tn[112];
     snprintf(tn, sizeof tn, "%s: chi2 (%d bins)", name, dof[0]);
@@ -558,6 +590,12 @@ static void gof(const gof_case *gc)
     gof_record(tn, pc[0]);
     snprintf(tn, sizeof tn, "%s: total", name);
     gof_record(tn, pz[0]);
+    for (int h = 0; albedo && h < 2; h++) {
+        snprintf(tn, sizeof tn, "%s: albedo %s", name, h ? "T" : "R");
+        gof_record(tn, erfc(fabs(za[0][h]) / sqrt(2.0)));
+        printf("%-32s albedo %s: mean w %.5f int f %.5f z=%+.2f | skewed z=%+.2f\n", name, h ? "T" : "R", oa[h] / N,
+               ea[h] / N, za[0][h], za[1][h]);
+    }
     /* The skew's expected effect, from the data: its shift of each coarse bin and of the
      * total against their sigmas (noncentralities). Where either is large the skewed copy
      * must be rejected: a total shifted by 10 sigma, or a coarse chi-square by 150 on about
@@ -971,6 +1009,14 @@ int main(int argc, char **argv)
                 gof(&die);
                 die.ms = 0;
                 gof(&die);
+            }
+            /* Lambertian facets that transmit, in single scattering: the exit is the walk's
+             * analog escape after its first vertex (through the facets or not), the
+             * evaluation its next-event terms, which average that escape analytically
+             * (mslambert_firstv); fT > fR so that most light crosses. From both sides. */
+            for (int side = 1; side >= -1; side -= 2) {
+                gof_case ls = {"Lambertian", LSQT_BSDF_MS_LAMBERTIAN, a, 0.35, 0.6, 0, 0, th, side, 2, NS, 500, 1, 2};
+                gof(&ls);
             }
         }
     /* Lambertian facets that only reflect, fR = 1: a furnace (every weight is 1, the
