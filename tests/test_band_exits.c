@@ -154,8 +154,10 @@ static const double TAU[MAXB] = {0.0, 0.3, 1.2};
 static void case_text(const exit_case *c, char *text, size_t size)
 {
     char layer[200], med[200];
-    snprintf(layer, sizeof layer, "MicrosurfaceLambertianBrdf alpha=%g fR=%g fT=%g use_multiple_scattering=false",
-             c->alpha, FR, FT);
+    /* iter_count 1: more walks per vertex serve only the point estimates, not tested here */
+    snprintf(layer, sizeof layer,
+             "MicrosurfaceLambertianBrdf alpha=%g fR=%g fT=%g use_multiple_scattering=false iter_count=1", c->alpha,
+             FR, FT);
     snprintf(med, sizeof med, "Medium mus=0,0,0 mua=%g,%g,%g", TAU[0], TAU[1], TAU[2]);
     if (c->over)
         snprintf(text, size, "Medium\nLayer z=1 NullBsdf\n%s\nLayer z=0 %s\nMedium\n", med, layer);
