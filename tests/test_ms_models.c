@@ -2,7 +2,8 @@
  * 2016, kernels/microsurface.cl) against their evaluations, through the harness kernels
  * (the code the path loop runs). `test_ms_models release` (the release suite) runs half of
  * the goodness-of-fit grid of 1. (alphas and angles alternating), `power` (ctest label
- * power) the other half, no argument all of it; 2 and 3 run in the release part. Release,
+ * power) the other half, no argument all of it; 2 and 3 run in the release part; a second
+ * argument N adds N to the seeds of 1.'s cases (to see that the tolerances hold). Release,
  * 2 cores: about 90 s, nearly all of it kernels.
  *
  * 1. Goodness of fit of harness_sample (weights: the products of the facet albedos)
@@ -394,6 +395,7 @@ typedef struct {
  * facets are mirror-symmetric: from below with the same seeds a case repeats its twin
  * from above bit for bit, so the cases from below take other seeds (independent data). */
 static cl_uint seed_shift = 0;
+static cl_uint seed_off = 0; /* argv[2]: added to every case's seeds (to see that the tolerances hold) */
 
 static void gof(const gof_case *gc)
 {
@@ -418,7 +420,7 @@ static void gof(const gof_case *gc)
     memset(&g, 0, sizeof g);
     g.nh = gc->nh, g.side = gc->side;
     float *smp = malloc((gc->n > GOF_NPILOT ? gc->n : GOF_NPILOT) * 16);
-    k_sample(bl, wo, 977u + seed_shift, GOF_NPILOT, smp);
+    k_sample(bl, wo, 977u + seed_off + seed_shift, GOF_NPILOT, smp);
     grid_from_pilot(&g, smp, GOF_NPILOT);
     if (gc->kind == LSQT_BSDF_MS_DIELECTRIC) {
         /* Refraction's half vector is horizontal where |cos theta_i| = cos theta_o / e (e the
@@ -435,7 +437,7 @@ static void gof(const gof_case *gc)
     const int nc = g.nh * NMU * NPHI, ncc = nc / (COARSE * COARSE);
 
     /* The samples, and their skewed copy. */
-    k_sample(bl, wo, 12345u + seed_shift, gc->n, smp);
+    k_sample(bl, wo, 12345u + seed_off + seed_shift, gc->n, smp);
     static tally_t t[2]; /* plain, skewed */
     memset(t, 0, sizeof t);
     double sw[2] = {0, 0}, sw2[2] = {0, 0};
@@ -510,7 +512,7 @@ static void gof(const gof_case *gc)
         cl_mem ble = fixture_mem(sizeof Le, &Le);
         ms_dirs md = ms_dirs_make(ble, (const double(*)[3])d, nn);
         float *out = malloc((size_t)ITEMS * PAD * sizeof *out);
-        k_ms_eval(ble, wo, &md, 4242u + seed_shift, gc->reps, out);
+        k_ms_eval(ble, wo, &md, 4242u + seed_off + seed_shift, gc->reps, out);
         static double a1[NCELL], a2[NCELL];
         memset(a1, 0, sizeof a1), memset(a2, 0, sizeof a2);
         double t1 = 0, t2 = 0;
@@ -983,10 +985,11 @@ int main(int argc, char **argv)
     if (argc > 1) {
         part_release = strcmp(argv[1], "release") == 0;
         part_power = strcmp(argv[1], "power") == 0;
-        if (!part_release && !part_power) {
-            fprintf(stderr, "usage: test_ms_models [release|power]\n");
+        if ((!part_release && !part_power) || argc > 3) {
+            fprintf(stderr, "usage: test_ms_models [release|power [SEED_OFFSET]]\n");
             return 2;
         }
+        if (argc == 3) seed_off = (cl_uint)strtoul(argv[2], NULL, 10);
     }
     fixture_open();
     prog = fixture_build("-cl-std=CL1.2 -DLSQT_HAS_BSDF_MS_LAMBERTIAN=1 -DLSQT_HAS_BSDF_MS_DIELECTRIC=1 "
