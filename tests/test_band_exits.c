@@ -36,8 +36,11 @@
  * the output prints lambda for all.
  * That the paths were shared: one block, and every band's work counters are the block's.
  *
- *   test_band_exits quick   2^21 paths a slice, alpha 0.3 and 1 (the release suite's).
- *   test_band_exits power   2^23 paths a slice, alpha 0.05, 0.3, 1 and 2.4 (power).
+ *   test_band_exits quick   the release suite's: 2^21 paths a slice; under at alpha 0.3
+ *                           (theta_o 0, 60, 85), over at alpha 1 (30, 70); evaluation
+ *                           ITEMS x 500 vertices a slice.
+ *   test_band_exits power   power: 2^23 paths a slice; under (0, 60, 85) and over (0, 45,
+ *                           70) at alpha 0.05, 0.3, 1 and 2.4; ITEMS x 2000 vertices.
  * `test_band_exits SECTION N` adds N to every seed (to see that the tolerances hold). */
 #include <stdint.h>
 
