@@ -4,7 +4,7 @@
  * the goodness-of-fit grid of 1. (alphas and angles alternating), `power` (ctest label
  * power) the other half, no argument all of it; 2 and 3 run in the release part; a second
  * argument N adds N to the seeds of 1.'s cases (to see that the tolerances hold). Release,
- * 2 cores: about 90 s, nearly all of it kernels.
+ * 2 cores: about 105 CPU-s (power 65), nearly all of it kernels.
  *
  * 1. Goodness of fit of harness_sample (weights: the products of the facet albedos)
  *    against the evaluation integrated over bins: Lambertian facets (fR 0.7, fT 0.25),
