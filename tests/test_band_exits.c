@@ -36,9 +36,9 @@
  * the output prints lambda for all.
  * That the paths were shared: one block, and every band's work counters are the block's.
  *
- *   test_band_exits quick   the release suite's: 2^21 paths a slice; under at alpha 0.3
+ *   test_band_exits quick   the release suite's: 2^22 paths a slice; under at alpha 0.3
  *                           (theta_o 0, 60, 85), over at alpha 1 (30, 70); evaluation
- *                           ITEMS x 500 vertices a slice. About 9 s on 2 cores.
+ *                           ITEMS x 1000 vertices a slice. About 18 s on 2 cores.
  *   test_band_exits power   power: 2^23 paths a slice; under (0, 60, 85) and over (0, 45,
  *                           70) at alpha 0.05, 0.3, 1 and 2.4; ITEMS x 2000 vertices.
  *                           About 170 CPU-s, two thirds of it the evaluation.
@@ -433,9 +433,9 @@ static void case_check(const exit_case *c, uint64_t paths, uint64_t seed)
 
 static void section_quick(void)
 {
-    const uint64_t n = (uint64_t)1 << 21;
-    const exit_case under = {"under a=0.3", 0, 0.3, 3, {0, 60, 85}, 500};
-    const exit_case over = {"over a=1", 1, 1.0, 2, {30, 70, 0}, 500};
+    const uint64_t n = (uint64_t)1 << 22;
+    const exit_case under = {"under a=0.3", 0, 0.3, 3, {0, 60, 85}, 1000};
+    const exit_case over = {"over a=1", 1, 1.0, 2, {30, 70, 0}, 1000};
     case_check(&under, n, 5001);
     case_check(&over, n, 5002);
 }
