@@ -275,6 +275,7 @@ typedef struct {
     ad_stack_desc S;
     ad_slab all;
     double *pR[AD_MAX_SLABS], *pT[AD_MAX_SLABS];
+    int diffuse_top; /* a Lambertian layer over the slabs (ad_ref_lambertian_top) */
 } ad_ref;
 
 /* Builds the reference of stack S on grid G (taken over: freed by ad_ref_free), each slab
@@ -286,6 +287,7 @@ static inline void ad_ref_make(ad_ref *r, const ad_grid *G, const ad_stack_desc 
 {
     r->G = *G;
     r->S = *S;
+    r->diffuse_top = 0;
     ad_slab_alloc(G, &r->all);
     if (S->floor) { /* f = fR / pi in mode 0, nothing through: tau infinite */
         const size_t nn = (size_t)G->n * (size_t)G->n;
@@ -314,6 +316,24 @@ static inline void ad_ref_make(ad_ref *r, const ad_grid *G, const ad_stack_desc 
     }
 }
 
+/* Puts a Lambertian layer over the stack of r: reflection fR / pi and transmission
+ * fT / pi, the same from either side (a symmetric operand, as ad_add needs), nothing
+ * unscattered through it (tau infinite), mode 0 only. Light reaches the slabs only
+ * diffusely then, so f has no sharp single-scattering part and no azimuthal modes: it is
+ * the composed kernels' mode 0, read as is (ad_ref_f skips the single-scattering split). */
+static inline void ad_ref_lambertian_top(ad_ref *r, double fr, double ft)
+{
+    const ad_grid *G = &r->G;
+    const size_t nn = (size_t)G->n * (size_t)G->n;
+    ad_slab L;
+    ad_slab_alloc(G, &L);
+    for (size_t i = 0; i < nn; i++) L.R[i] = fr / PI, L.T[i] = ft / PI;
+    L.tau = INFINITY;
+    ad_add(G, &L, &r->all, &r->all);
+    ad_slab_free(&L);
+    r->diffuse_top = 1;
+}
+
 static inline void ad_ref_free(ad_ref *r)
 {
     ad_slab_free(&r->all);
@@ -338,6 +358,7 @@ static inline double ad_ref_f(const ad_ref *r, double mu0, double mu, double dph
     const int i = ad_node(G, fabs(mu)), j = ad_node(G, mu0), n = G->n;
     if (i < 0 || j < 0) return NAN;
     const double *K = mu > 0 ? r->all.R : r->all.T;
+    if (r->diffuse_top) return K[(size_t)i * n + j]; /* mode 0 is all there is */
     double ms = 0.0;
     for (int m = 0; m < nm_used && m < G->nm; m++) {
         const size_t at = ((size_t)m * n + i) * n + j;

@@ -2,8 +2,9 @@
  * 2016, kernels/microsurface.cl) against their evaluations, through the harness kernels
  * (the code the path loop runs). `test_ms_models release` (the release suite) runs half of
  * the goodness-of-fit grid of 1. (alphas and angles alternating), `power` (ctest label
- * power) the other half, no argument all of it; 2 and 3 run in the release part. Release,
- * 2 cores: about 90 s, nearly all of it kernels.
+ * power) the other half, no argument all of it; 2 and 3 run in the release part; a second
+ * argument N adds N to the seeds of 1.'s cases (to see that the tolerances hold). Release,
+ * 2 cores: about 105 CPU-s (power 65), nearly all of it kernels.
  *
  * 1. Goodness of fit of harness_sample (weights: the products of the facet albedos)
  *    against the evaluation integrated over bins: Lambertian facets (fR 0.7, fT 0.25),
@@ -12,6 +13,13 @@
  *    85 degrees, 10^6 exits each; with multiple scattering (the walk; its evaluation is
  *    harness_ms_eval, stochastic) and, for the conductor and the dielectric, without
  *    (single scattering: harness_eval, analytic; for the conductor also weight = f/pdf).
+ *    Lambertian facets that transmit (fR 0.35, fT 0.6) also in single scattering, from
+ *    above and from below, 4 x 10^6 exits each (from below with other seeds: the model
+ *    is mirror-symmetric, so with the same seeds the case from below repeats the one from
+ *    above bit for bit): the sampler's exit is the walk's first vertex and then its
+ *    chance of escaping (ms_walk, max_order 1: through the facets or not), the
+ *    evaluation that vertex's next-event terms, which average the escape analytically
+ *    (harness_ms_eval with multiple scattering off).
  *    Bins: per hemisphere (wo's side and the other) a 16 x 16 product grid in
  *    (|cos theta|, phi) with breakpoints at quantiles of 0.4 uniform + 0.6 an independent
  *    pilot run's exits, so bins crowd where the lobe is (an alpha 0.05 lobe gets about
@@ -30,11 +38,14 @@
  *    is fitted: E is absolute); (b) the same on 4 x 4 blocks of bins with the full
  *    covariance (the walks add to all bins at once: their errors are correlated); (c)
  *    the total, sum of all weights against N x the integral of f, variance N var(w) + the
- *    evaluation's (per item) + the quadrature's: the furnace for lossless facets.
+ *    evaluation's (per item) + the quadrature's: the furnace for lossless facets; (d) for
+ *    Lambertian facets that transmit, the same per hemisphere (the albedos of reflection
+ *    and transmission), since an error that moves light from one to the other can leave
+ *    the total nearly as it was.
  *    p-values: the regularized upper incomplete gamma and erfc (stats.h); the family, the
  *    pooled chi-square and the adaptive integration are gof.h's.
  *    Threshold: all p-values of the file form one family, Bonferroni corrected, reject
- *    if p < 1e-3 / (number of tests) (about 3.4e-6 for 298).
+ *    if p < 1e-3 / (number of tests) (about 2.3e-6 for 442).
  *    Power, kept as a self-check: every case's exits reweighted by 1 + 0.02 wi.x (a 2 %
  *    skew of the sampler) must be rejected wherever the data say the tests can see it
  *    (noncentrality of the skew >= 100 for the total or >= 150 for the coarse test);
@@ -380,6 +391,12 @@ typedef struct {
     double O[NCELL], S2[NCELL];
 } tally_t;
 
+/* Added to the seeds of a case (the pilot's, the samples', the evaluation's). Lambertian
+ * facets are mirror-symmetric: from below with the same seeds a case repeats its twin
+ * from above bit for bit, so the cases from below take other seeds (independent data). */
+static cl_uint seed_shift = 0;
+static cl_uint seed_off = 0; /* argv[2]: added to every case's seeds (to see that the tolerances hold) */
+
 static void gof(const gof_case *gc)
 {
     const double th = gc->theta * PI / 180, wo[3] = {sin(th), 0.0, gc->side * cos(th)};
@@ -389,6 +406,9 @@ static void gof(const gof_case *gc)
     L.p[0] = (float)gc->alpha, L.p[1] = (float)gc->p1, L.p[2] = (float)gc->p2, L.p[3] = (float)gc->p3;
     cl_mem bl = fixture_mem(sizeof L, &L);
     const int analytic = gc->kind != LSQT_BSDF_MS_LAMBERTIAN;
+    /* Lambertian facets have no analytic part: even in single scattering the evaluation
+     * is the walk's (its first vertex's next-event terms, harness_ms_eval) */
+    const int walked = gc->ms || !analytic;
     const double N = (double)gc->n;
     char name[80];
     snprintf(name, sizeof name, "%s%s a=%.2g th=%g%s", gc->name, gc->ms ? "" : " single", gc->alpha, gc->theta,
@@ -400,7 +420,7 @@ static void gof(const gof_case *gc)
     memset(&g, 0, sizeof g);
     g.nh = gc->nh, g.side = gc->side;
     float *smp = malloc((gc->n > GOF_NPILOT ? gc->n : GOF_NPILOT) * 16);
-    k_sample(bl, wo, 977u, GOF_NPILOT, smp);
+    k_sample(bl, wo, 977u + seed_off + seed_shift, GOF_NPILOT, smp);
     grid_from_pilot(&g, smp, GOF_NPILOT);
     if (gc->kind == LSQT_BSDF_MS_DIELECTRIC) {
         /* Refraction's half vector is horizontal where |cos theta_i| = cos theta_o / e (e the
@@ -417,7 +437,7 @@ static void gof(const gof_case *gc)
     const int nc = g.nh * NMU * NPHI, ncc = nc / (COARSE * COARSE);
 
     /* The samples, and their skewed copy. */
-    k_sample(bl, wo, 12345u, gc->n, smp);
+    k_sample(bl, wo, 12345u + seed_off + seed_shift, gc->n, smp);
     static tally_t t[2]; /* plain, skewed */
     memset(t, 0, sizeof t);
     double sw[2] = {0, 0}, sw2[2] = {0, 0};
@@ -470,7 +490,7 @@ static void gof(const gof_case *gc)
      * evaluation's layer runs ic walks per vertex (iter_count): the analytic single
      * scattering, the same for all, is then computed once per ic walks. */
     double tot_var_e = 0;
-    if (gc->ms) {
+    if (walked) {
         const int most = 2 * nc * gc->qm * gc->qm;
         double(*d)[3] = malloc((size_t)most * sizeof *d), *wt = malloc((size_t)most * sizeof *wt);
         static int off[NCELL + 1];
@@ -492,7 +512,7 @@ static void gof(const gof_case *gc)
         cl_mem ble = fixture_mem(sizeof Le, &Le);
         ms_dirs md = ms_dirs_make(ble, (const double(*)[3])d, nn);
         float *out = malloc((size_t)ITEMS * PAD * sizeof *out);
-        k_ms_eval(ble, wo, &md, 4242u, gc->reps, out);
+        k_ms_eval(ble, wo, &md, 4242u + seed_off + seed_shift, gc->reps, out);
         static double a1[NCELL], a2[NCELL];
         memset(a1, 0, sizeof a1), memset(a2, 0, sizeof a2);
         double t1 = 0, t2 = 0;
@@ -544,12 +564,41 @@ static void gof(const gof_case *gc)
         for (int c = 0; c < nc; c++) OC[k][coarse_of(c)] += t[k].O[c], SC[k][coarse_of(c)] += t[k].S2[c];
     for (int k = 0; k < 2; k++) {
         chi[k] = gof_chi2(nc, t[k].O, t[k].S2, E, VEF, rg, NULL, &dof[k], NULL);
-        chic[k] = coarse_chi2(ncc, OC[k], SC[k], EC, QC, gc->ms ? CI : NULL, N, rg, &dofc[k], k ? NULL : &lam_c,
+        chic[k] = coarse_chi2(ncc, OC[k], SC[k], EC, QC, walked ? CI : NULL, N, rg, &dofc[k], k ? NULL : &lam_c,
                               OC[1]);
         double var_t = fmax(sw2[k] - sw[k] * sw[k] / N, 0.0) + var_et;
         z[k] = var_t > 0 ? (sw[k] - et) / sqrt(var_t) : (fabs(sw[k] - et) <= 1e-9 * N ? 0 : 1e9);
         pf[k] = chi2_p(chi[k], dof[k]), pc[k] = chi2_p(chic[k], dofc[k]), pz[k] = erfc(fabs(z[k]) / sqrt(2.0));
         pmin[k] = fmin(pf[k], fmin(pc[k], pz[k]));
+    }
+    /* Lambertian facets that transmit: the albedo of each hemisphere on its own (the sum
+     * of the exits' weights there against N x the integral of f over it), since an error
+     * that moves light between reflection and transmission (the fR : fT branch, the
+     * escape after a crossing) can leave the total nearly as it was. Variance: the
+     * sampling's (N var of w 1{h}) + the items' spread of the hemisphere's integral. */
+    double za[2][2] = {{0, 0}, {0, 0}}, ea[2] = {0, 0}, oa[2] = {0, 0};
+    const int albedo = !analytic && g.nh == 2;
+    if (albedo) {
+        double vea[2] = {0, 0};
+        for (int h = 0; h < 2; h++) {
+            double m1 = 0, m2 = 0;
+            for (int it = 0; it < ITEMS; it++) {
+                double v = 0;
+                for (int cc = h * NCOARSE / 2; cc < (h + 1) * NCOARSE / 2; cc++) v += CI[it][cc];
+                m1 += v / ITEMS, m2 += v * v / ITEMS;
+            }
+            vea[h] = N * N * fmax(m2 - m1 * m1, 0.0) / (ITEMS - 1);
+            for (int c = h * NMU * NPHI; c < (h + 1) * NMU * NPHI; c++) ea[h] += E[c];
+        }
+        for (int k = 0; k < 2; k++)
+            for (int h = 0; h < 2; h++) {
+                double o = 0, o2 = 0;
+                for (int c = h * NMU * NPHI; c < (h + 1) * NMU * NPHI; c++) o += t[k].O[c], o2 += t[k].S2[c];
+                const double var = fmax(o2 - o * o / N, 0.0) + vea[h] + 1e-12 * ea[h] * ea[h];
+                za[k][h] = var > 0 ? (o - ea[h]) / sqrt(var) : 0;
+                if (!k) oa[h] = o;
+                pmin[k] = fmin(pmin[k], erfc(fabs(za[k][h]) / sqrt(2.0)));
+            }
     }
     char tn[112];
     snprintf(tn, sizeof tn, "%s: chi2 (%d bins)", name, dof[0]);
@@ -558,6 +607,12 @@ static void gof(const gof_case *gc)
     gof_record(tn, pc[0]);
     snprintf(tn, sizeof tn, "%s: total", name);
     gof_record(tn, pz[0]);
+    for (int h = 0; albedo && h < 2; h++) {
+        snprintf(tn, sizeof tn, "%s: albedo %s", name, h ? "T" : "R");
+        gof_record(tn, erfc(fabs(za[0][h]) / sqrt(2.0)));
+        printf("%-32s albedo %s: mean w %.5f int f %.5f z=%+.2f | skewed z=%+.2f\n", name, h ? "T" : "R", oa[h] / N,
+               ea[h] / N, za[0][h], za[1][h]);
+    }
     /* The skew's expected effect, from the data: its shift of each coarse bin and of the
      * total against their sigmas (noncentralities). Where either is large the skewed copy
      * must be rejected: a total shifted by 10 sigma, or a coarse chi-square by 150 on about
@@ -930,10 +985,11 @@ int main(int argc, char **argv)
     if (argc > 1) {
         part_release = strcmp(argv[1], "release") == 0;
         part_power = strcmp(argv[1], "power") == 0;
-        if (!part_release && !part_power) {
-            fprintf(stderr, "usage: test_ms_models [release|power]\n");
+        if ((!part_release && !part_power) || argc > 3) {
+            fprintf(stderr, "usage: test_ms_models [release|power [SEED_OFFSET]]\n");
             return 2;
         }
+        if (argc == 3) seed_off = (cl_uint)strtoul(argv[2], NULL, 10);
     }
     fixture_open();
     prog = fixture_build("-cl-std=CL1.2 -DLSQT_HAS_BSDF_MS_LAMBERTIAN=1 -DLSQT_HAS_BSDF_MS_DIELECTRIC=1 "
@@ -971,6 +1027,18 @@ int main(int argc, char **argv)
                 gof(&die);
                 die.ms = 0;
                 gof(&die);
+            }
+            /* Lambertian facets that transmit, in single scattering: the exit is the walk's
+             * analog escape after its first vertex (through the facets or not), the
+             * evaluation its next-event terms, which average that escape analytically
+             * (mslambert_firstv); fT > fR so that most light crosses. From both sides.
+             * Single-vertex walks are cheap: 4 x 10^6 exits, so that a 2 % change of the
+             * lobe's shape (not only of an albedo) is seen. */
+            for (int side = 1; side >= -1; side -= 2) {
+                gof_case ls = {"Lambertian", LSQT_BSDF_MS_LAMBERTIAN, a, 0.35, 0.6, 0, 0, th, side, 2, 4 * NS, 500, 1, 2};
+                seed_shift = side < 0 ? 7919u : 0u;
+                gof(&ls);
+                seed_shift = 0;
             }
         }
     /* Lambertian facets that only reflect, fR = 1: a furnace (every weight is 1, the
