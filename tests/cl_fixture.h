@@ -146,6 +146,68 @@ static inline void fixture_harness_eval(cl_program prog, cl_mem layer, cl_mem me
     clReleaseMemObject(bd);
 }
 
+/* The direction tables a walk model's stochastic evaluation reads (lsqt_prepare for a
+ * scene of the one layer `layer`: Lambda and lgamma per direction): the first n of n_wi
+ * directions d as x[pad], y[pad], z[pad], zero padded (zero vectors add nothing), and
+ * the slice's table. Free with fixture_dirs_free. */
+typedef struct {
+    cl_mem wi, tab;
+} fixture_dirs;
+
+static inline fixture_dirs fixture_dirs_make(cl_program prog, cl_mem layer, const double (*d)[3], int n, int n_wi,
+                                             int pad)
+{
+    float *soa = calloc((size_t)3 * (size_t)pad, sizeof *soa);
+    for (int i = 0; i < n; i++)
+        for (int c = 0; c < 3; c++) soa[c * pad + i] = (float)d[i][c];
+    lsqt_dev_scene sc;
+    memset(&sc, 0, sizeof sc);
+    sc.n_layers = 1, sc.n_wi = n_wi, sc.top_nonnull = 0, sc.bottom_nonnull = 0;
+    lsqt_dev_medium med[2];
+    memset(med, 0, sizeof med);
+    med[0].eta = med[1].eta = 1;
+    cl_mem bs = fixture_mem(sizeof sc, &sc), bm = fixture_mem(sizeof med, med);
+    /* walk.cl's LSQT_SLICE_TAB(1) */
+    fixture_dirs r = {fixture_mem((size_t)3 * (size_t)pad * sizeof *soa, soa),
+                      fixture_mem((size_t)(LSQT_MEDIA_TAB_ROWS + LSQT_LAYER_TAB_ROWS) * (size_t)pad * sizeof(float), NULL)};
+    free(soa);
+    cl_kernel k = clCreateKernel(prog, "lsqt_prepare", NULL);
+    const size_t sz[] = {sizeof bs, sizeof bm, sizeof layer, sizeof r.wi, sizeof r.tab};
+    const void *val[] = {&bs, &bm, &layer, &r.wi, &r.tab};
+    fixture_args(k, 5, sz, val);
+    size_t g[2] = {(size_t)pad, 1};
+    cl_int e = clEnqueueNDRangeKernel(fixture_cx.queue, k, 2, NULL, g, NULL, 0, NULL, NULL);
+    if (e == CL_SUCCESS) e = clFinish(fixture_cx.queue);
+    CHECK(e == CL_SUCCESS, "lsqt_prepare: %d", (int)e);
+    clReleaseKernel(k);
+    clReleaseMemObject(bs);
+    clReleaseMemObject(bm);
+    return r;
+}
+
+static inline void fixture_dirs_free(fixture_dirs *d)
+{
+    clReleaseMemObject(d->wi);
+    clReleaseMemObject(d->tab);
+}
+
+/* harness_ms_eval: `items` independent means of `reps` vertex evaluations each of the walk
+ * model `layer` lit from wo, out[item * pad + k] = f(wo -> wi_k) at the directions d. */
+static inline void fixture_ms_eval(cl_program prog, cl_mem layer, const double wo[3], const fixture_dirs *d,
+                                   cl_uint seed, cl_int reps, int items, int pad, float *out)
+{
+    cl_mem bo = fixture_mem((size_t)items * (size_t)pad * sizeof(float), NULL);
+    cl_kernel k = clCreateKernel(prog, "harness_ms_eval", NULL);
+    float w[3] = {(float)wo[0], (float)wo[1], (float)wo[2]};
+    const size_t sz[] = {sizeof layer, 4, 4, 4, sizeof d->wi, sizeof d->tab, sizeof seed, sizeof reps, sizeof bo};
+    const void *val[] = {&layer, &w[0], &w[1], &w[2], &d->wi, &d->tab, &seed, &reps, &bo};
+    fixture_args(k, 9, sz, val);
+    fixture_launch(k, (size_t)items, 1); /* one work-item per group: each holds pad private sums */
+    fixture_read(bo, (size_t)items * (size_t)pad * sizeof(float), out);
+    clReleaseKernel(k);
+    clReleaseMemObject(bo);
+}
+
 /* harness_eval of the layer L (as floats, or as doubles in a program built with
  * LSQT_DOUBLE when dbl) between media of index eta, at n direction pairs wo[i] -> wi[i]:
  * f[i] (the cosine of wi included) and, where pdf is not NULL, pdf[i]. One launch a pair

@@ -72,6 +72,7 @@
  * What a section can see: it prints, per band and slice, the median relative standard
  * error of f per direction and of the means; a bias of ZA times that is caught.
  * `test_band_blocks SECTION N` adds N to every seed (to see that the tolerances hold). */
+#include "band_run.h"
 #include "family_stats.h"
 #include "ref_adding.h"
 #include "ref_conductor.h"
@@ -328,55 +329,6 @@ static double slab_f(const ad_ref *r, double deg, const double d[3], int modes)
     return ad_ref_f(r, mu0, d[2], atan2(d[1], d[0]) - PI, modes);
 }
 
-/* Parses the bands of TEXT, checks that they make one block of c->nb, and simulates them
- * in one run at the slices DEG_O and the directions dirs; fills *st (every band) and
- * returns the estimates (band after band), or NULL after a failed run. */
-static lsqt_slice_est *run_bands(const band_case *c, const char *text, int n_wi, const double (*dirs)[3],
-                                 uint64_t paths, uint64_t seed, lsqt_state *st)
-{
-    lsqt_assembly a;
-    lsqt_diag diag;
-    memset(&diag, 0, sizeof diag);
-    if (lsqt_parse_bands(text, strlen(text), "test", NULL, 0, ".", &a, &diag)) {
-        fprintf(stderr, "%s: parse failed: %s\n", c->name, diag.error);
-        exit(1);
-    }
-    CHECK(lsqt_assembly_bands(&a) == c->nb, "%s: %d bands, not %d", c->name, lsqt_assembly_bands(&a), c->nb);
-    lsqt_band_block *blocks = NULL;
-    const int n_blocks = lsqt_band_blocks(&a, LSQT_BAND_BLOCK_MAX, &blocks);
-    CHECK(n_blocks == 1 && blocks[0].nb == c->nb, "%s: %d bands in %d blocks (the first of %d): they do not share",
-          c->name, c->nb, n_blocks, n_blocks > 0 ? blocks[0].nb : 0);
-    free(blocks);
-    const size_t n = lsqt_assembly_canonical(&a, NULL, 0);
-    char *canon = malloc(n + 1);
-    lsqt_assembly_canonical(&a, canon, n + 1);
-    if (lsqt_state_init_bands(st, canon, lsqt_assembly_hash(&a), seed, NS, n_wi, lsqt_assembly_transmits(&a),
-                              lsqt_assembly_bands(&a), NULL))
-        exit(1);
-    free(canon);
-    st->use_double = 0;
-    for (int s = 0; s < NS; s++) {
-        st->theta_o[s] = DEG_O[s] * PI / 180.0;
-        float *w = st->wi + (size_t)s * (size_t)n_wi * 4;
-        for (int k = 0; k < n_wi; k++) {
-            w[4 * k] = (float)dirs[k][0], w[4 * k + 1] = (float)dirs[k][1], w[4 * k + 2] = (float)dirs[k][2];
-            w[4 * k + 3] = 0.0f;
-        }
-    }
-    st->seed += seed_offset;
-    /* a failed run (e.g. weights beyond the tallies' range) is a failed check of this stack */
-    lsqt_sim_opts o = {0, 0.0, 0, NULL, NULL, 0, 0.0, 0.0, NULL, NULL, NULL};
-    lsqt_sim_stats stats;
-    char err[1024];
-    const int rc = lsqt_simulate(&fixture_cx, &a, st, paths, &o, &stats, err, sizeof err);
-    lsqt_assembly_free(&a);
-    CHECK(rc == 0, "%s: the run failed: %s", c->name, err);
-    if (rc) return NULL;
-    CHECK(st->flags == 0, "%s: flags %u", c->name, st->flags);
-    return lsqt_estimates(st);
-}
-
-/* Median of n values (sorted in place). */
 /* Every scattered exit of a band lands in one bin of that band's histogram, in its path's
  * batch, with the same fixed-point weight as its R or T tally (the block's histogram has
  * the bands innermost: this reads each band's part back): hist + delta_T = R + T, exactly,
@@ -394,15 +346,6 @@ static int hist_mismatches(const lsqt_state *v, int s)
     return bad;
 }
 
-static double median(double *v, int n)
-{
-    for (int i = 1; i < n; i++)
-        for (int j = i; j > 0 && v[j - 1] > v[j]; j--) {
-            const double t = v[j];
-            v[j] = v[j - 1], v[j - 1] = t;
-        }
-    return n ? (n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2])) : 0.0;
-}
 
 /* "NAME band B (tau .. albedo .., ...)": band b's values, for the messages */
 static void describe(const band_case *c, int b, char *who, size_t size)
@@ -440,7 +383,7 @@ static void case_check(const band_case *c, uint64_t paths, uint64_t seed, int co
     stack_dirs(dirs, grp);
     lsqt_state st;
     const double t0 = check_now();
-    lsqt_slice_est *e = run_bands(c, text, nwi, (const double(*)[3])dirs, paths, seed, &st);
+    lsqt_slice_est *e = band_block_run(c->name, text, c->nb, NS, DEG_O, nwi, (const double(*)[3])dirs, paths, seed, &st);
     const double secs = check_now() - t0;
     if (!e) {
         lsqt_state_free(&st);
@@ -565,7 +508,7 @@ static void case_check(const band_case *c, uint64_t paths, uint64_t seed, int co
                   DEG_O[s], pool[0], pool[1], eb[s].R.err, ERR_CAP_F * scale, ERR_CAP_R * scale);
             /* what the section can see: the typical relative standard error of f, of the
              * means over azimuths and over every direction, and of R */
-            const double md = median(rel_d, nwi), ma = median(rel_a, ngrp);
+            const double md = band_median(rel_d, nwi), ma = band_median(rel_a, ngrp);
             printf("  %-44s to=%2.0f: max |z| %.2f per direction, %.2f per mean; R %.5f (ref %.5f), T %.5f (ref %.5f); "
                    "rel. s.e. %.2f %% per direction, %.2f %% per theta_i, %.2f %% all up, R %.2f %%\n",
                    who, DEG_O[s], zmax, amax, eb[s].R.mean, Rr, eb[s].T.mean, Tr, 100 * md, 100 * ma, 100 * pool[0],
@@ -657,10 +600,7 @@ int main(int argc, char **argv)
            "family 1e-3)\n",
            names[sec], n_dir, ZD, n_agg, ZA);
     fixture_open();
-    /* The GPU path runs every band alone (one band a program): nothing shares there. */
-    const char *gp = getenv("LSQT_GPU_PATH");
-    if (gp && *gp ? strcmp(gp, "0") != 0 : !fixture_cx.dev.is_cpu) {
-        printf("the GPU path walks every band alone: skipped\n");
+    if (band_blocks_absent()) {
         lsqt_context_release(&fixture_cx);
         return 77;
     }

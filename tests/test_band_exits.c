@@ -45,6 +45,7 @@
  * `test_band_exits SECTION N` adds N to every seed (to see that the tolerances hold). */
 #include <stdint.h>
 
+#include "band_run.h"
 #include "family_stats.h"
 #include "gof.h"
 
@@ -69,40 +70,6 @@ static cl_program prog;
 
 /* ------------------------------------------------------------------ the evaluation */
 
-/* The direction tables lsqt_prepare makes for a one-layer scene (as test_ms_models). */
-typedef struct {
-    cl_mem wi, tab;
-} ms_dirs;
-
-static ms_dirs ms_dirs_make(cl_mem bl, const double (*d)[3], int n)
-{
-    static float soa[3 * PAD_H];
-    memset(soa, 0, sizeof soa);
-    for (int i = 0; i < n; i++)
-        for (int c = 0; c < 3; c++) soa[c * PAD_H + i] = (float)d[i][c];
-    lsqt_dev_scene sc;
-    memset(&sc, 0, sizeof sc);
-    sc.n_layers = 1, sc.n_wi = NWI_H, sc.top_nonnull = 0, sc.bottom_nonnull = 0;
-    lsqt_dev_medium med[2];
-    memset(med, 0, sizeof med);
-    med[0].eta = med[1].eta = 1;
-    cl_mem bs = fixture_mem(sizeof sc, &sc), bm = fixture_mem(sizeof med, med);
-    ms_dirs r = {fixture_mem(sizeof soa, soa),
-                 fixture_mem((LSQT_MEDIA_TAB_ROWS + LSQT_LAYER_TAB_ROWS) * PAD_H * sizeof(float), NULL)};
-    cl_kernel k = clCreateKernel(prog, "lsqt_prepare", NULL);
-    const size_t sz[] = {sizeof bs, sizeof bm, sizeof bl, sizeof r.wi, sizeof r.tab};
-    const void *val[] = {&bs, &bm, &bl, &r.wi, &r.tab};
-    fixture_args(k, 5, sz, val);
-    size_t g[2] = {PAD_H, 1};
-    cl_int e = clEnqueueNDRangeKernel(fixture_cx.queue, k, 2, NULL, g, NULL, 0, NULL, NULL);
-    if (e == CL_SUCCESS) e = clFinish(fixture_cx.queue);
-    CHECK(e == CL_SUCCESS, "lsqt_prepare: %d", (int)e);
-    clReleaseKernel(k);
-    clReleaseMemObject(bs);
-    clReleaseMemObject(bm);
-    return r;
-}
-
 /* The histogram bin (h, i, j)'s nodes: mu at the 2-point Gauss nodes of [i, i + 1] / HMU,
  * phi at those of [j, j + 1] pi / HPHI; node n = bin * 4 + 2 * a + q (a: mu, q: phi). */
 static const double G2 = 0.57735026918962576451;
@@ -124,19 +91,10 @@ static void eval_nodes(const lsqt_dev_layer *L, double theta_o, int reps, cl_uin
             }
     }
     cl_mem bl = fixture_mem(sizeof *L, L);
-    ms_dirs md = ms_dirs_make(bl, (const double(*)[3])d, NWI_H);
-    cl_mem bo = fixture_mem((size_t)ITEMS * PAD_H * sizeof(float), NULL);
-    cl_kernel k = clCreateKernel(prog, "harness_ms_eval", NULL);
-    float w[3] = {(float)sin(theta_o), 0.0f, (float)cos(theta_o)};
-    const size_t sz[] = {sizeof bl, 4, 4, 4, sizeof md.wi, sizeof md.tab, sizeof seed, sizeof reps, sizeof bo};
-    const void *val[] = {&bl, &w[0], &w[1], &w[2], &md.wi, &md.tab, &seed, &reps, &bo};
-    fixture_args(k, 9, sz, val);
-    fixture_launch(k, ITEMS, 1);
-    fixture_read(bo, (size_t)ITEMS * PAD_H * sizeof(float), out);
-    clReleaseKernel(k);
-    clReleaseMemObject(bo);
-    clReleaseMemObject(md.wi);
-    clReleaseMemObject(md.tab);
+    fixture_dirs md = fixture_dirs_make(prog, bl, (const double(*)[3])d, NWI_H, NWI_H, PAD_H);
+    const double wo[3] = {sin(theta_o), 0.0, cos(theta_o)};
+    fixture_ms_eval(prog, bl, wo, &md, seed, reps, ITEMS, PAD_H, out);
+    fixture_dirs_free(&md);
     clReleaseMemObject(bl);
 }
 
@@ -223,43 +181,9 @@ static lsqt_slice_est *run_block(const exit_case *c, uint64_t paths, uint64_t se
 {
     char text[1024];
     case_text(c, text, sizeof text);
-    lsqt_assembly a;
-    lsqt_diag diag;
-    memset(&diag, 0, sizeof diag);
-    if (lsqt_parse_bands(text, strlen(text), "test", NULL, 0, ".", &a, &diag)) {
-        fprintf(stderr, "%s: parse failed: %s\n", c->name, diag.error);
-        exit(1);
-    }
-    CHECK(lsqt_assembly_bands(&a) == NBANDS, "%s: %d bands", c->name, lsqt_assembly_bands(&a));
-    lsqt_band_block *blocks = NULL;
-    const int n_blocks = lsqt_band_blocks(&a, LSQT_BAND_BLOCK_MAX, &blocks);
-    CHECK(n_blocks == 1 && blocks[0].nb == NBANDS, "%s: %d blocks (the first of %d bands): the bands do not share",
-          c->name, n_blocks, n_blocks > 0 ? blocks[0].nb : 0);
-    free(blocks);
-    const size_t n = lsqt_assembly_canonical(&a, NULL, 0);
-    char *canon = malloc(n + 1);
-    lsqt_assembly_canonical(&a, canon, n + 1);
     /* two directions for the point estimates (the exits are what is tested) */
-    if (lsqt_state_init_bands(st, canon, lsqt_assembly_hash(&a), seed + seed_offset, c->ns, 2,
-                              lsqt_assembly_transmits(&a), NBANDS, NULL))
-        exit(1);
-    free(canon);
-    st->use_double = 0;
-    for (int s = 0; s < c->ns; s++) {
-        st->theta_o[s] = c->deg[s] * PI / 180.0;
-        float *w = st->wi + (size_t)s * 2 * 4;
-        const float dw[8] = {0.5f, 0.0f, 0.8660254f, 0.0f, 0.5f, 0.0f, -0.8660254f, 0.0f};
-        memcpy(w, dw, sizeof dw);
-    }
-    lsqt_sim_opts o = {0, 0.0, 0, NULL, NULL, 0, 0.0, 0.0, NULL, NULL, NULL};
-    lsqt_sim_stats stats;
-    char err[1024];
-    const int rc = lsqt_simulate(&fixture_cx, &a, st, paths, &o, &stats, err, sizeof err);
-    lsqt_assembly_free(&a);
-    CHECK(rc == 0, "%s: the run failed: %s", c->name, err);
-    if (rc) return NULL;
-    CHECK(st->flags == 0, "%s: flags %u", c->name, st->flags);
-    return lsqt_estimates(st);
+    static const double dw[2][3] = {{0.5, 0.0, 0.8660254}, {0.5, 0.0, -0.8660254}};
+    return band_block_run(c->name, text, NBANDS, c->ns, c->deg, 2, dw, paths, seed, st);
 }
 
 static void case_check(const exit_case *c, uint64_t paths, uint64_t seed)
@@ -472,10 +396,7 @@ int main(int argc, char **argv)
     /* the default width, whatever the caller's environment says */
     setenv("LSQT_BAND_BLOCK", "16", 1);
     fixture_open();
-    /* The GPU path runs every band alone (one band a program): nothing shares there. */
-    const char *gp = getenv("LSQT_GPU_PATH");
-    if (gp && *gp ? strcmp(gp, "0") != 0 : !fixture_cx.dev.is_cpu) {
-        printf("the GPU path walks every band alone: skipped\n");
+    if (band_blocks_absent()) {
         lsqt_context_release(&fixture_cx);
         return 77;
     }

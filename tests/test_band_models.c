@@ -59,6 +59,7 @@
  * there. That the paths were shared: the bands make one block and every band's work
  * counters are equal (test_band_blocks). `test_band_models SECTION N` adds N to every
  * seed. */
+#include "band_run.h"
 #include "family_stats.h"
 #include "ref_adding.h"
 #include "stack_dirs.h"
@@ -134,63 +135,6 @@ static void case_text(const model_case *c, int b, char *out, size_t size)
     out[at] = '\0';
 }
 
-/* Parses TEXT, checks that its nb bands make one block, and simulates them in one run at
- * the slices DEG_O and the directions dirs; fills *st and returns the estimates (band
- * after band), or NULL after a failed run. */
-static lsqt_slice_est *run_bands(const char *who, const char *text, int nb, int n_wi, const double (*dirs)[3],
-                                 uint64_t paths, uint64_t seed, lsqt_state *st)
-{
-    lsqt_assembly a;
-    lsqt_diag diag;
-    memset(&diag, 0, sizeof diag);
-    if (lsqt_parse_bands(text, strlen(text), "test", NULL, 0, ".", &a, &diag)) {
-        fprintf(stderr, "%s: parse failed: %s\n", who, diag.error);
-        exit(1);
-    }
-    CHECK(lsqt_assembly_bands(&a) == nb, "%s: %d bands, not %d", who, lsqt_assembly_bands(&a), nb);
-    lsqt_band_block *blocks = NULL;
-    const int n_blocks = lsqt_band_blocks(&a, LSQT_BAND_BLOCK_MAX, &blocks);
-    CHECK(n_blocks == 1 && blocks[0].nb == nb, "%s: %d bands in %d blocks (the first of %d): they do not share", who,
-          nb, n_blocks, n_blocks > 0 ? blocks[0].nb : 0);
-    free(blocks);
-    const size_t n = lsqt_assembly_canonical(&a, NULL, 0);
-    char *canon = malloc(n + 1);
-    lsqt_assembly_canonical(&a, canon, n + 1);
-    if (lsqt_state_init_bands(st, canon, lsqt_assembly_hash(&a), seed, NS, n_wi, lsqt_assembly_transmits(&a),
-                              lsqt_assembly_bands(&a), NULL))
-        exit(1);
-    free(canon);
-    st->use_double = 0;
-    for (int s = 0; s < NS; s++) {
-        st->theta_o[s] = DEG_O[s] * PI / 180.0;
-        float *w = st->wi + (size_t)s * (size_t)n_wi * 4;
-        for (int k = 0; k < n_wi; k++) {
-            w[4 * k] = (float)dirs[k][0], w[4 * k + 1] = (float)dirs[k][1], w[4 * k + 2] = (float)dirs[k][2];
-            w[4 * k + 3] = 0.0f;
-        }
-    }
-    st->seed += seed_offset;
-    lsqt_sim_opts o = {0, 0.0, 0, NULL, NULL, 0, 0.0, 0.0, NULL, NULL, NULL};
-    lsqt_sim_stats stats;
-    char err[1024];
-    const int rc = lsqt_simulate(&fixture_cx, &a, st, paths, &o, &stats, err, sizeof err);
-    lsqt_assembly_free(&a);
-    CHECK(rc == 0, "%s: the run failed: %s", who, err);
-    if (rc) return NULL;
-    CHECK(st->flags == 0, "%s: flags %u", who, st->flags);
-    return lsqt_estimates(st);
-}
-
-static double median(double *v, int n)
-{
-    for (int i = 1; i < n; i++)
-        for (int j = i; j > 0 && v[j - 1] > v[j]; j--) {
-            const double t = v[j];
-            v[j] = v[j - 1], v[j - 1] = t;
-        }
-    return n ? (n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2])) : 0.0;
-}
-
 /* z of two independent estimates; 0 where both are exactly equal without errors (a
  * direction neither run reaches) */
 static double z_of(lsqt_est a, lsqt_est b)
@@ -235,7 +179,7 @@ static void case_check(const model_case *c, uint64_t paths, uint64_t seed, int c
     case_text(c, -1, text, sizeof text);
     lsqt_state st;
     double t0 = check_now();
-    lsqt_slice_est *e = run_bands(c->name, text, c->nb, nwi, (const double(*)[3])dirs, paths, seed, &st);
+    lsqt_slice_est *e = band_block_run(c->name, text, c->nb, NS, DEG_O, nwi, (const double(*)[3])dirs, paths, seed, &st);
     const double t_block = check_now() - t0;
     if (!e) {
         lsqt_state_free(&st);
@@ -261,7 +205,7 @@ static void case_check(const model_case *c, uint64_t paths, uint64_t seed, int c
         lsqt_state so;
         t0 = check_now();
         /* another seed than the block's (and than the other bands') */
-        lsqt_slice_est *o = run_bands(who, own, 1, nwi, (const double(*)[3])dirs, paths, seed + 1000 + (uint64_t)b, &so);
+        lsqt_slice_est *o = band_block_run(who, own, 1, NS, DEG_O, nwi, (const double(*)[3])dirs, paths, seed + 1000 + (uint64_t)b, &so);
         t_own += check_now() - t0;
         if (!o) {
             lsqt_state_free(&so);
@@ -331,12 +275,12 @@ static void case_check(const model_case *c, uint64_t paths, uint64_t seed, int c
         }
         CHECK(cap <= ERR_CAP, "%s: a standard error %.2f times its own run's (at most %g)", who, cap, ERR_CAP);
         char t_rel[32] = "-";
-        if (!c->opaque) snprintf(t_rel, sizeof t_rel, "%.2f %%", 100 * median(r_T, NS));
+        if (!c->opaque) snprintf(t_rel, sizeof t_rel, "%.2f %%", 100 * band_median(r_T, NS));
         printf("  %-20s max |z| %.2f per direction, %.2f per aggregate; R %.5f (own %.5f) at to=0; median rel. s.e. "
                "%.2f %% per direction, %.2f %% per theta_i, %.2f %% per side (%.2f %% inverse-variance), R %.2f %%, T %s; "
                "s.e. up to %.2f x own\n",
-               who, zd, za, eb[0].R.mean, o[0].R.mean, 100 * median(r_dir, n_d), 100 * median(r_th, n_th),
-               100 * median(r_side, n_side), 100 * median(r_iv, n_iv), 100 * median(r_R, NS), t_rel, cap);
+               who, zd, za, eb[0].R.mean, o[0].R.mean, 100 * band_median(r_dir, n_d), 100 * band_median(r_th, n_th),
+               100 * band_median(r_side, n_side), 100 * band_median(r_iv, n_iv), 100 * band_median(r_R, NS), t_rel, cap);
         lsqt_estimates_free(o, NS);
         lsqt_state_free(&so);
     }
@@ -376,10 +320,7 @@ int main(int argc, char **argv)
            "family 1e-3)\n",
            names[sec], n_dir, ZD, n_agg, ZA);
     fixture_open();
-    /* The GPU path runs every band alone (one band a program): nothing shares there. */
-    const char *gp = getenv("LSQT_GPU_PATH");
-    if (gp && *gp ? strcmp(gp, "0") != 0 : !fixture_cx.dev.is_cpu) {
-        printf("the GPU path walks every band alone: skipped\n");
+    if (band_blocks_absent()) {
         lsqt_context_release(&fixture_cx);
         return 77;
     }

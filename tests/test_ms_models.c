@@ -109,58 +109,14 @@ static void k_eval(cl_mem bl, const double wo[3], const float *dirs, size_t n, f
  * not set it: zero vectors add nothing) and the slice's direction tables from
  * lsqt_prepare for a one-layer scene. */
 #define PAD LSQT_PAD(NWI, 4)
-typedef struct {
-    cl_mem wi, tab;
-} ms_dirs;
-
-static ms_dirs ms_dirs_make(cl_mem bl, const double (*d)[3], int n)
-{
-    static float soa[3 * PAD];
-    memset(soa, 0, sizeof soa);
-    for (int i = 0; i < n; i++)
-        for (int c = 0; c < 3; c++) soa[c * PAD + i] = (float)d[i][c];
-    lsqt_dev_scene sc;
-    memset(&sc, 0, sizeof sc);
-    sc.n_layers = 1, sc.n_wi = NWI, sc.top_nonnull = 0, sc.bottom_nonnull = 0;
-    lsqt_dev_medium med[2];
-    memset(med, 0, sizeof med);
-    med[0].eta = med[1].eta = 1;
-    cl_mem bs = fixture_mem(sizeof sc, &sc), bm = fixture_mem(sizeof med, med);
-    ms_dirs r = {fixture_mem(sizeof soa, soa), fixture_mem((LSQT_MEDIA_TAB_ROWS + LSQT_LAYER_TAB_ROWS) * PAD * sizeof(float), NULL)}; /* walk.cl's LSQT_SLICE_TAB(1) */
-    cl_kernel k = clCreateKernel(prog, "lsqt_prepare", NULL);
-    const size_t sz[] = {sizeof bs, sizeof bm, sizeof bl, sizeof r.wi, sizeof r.tab};
-    const void *val[] = {&bs, &bm, &bl, &r.wi, &r.tab};
-    fixture_args(k, 5, sz, val);
-    size_t g[2] = {PAD, 1};
-    cl_int e = clEnqueueNDRangeKernel(fixture_cx.queue, k, 2, NULL, g, NULL, 0, NULL, NULL);
-    if (e == CL_SUCCESS) e = clFinish(fixture_cx.queue);
-    CHECK(e == CL_SUCCESS, "lsqt_prepare: %d", (int)e);
-    clReleaseKernel(k);
-    clReleaseMemObject(bs);
-    clReleaseMemObject(bm);
-    return r;
-}
-
-static void ms_dirs_free(ms_dirs *d)
-{
-    clReleaseMemObject(d->wi);
-    clReleaseMemObject(d->tab);
-}
+/* walk models' evaluations at PAD directions (cl_fixture.h) */
+static fixture_dirs ms_dirs_make(cl_mem bl, const double (*d)[3], int n) { return fixture_dirs_make(prog, bl, d, n, NWI, PAD); }
 
 /* harness_ms_eval: ITEMS independent means of `reps` vertex evaluations each, out[item *
  * PAD + k] = f(wo -> wi_k). */
-static void k_ms_eval(cl_mem bl, const double wo[3], const ms_dirs *d, cl_uint seed, cl_int reps, float *out)
+static void k_ms_eval(cl_mem bl, const double wo[3], const fixture_dirs *d, cl_uint seed, cl_int reps, float *out)
 {
-    cl_mem bo = fixture_mem((size_t)ITEMS * PAD * sizeof(float), NULL);
-    cl_kernel k = clCreateKernel(prog, "harness_ms_eval", NULL);
-    float w[3] = {(float)wo[0], (float)wo[1], (float)wo[2]};
-    const size_t sz[] = {sizeof bl, 4, 4, 4, sizeof d->wi, sizeof d->tab, sizeof seed, sizeof reps, sizeof bo};
-    const void *val[] = {&bl, &w[0], &w[1], &w[2], &d->wi, &d->tab, &seed, &reps, &bo};
-    fixture_args(k, 9, sz, val);
-    fixture_launch(k, ITEMS, 1); /* one work-item per group: each holds PAD private sums */
-    fixture_read(bo, (size_t)ITEMS * PAD * sizeof(float), out);
-    clReleaseKernel(k);
-    clReleaseMemObject(bo);
+    fixture_ms_eval(prog, bl, wo, d, seed, reps, ITEMS, PAD, out);
 }
 
 /* ---------------------------------------------------------------- bins */
@@ -510,7 +466,7 @@ static void gof(const gof_case *gc)
         lsqt_dev_layer Le = L;
         Le.iter_count = gc->ic;
         cl_mem ble = fixture_mem(sizeof Le, &Le);
-        ms_dirs md = ms_dirs_make(ble, (const double(*)[3])d, nn);
+        fixture_dirs md = ms_dirs_make(ble, (const double(*)[3])d, nn);
         float *out = malloc((size_t)ITEMS * PAD * sizeof *out);
         k_ms_eval(ble, wo, &md, 4242u + seed_off + seed_shift, gc->reps, out);
         static double a1[NCELL], a2[NCELL];
@@ -541,7 +497,7 @@ static void gof(const gof_case *gc)
         double unused = 0;
         for (int c = 0; c < nc; c++) MEAN_VAR(a1[c], a2[c], E[c], VE[c]);
         MEAN_VAR(t1, t2, unused, tot_var_e);
-        ms_dirs_free(&md);
+        fixture_dirs_free(&md);
         clReleaseMemObject(ble);
         free(out), free(single), free(d), free(wt);
     }
@@ -881,14 +837,14 @@ static void unit(double th_deg, double ph_deg, double z_sign, double d[3])
 /* f(wo -> wi) by harness_ms_eval with wi alone: the mean and the variance of the mean. */
 static void ms_value(cl_mem bl, const double wo[3], const double wi[3], cl_uint seed, int reps, double *m, double *v)
 {
-    ms_dirs md = ms_dirs_make(bl, (const double(*)[3])wi, 1);
+    fixture_dirs md = ms_dirs_make(bl, (const double(*)[3])wi, 1);
     static float out[ITEMS * PAD];
     k_ms_eval(bl, wo, &md, seed, reps, out);
     double s1 = 0, s2 = 0;
     for (int i = 0; i < ITEMS; i++) s1 += out[(size_t)i * PAD], s2 += (double)out[(size_t)i * PAD] * out[(size_t)i * PAD];
     *m = s1 / ITEMS;
     *v = fmax((s2 / ITEMS - *m * *m) / (ITEMS - 1), 0.0);
-    ms_dirs_free(&md);
+    fixture_dirs_free(&md);
 }
 
 #define NPAIR 20
