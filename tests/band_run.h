@@ -69,6 +69,40 @@ static inline int band_blocks_absent(void)
     return 0;
 }
 
+/* main() of a band test of two sections, quick and power, each a function that counts
+ * its checks (count_only) or runs them: `name quick|power [SEED_OFFSET]`. Sets the default
+ * block width whatever the caller's environment says, the family's thresholds from the
+ * counted checks (tests/family_stats.h), and skips on the GPU path. */
+static inline int band_sections_main(const char *name, int argc, char **argv, void (*quick)(int), void (*power)(int))
+{
+    static const char *names[] = {"quick", "power"};
+    void (*const run[])(int) = {quick, power};
+    int sec = -1;
+    for (int i = 0; argc >= 2 && i < 2; i++)
+        if (!strcmp(argv[1], names[i])) sec = i;
+    if (sec < 0 || argc > 3) {
+        fprintf(stderr, "usage: %s quick|power [SEED_OFFSET]\n", name);
+        return 2;
+    }
+    if (argc == 3) seed_offset = strtoull(argv[2], NULL, 10);
+    setenv("LSQT_BAND_BLOCK", "16", 1);
+    run[sec](1);
+    ZD = z_family(n_dir, 5e-4), ZA = z_family(n_agg, 5e-4);
+    printf("%s: %d checks of single directions, |z| <= %.2f; %d aggregates, |z| <= %.2f (Student t, 31 dof, "
+           "family 1e-3)\n",
+           names[sec], n_dir, ZD, n_agg, ZA);
+    fixture_open();
+    if (band_blocks_absent()) {
+        lsqt_context_release(&fixture_cx);
+        return 77;
+    }
+    run[sec](0);
+    lsqt_context_release(&fixture_cx);
+    char what[64];
+    snprintf(what, sizeof what, "%s %s", name, names[sec]);
+    return check_finish(what);
+}
+
 /* Median of n values (sorted in place). */
 static inline double band_median(double *v, int n)
 {

@@ -302,31 +302,6 @@ static void section_power(int count_only)
 
 int main(int argc, char **argv)
 {
-    static const char *names[] = {"quick", "power"};
-    static void (*const run[])(int) = {section_quick, section_power};
-    int sec = -1;
-    for (int i = 0; argc >= 2 && i < 2; i++)
-        if (!strcmp(argv[1], names[i])) sec = i;
-    if (sec < 0 || argc > 3) {
-        fprintf(stderr, "usage: test_band_models quick|power [SEED_OFFSET]\n");
-        return 2;
-    }
-    if (argc == 3) seed_offset = strtoull(argv[2], NULL, 10);
     (void)stack_grid; /* stack_dirs.h's reference grid: no reference here */
-    setenv("LSQT_BAND_BLOCK", "16", 1); /* the default width, whatever the caller's environment says */
-    run[sec](1);
-    ZD = z_family(n_dir, 5e-4), ZA = z_family(n_agg, 5e-4);
-    printf("%s: %d checks of single directions, |z| <= %.2f; %d aggregates, |z| <= %.2f (Student t, 31 dof, "
-           "family 1e-3)\n",
-           names[sec], n_dir, ZD, n_agg, ZA);
-    fixture_open();
-    if (band_blocks_absent()) {
-        lsqt_context_release(&fixture_cx);
-        return 77;
-    }
-    run[sec](0);
-    lsqt_context_release(&fixture_cx);
-    char what[64];
-    snprintf(what, sizeof what, "test_band_models %s", names[sec]);
-    return check_finish(what);
+    return band_sections_main("test_band_models", argc, argv, section_quick, section_power);
 }
