@@ -10,7 +10,7 @@
 #include "lsqt/state.h"
 
 /* Parses TEXT (who names it in messages), checks that its nb bands make one block, and
- * simulates them in one run (float) at the n_slices angles deg (degrees) and the n_wi
+ * simulates them in one run (and checks that they shared its paths) (float) at the n_slices angles deg (degrees) and the n_wi
  * directions dirs, seed + seed_offset; fills *st (every band) and returns the estimates
  * (band after band), or NULL after a failed run (a failed check). */
 static inline lsqt_slice_est *band_block_run(const char *who, const char *text, int nb, int n_slices,
@@ -54,7 +54,20 @@ static inline lsqt_slice_est *band_block_run(const char *who, const char *text, 
     CHECK(rc == 0, "%s: the run failed: %s", who, err);
     if (rc) return NULL;
     CHECK(st->flags == 0, "%s: flags %u", who, st->flags);
-    return lsqt_estimates(st);
+    lsqt_slice_est *e = lsqt_estimates(st);
+    /* the paths were shared: every band's work counters (events and next-event
+     * evaluations per path, counted for each band of the block) are the block's */
+    for (int b = 1; b < nb; b++)
+        for (int s = 0; s < n_slices; s++) {
+            const lsqt_slice_est *x = &e[s], *y = &e[b * n_slices + s];
+            CHECK(x->layer_events == y->layer_events && x->medium_events == y->medium_events &&
+                      x->nee_evaluations == y->nee_evaluations,
+                  "%s to=%g: band %d's work (%.6g layer, %.6g medium events, %.6g evaluations) is not band 1's "
+                  "(%.6g, %.6g, %.6g): the bands did not share their paths",
+                  who, deg[s], b + 1, y->layer_events, y->medium_events, y->nee_evaluations, x->layer_events,
+                  x->medium_events, x->nee_evaluations);
+        }
+    return e;
 }
 
 /* Whether this run takes the GPU code path, which walks every band alone (one band a

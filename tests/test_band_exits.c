@@ -196,12 +196,6 @@ static void case_check(const exit_case *c, uint64_t paths, uint64_t seed)
         lsqt_state_free(&st);
         return;
     }
-    for (int b = 1; b < NBANDS; b++)
-        for (int s = 0; s < c->ns; s++)
-            CHECK(e[s].layer_events == e[b * c->ns + s].layer_events &&
-                      e[s].medium_events == e[b * c->ns + s].medium_events,
-                  "%s to=%g: band %d's work is not band 1's: the bands did not share their paths", c->name, c->deg[s],
-                  b + 1);
     lsqt_dev_layer L;
     memset(&L, 0, sizeof L);
     L.kind = LSQT_BSDF_MS_LAMBERTIAN, L.iter_count = 1, L.multiple_scattering = 0;

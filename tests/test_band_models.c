@@ -187,16 +187,6 @@ static void case_check(const model_case *c, uint64_t paths, uint64_t seed, int c
     }
     CHECK(st.n_bands == c->nb && st.transmits == !c->opaque && st.n_wi == nwi, "%s: %d bands, transmits %d, %d directions",
           c->name, st.n_bands, st.transmits, st.n_wi);
-    for (int b = 1; b < c->nb; b++)
-        for (int s = 0; s < NS; s++) {
-            const lsqt_slice_est *x = &e[s], *y = &e[b * NS + s];
-            CHECK(x->layer_events == y->layer_events && x->medium_events == y->medium_events &&
-                      x->nee_evaluations == y->nee_evaluations,
-                  "%s to=%g: band %d's work (%.6g layer, %.6g medium events, %.6g evaluations) is not band 1's "
-                  "(%.6g, %.6g, %.6g): the bands did not share their paths",
-                  c->name, DEG_O[s], b + 1, y->layer_events, y->medium_events, y->nee_evaluations, x->layer_events,
-                  x->medium_events, x->nee_evaluations);
-        }
     double t_own = 0.0;
     for (int b = 0; b < c->nb; b++) {
         char who[64], own[1024];
