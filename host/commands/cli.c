@@ -84,6 +84,8 @@ static void help_run_flags(FILE *f)
           "  -o, --output PATH           RAW file (default FILE.raw, Layered.raw for stdin; - is stdout)\n"
           "  -H, --only-hemispherical    write OUT.R.raw and OUT.T.raw (transmission mirrored up)\n"
           "                              instead, named by replacing OUT's final .raw\n"
+          "      --no-raw                write no RAW file (the LSS, --json and lsqt-cl export\n"
+          "                              hold the results: for runs of many bands)\n"
           "  -d, --device D              OpenCL device: index, name substring, cpu or gpu\n"
           "      --list-devices          list OpenCL devices and exit\n"
           "      --double                compute in double precision (device needs fp64)\n"
@@ -151,7 +153,7 @@ void lsqt_cli_help(FILE *f)
 
 enum flag_id {
     F_PATHS, F_WO, F_WO_ANGLES, F_WI, F_WI_FILE, F_RX, F_RP, F_RESTART, F_SEED, F_THREADS, F_OUTPUT,
-    F_HEMI, F_SPREAD, F_GRID, F_RGL_GRID, F_WAVELENGTHS, F_BELOW, F_CHECKPOINT, F_SHARD, F_REFINE, F_DEVICE, F_LIST, F_DOUBLE, F_TIME, F_TARGET, F_LSS, F_JSON, F_QUIET, F_VERBOSE, F_HELP, F_VERSION, F_TOTAL, F_PLAN
+    F_HEMI, F_SPREAD, F_GRID, F_RGL_GRID, F_WAVELENGTHS, F_BELOW, F_CHECKPOINT, F_SHARD, F_REFINE, F_DEVICE, F_LIST, F_DOUBLE, F_TIME, F_TARGET, F_LSS, F_JSON, F_QUIET, F_VERBOSE, F_HELP, F_VERSION, F_TOTAL, F_PLAN, F_NO_RAW
 };
 
 static const struct flag {
@@ -175,6 +177,7 @@ static const struct flag {
     {NULL, "--grid", F_GRID, 1},             {NULL, "--rgl-grid", F_RGL_GRID, 1},
     {NULL, "--wavelengths", F_WAVELENGTHS, 1}, {NULL, "--version", F_VERSION, 0},
     {NULL, "--total-paths", F_TOTAL, 1},     {NULL, "--plan", F_PLAN, 0},
+    {NULL, "--no-raw", F_NO_RAW, 0},
 };
 
 /* --grid NO,NI,NPHI or --grid N (= N,N,4(N-1)): NO, NI in 2-1024, NPHI even in 2-2048
@@ -265,6 +268,7 @@ static int apply(const struct flag *fl, const char *name, const char *v, lsqt_cl
     case F_JSON: if (!*v) expect = "a file name"; c->json = v; break;
     case F_RESTART: c->restart = 1; break;
     case F_HEMI: c->only_hemispherical = 1; break;
+    case F_NO_RAW: c->no_raw = 1; break;
     case F_SPREAD: c->wi_spread = 1; c->sampling_given = 1; break;
     case F_RGL_GRID: both = c->grid_no && !c->grid_rgl;
         if (parse_rgl_grid(v, c)) expect = "NT,NU: NT slices in 2-1024, NU (half vectors per axis) in 2-44";

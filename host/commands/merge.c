@@ -368,7 +368,7 @@ static int write_outputs(merge_job *j, const merge_outs *o)
         const lsqt_slice_est *re = two ? side_est[b] : est;
         const int mode = !hemi ? LSQT_RAW_ALL : (i == O_RAW || i == O_RAW_B) ? LSQT_RAW_REFLECT : LSQT_RAW_TRANSMIT;
         int w = i == O_LSS    ? lsqt_lss_write(p, sum, j->err, sizeof j->err)
-                : i == O_JSON ? lsqt_report_json(p, sum, est, &ri, j->err, sizeof j->err)
+                : i == O_JSON ? lsqt_report_json(p, sum, est, &ri, NULL, j->err, sizeof j->err)
                               : lsqt_raw_write_bands(p, rs, re, mode, &skipped, j->err, sizeof j->err);
         if (w) rc = lsqt_prog_error(j->prog, 1, j->err);
     }

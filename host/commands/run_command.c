@@ -247,10 +247,7 @@ static int report_run(const lsqt_cli *c, const outputs *out, const lsqt_state *s
 static int open_device(const lsqt_cli *c, const lsqt_state *st, const outputs *out, lsqt_context *cx)
 {
     char err[LSQT_PATH_CAP + 1024];
-    int rc = 0;
-    for (int i = 0; i < OUT_COUNT && !rc; i++)
-        if (out->path[i] && lsqt_out_check(out->path[i], err, sizeof err))
-            rc = fail(1, "%s (nothing simulated)", err, "");
+    int rc = run_check_outputs(out);
     memset(cx, 0, sizeof *cx);
     if (!rc) {
         rc = lsqt_context_create(cx, c->device, err, sizeof err);
@@ -299,12 +296,10 @@ int run_command(const lsqt_cli *c)
     float *wi_dirs = NULL;
     int n_wi_dirs = 0, n_mirrored = 0;
     rc = check_directions(c, &a);
-    if (!rc && lsqt_assembly_bands(&a) > 1 && c->output && strcmp(c->output, "-") == 0)
-        rc = fail(2, "-o -: a run with bands writes one RAW per band, named from the RAW name, and stdout is one "
-                     "stream: give -o a file name%s%s", "", "");
     if (!rc) rc = read_wi_file(c, &a, &wi_dirs, &n_wi_dirs, &n_mirrored);
     outputs out;
-    if (!rc && (rc = run_plan_outputs(c, from_stdin, lsqt_assembly_transmits(&a), 0, &out, err, sizeof err)))
+    memset(&out, 0, sizeof out);
+    if (!rc && (rc = run_plan_outputs(c, from_stdin, &a, lsqt_assembly_transmits(&a), 0, &out, err, sizeof err)))
         fail(rc, "%s%s", err, "");
     if (!rc) rc = run_lock_states(&out, c->quiet) ? 1 : 0;
     lsqt_state st;
@@ -317,6 +312,7 @@ int run_command(const lsqt_cli *c)
         rc = simulate(c, &a, &st, &out);
         lsqt_state_free(&st);
     }
+    run_outputs_free(&out);
     lsqt_assembly_free(&a);
     return rc;
 }

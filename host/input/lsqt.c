@@ -1046,6 +1046,23 @@ static int same_stack(const lsqt_assembly *a0, const lsqt_assembly *ab, parser *
                 "every band");
 }
 
+/* The tables' paths move from B to A (read by the output checks); B's tables freed. */
+static void keep_tables(lsqt_bands *b, lsqt_assembly *a)
+{
+    if (a) {
+        a->tables = b->table_paths, a->n_tables = b->n_tables;
+        b->table_paths = NULL;
+    }
+    for (int i = 0; i < b->n_tables; i++)
+        lsqt_band_table_free(&b->tables[i]);
+    if (!a)
+        for (int i = 0; i < b->n_tables; i++)
+            free(b->table_paths[i]);
+    free(b->table_paths);
+    free(b->tables);
+    b->n_tables = 0, b->table_paths = NULL, b->tables = NULL;
+}
+
 int lsqt_parse_bands(const char *text, size_t len, const char *name, const double *wl, int n_wl,
                      const char *dir, lsqt_assembly *out, lsqt_diag *diag)
 {
@@ -1069,7 +1086,7 @@ int lsqt_parse_bands(const char *text, size_t len, const char *name, const doubl
     }
     if (!rc && bands.n == 1) {
         rc = lsqt_parse_band(text, len, name, &bands, 0, out, diag);
-        lsqt_bands_free(&bands);
+        keep_tables(&bands, rc ? NULL : out);
         /* one band at one wavelength keeps it (its RAW header, the JSON, the LSS) */
         if (!rc && n_wl == 1 && (out->wavelengths = malloc(sizeof *out->wavelengths)) != NULL)
             out->wavelengths[0] = wl[0];
@@ -1093,12 +1110,12 @@ int lsqt_parse_bands(const char *text, size_t len, const char *name, const doubl
             rc = same_stack(&each[0], &each[done], &P, done);
     }
     free(keep);
-    lsqt_bands_free(&bands);
     if (!rc && (!each || lsqt_assembly_join(each, bands.n, wl, out))) {
         rc = 2;
         if (diag)
             snprintf(diag->error, sizeof diag->error, "%s: error: out of memory", name ? name : "<input>");
     }
+    keep_tables(&bands, rc ? NULL : out);
     if (rc)
         for (int b = 0; b < done && b < bands.n; b++)
             lsqt_assembly_free(&each[b]);

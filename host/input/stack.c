@@ -13,6 +13,9 @@ void lsqt_assembly_free(lsqt_assembly *a)
         lsqt_assembly_free(&a->band[b]);
     free(a->band);
     free(a->wavelengths);
+    for (int i = 0; i < a->n_tables; i++)
+        free(a->tables[i]);
+    free(a->tables);
     free(a->layers);
     free(a->media);
     memset(a, 0, sizeof *a);

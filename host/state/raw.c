@@ -9,7 +9,7 @@
 #include "lsqt/util.h"
 
 int lsqt_raw_write(const char *path, const lsqt_state *st, const lsqt_slice_est *est, int mode,
-                   int *skipped, char *err, size_t errcap)
+                   int *skipped, lsqt_out_set *hold, char *err, size_t errcap)
 {
     lsqt_out af;
     *skipped = 0;
@@ -37,7 +37,7 @@ int lsqt_raw_write(const char *path, const lsqt_state *st, const lsqt_slice_est 
             fprintf(f, "%d %.9g %.9g %.9g %.9g\n", s, x, 0.0 - y, z, v); /* y = 0: "0", not "-0" */
         }
     }
-    return lsqt_out_commit(&af, err, errcap);
+    return hold ? lsqt_out_hold(&af, hold, err, errcap) : lsqt_out_commit(&af, err, errcap);
 }
 
 void lsqt_raw_hemi_name(const char *out, const char *part, char *dst, size_t cap)
@@ -50,20 +50,25 @@ void lsqt_raw_hemi_name(const char *out, const char *part, char *dst, size_t cap
 int lsqt_raw_write_bands(const char *path, const lsqt_state *st, const lsqt_slice_est *est, int mode, int *skipped,
                   char *err, size_t errcap)
 {
-    if (st->n_bands <= 1) return lsqt_raw_write(path, st, est, mode, skipped, err, errcap);
+    if (st->n_bands <= 1) return lsqt_raw_write(path, st, est, mode, skipped, NULL, err, errcap);
     if (strcmp(path, "-") == 0) {
         snprintf(err, errcap, "a run with bands writes one RAW per band, named from the RAW name, and stdout is "
                               "one stream: give -o a file name");
         return -1;
     }
+    /* every band's file, then all renamed: a failure leaves the previous files whole */
+    lsqt_out_set set = {0, 0, NULL, NULL};
     for (int b = 0; b < st->n_bands; b++) {
         char label[48], name[LSQT_PATH_CAP + 96];
         lsqt_band_path(path, lsqt_band_label(st->n_bands, st->wavelengths, b, label, sizeof label), name,
                        sizeof name);
         const lsqt_state view = lsqt_state_band(st, b);
-        if (lsqt_raw_write(name, &view, est + (size_t)b * (size_t)st->n_slices, mode, skipped, err, errcap))
+        if (lsqt_raw_write(name, &view, est + (size_t)b * (size_t)st->n_slices, mode, skipped, &set, err, errcap)) {
+            lsqt_out_set_abort(&set);
             return -1;
+        }
     }
-    return 0;
+    if (lsqt_out_set_publish(&set) == 0) return 0;
+    snprintf(err, errcap, "the RAW files named from '%s' were not all published (see above)", path);
+    return -1;
 }
-

@@ -180,7 +180,7 @@ void lsqt_json_slice_fields(FILE *f, const lsqt_state *st, const lsqt_slice_est 
 }
 
 int lsqt_report_json(const char *path, const lsqt_state *st, const lsqt_slice_est *est,
-                     const lsqt_run_info *ri, char *err, size_t errcap)
+                     const lsqt_run_info *ri, lsqt_out_set *hold, char *err, size_t errcap)
 {
     lsqt_out af;
     if (lsqt_out_open(&af, path, err, errcap)) return -1;
@@ -225,5 +225,5 @@ int lsqt_report_json(const char *path, const lsqt_state *st, const lsqt_slice_es
         lsqt_json_slice(f, st, &est[s], s, 0);
     }
     fprintf(f, "\n ]}\n");
-    return lsqt_out_commit(&af, err, errcap);
+    return hold ? lsqt_out_hold(&af, hold, err, errcap) : lsqt_out_commit(&af, err, errcap);
 }

@@ -4,6 +4,8 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -57,7 +59,9 @@ int lsqt_out_open(lsqt_out *o, const char *path, char *err, size_t errcap)
     return 0;
 }
 
-int lsqt_out_commit(lsqt_out *o, char *err, size_t errcap)
+/* Flushes, syncs and closes o; a replaced output keeps its temporary. Returns 0, or -1
+ * with err filled and the temporary removed. */
+static int out_finish(lsqt_out *o, char *err, size_t errcap)
 {
     errno = 0;
     int bad = fflush(o->f) != 0 || ferror(o->f);
@@ -78,8 +82,100 @@ int lsqt_out_commit(lsqt_out *o, char *err, size_t errcap)
         lsqt_out_error(o, strerror(saved), err, errcap);
         return -1;
     }
-    if (o->how == LSQT_OUT_IN_PLACE) return 0;
-    return lsqt_out_replace_target(o, err, errcap);
+    return 0;
+}
+
+int lsqt_out_commit(lsqt_out *o, char *err, size_t errcap)
+{
+    const int how = o->how;
+    if (out_finish(o, err, errcap)) return -1;
+    return how == LSQT_OUT_REPLACE ? lsqt_out_replace_target(o, err, errcap) : 0;
+}
+
+static char *dup_string(const char *s)
+{
+    char *d = malloc(strlen(s) + 1);
+    if (d) strcpy(d, s);
+    return d;
+}
+
+int lsqt_out_hold(lsqt_out *o, lsqt_out_set *set, char *err, size_t errcap)
+{
+    const int how = o->how;
+    if (out_finish(o, err, errcap)) return -1;
+    if (how != LSQT_OUT_REPLACE) return 0;
+    if (set->n == set->cap) {
+        int nc = set->cap ? 2 * set->cap : 16;
+        char **t = realloc(set->tmp, (size_t)nc * sizeof *t);
+        if (t) set->tmp = t;
+        char **g = t ? realloc(set->target, (size_t)nc * sizeof *g) : NULL;
+        if (g) set->target = g, set->cap = nc;
+    }
+    char *tmp = set->n < set->cap ? dup_string(o->tmp) : NULL, *target = tmp ? dup_string(o->target) : NULL;
+    if (!target) {
+        free(tmp);
+        unlink(o->tmp);
+        lsqt_out_error(o, "out of memory", err, errcap);
+        return -1;
+    }
+    set->tmp[set->n] = tmp, set->target[set->n] = target, set->n++;
+    return 0;
+}
+
+static void set_clear(lsqt_out_set *set, int unlink_temps)
+{
+    for (int i = 0; i < set->n; i++) {
+        if (unlink_temps && set->tmp[i]) unlink(set->tmp[i]);
+        free(set->tmp[i]);
+        free(set->target[i]);
+    }
+    free(set->tmp);
+    free(set->target);
+    memset(set, 0, sizeof *set);
+}
+
+int lsqt_out_set_publish(lsqt_out_set *set)
+{
+    int failed = 0;
+    for (int i = 0; i < set->n; i++) {
+        if (rename(set->tmp[i], set->target[i]) == 0) {
+            free(set->tmp[i]);
+            set->tmp[i] = NULL;
+            continue;
+        }
+        fprintf(stderr, "lsqt-cl: error: cannot write '%s': cannot rename the temporary over it: %s\n",
+                set->target[i], strerror(errno));
+        failed++;
+    }
+    /* each folder once: a run's RAW files are usually all in one */
+    char last[LSQT_PATH_CAP] = "";
+    for (int i = 0; i < set->n; i++) {
+        char dir[LSQT_PATH_CAP];
+        const char *slash = strrchr(set->target[i], '/');
+        snprintf(dir, sizeof dir, "%.*s", slash ? (int)(slash - set->target[i]) + 1 : 1,
+                 slash ? set->target[i] : ".");
+        if (strcmp(dir, last) == 0) continue;
+        snprintf(last, sizeof last, "%s", dir);
+        int dfd = open(dir, O_RDONLY | O_CLOEXEC);
+        if (dfd >= 0) {
+            (void)fsync(dfd);
+            close(dfd);
+        }
+    }
+    set_clear(set, 1);
+    return failed;
+}
+
+void lsqt_out_set_abort(lsqt_out_set *set) { set_clear(set, 1); }
+
+int lsqt_out_remove_old(const char *path)
+{
+    lsqt_out o;
+    struct stat old;
+    int exists = 0;
+    char err[64];
+    return lsqt_out_plan(&o, path, &old, &exists, err, sizeof err) == 0 && exists && o.how == LSQT_OUT_REPLACE &&
+           S_ISREG(old.st_mode) && unlink(o.target) == 0;
 }
 
 int lsqt_out_open_named(lsqt_out *o, const char *path, char *err, size_t errcap)

@@ -75,17 +75,30 @@ static int absolute_name(const char *path, char *out, size_t cap)
     return w > 0 && (size_t)w < cap ? 0 : -1;
 }
 
+char *lsqt_file_identity(const char *path)
+{
+    if (strcmp(path, "-") == 0) return strdup("-");
+    char t[LSQT_PATH_CAP], e[64], full[2 * LSQT_PATH_CAP + 8];
+    if (lsqt_resolve_links(path, t, sizeof t, e, sizeof e)) {
+        snprintf(full, sizeof full, "?%s", path); /* a link that cannot be followed: its name */
+        return strdup(full);
+    }
+    struct stat sb;
+    if (stat(t, &sb) == 0) {
+        if (!S_ISREG(sb.st_mode)) return NULL; /* a device or FIFO may take several outputs */
+        snprintf(full, sizeof full, "i%llu:%llu", (unsigned long long)sb.st_dev, (unsigned long long)sb.st_ino);
+        return strdup(full);
+    }
+    full[0] = 'p';
+    if (absolute_name(t, full + 1, sizeof full - 1)) snprintf(full, sizeof full, "?%s", t);
+    return strdup(full);
+}
+
 int lsqt_same_file(const char *a, const char *b)
 {
-    if (strcmp(a, "-") == 0 || strcmp(b, "-") == 0) return strcmp(a, b) == 0;
-    char ta[LSQT_PATH_CAP], tb[LSQT_PATH_CAP], e[64];
-    if (lsqt_resolve_links(a, ta, sizeof ta, e, sizeof e) || lsqt_resolve_links(b, tb, sizeof tb, e, sizeof e))
-        return strcmp(a, b) == 0;
-    struct stat sa, sb;
-    int ha = stat(ta, &sa) == 0, hb = stat(tb, &sb) == 0;
-    if (ha && hb) return S_ISREG(sa.st_mode) && sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
-    if (ha || hb) return 0;
-    char fa[2 * LSQT_PATH_CAP], fb[2 * LSQT_PATH_CAP];
-    if (absolute_name(ta, fa, sizeof fa) || absolute_name(tb, fb, sizeof fb)) return strcmp(ta, tb) == 0;
-    return strcmp(fa, fb) == 0;
+    char *ia = lsqt_file_identity(a), *ib = lsqt_file_identity(b);
+    int same = ia && ib && strcmp(ia, ib) == 0;
+    free(ia);
+    free(ib);
+    return same;
 }

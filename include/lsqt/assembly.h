@@ -45,6 +45,8 @@ typedef struct lsqt_assembly {
     int n_bands;
     struct lsqt_assembly *band;
     double *wavelengths;   /* n_bands nm, or NULL: unnamed bands (three are R, G, B) */
+    int n_tables;          /* the @FILE tables the text read (paths as opened), so that no */
+    char **tables;         /* output of the run lands on one */
 } lsqt_assembly;
 
 /* Diagnostics. The parser never prints: it fills this, the caller decides. */

@@ -28,6 +28,7 @@ typedef struct lsqt_cli {
     int threads;              /* -t, 0 = all */
     const char *output;       /* -o RAW path */
     int only_hemispherical;   /* -H */
+    int no_raw;               /* --no-raw: no RAW file at all */
     const char *device;       /* -d */
     int list_devices;
     int use_double;

@@ -6,6 +6,7 @@
 
 #include "lsqt/state.h"
 #include "lsqt/tally.h"
+#include "lsqt/util.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -17,13 +18,15 @@ enum lsqt_raw_mode {
     LSQT_RAW_TRANSMIT = 2  /* lower hemisphere mirrored up (z -> -z), RAWBH */
 };
 
-/* Written through lsqt_out (util.h). *skipped counts non-finite estimates left out. Returns 0 or -1. */
+/* Written through lsqt_out (util.h): committed, or with HOLD left in its temporary for
+ * lsqt_out_set_publish. *skipped counts non-finite estimates left out. Returns 0 or -1. */
 int lsqt_raw_write(const char *path, const lsqt_state *st, const lsqt_slice_est *est, int mode,
-                   int *skipped, char *err, size_t errcap);
+                   int *skipped, lsqt_out_set *hold, char *err, size_t errcap);
 
 /* lsqt_raw_write, or with bands one RAW per band, named PATH with the band's label before
  * .raw (lsqt_band_path: panel.lsqt.550nm.raw), each band's values in the one-band format
- * (est: lsqt_estimates of st, every band). stdout ("-") is refused then. Returns 0 or -1. */
+ * (est: lsqt_estimates of st, every band), all published together (a failure leaves the
+ * previous files). stdout ("-") is refused then. Returns 0 or -1. */
 int lsqt_raw_write_bands(const char *path, const lsqt_state *st, const lsqt_slice_est *est, int mode,
                          int *skipped, char *err, size_t errcap);
 

@@ -6,6 +6,7 @@
 
 #include "lsqt/state.h"
 #include "lsqt/tally.h"
+#include "lsqt/util.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -30,9 +31,10 @@ typedef struct lsqt_run_info {
 void lsqt_report_summary(FILE *f, const lsqt_state *st, const lsqt_slice_est *est,
                          const lsqt_run_info *ri);
 
-/* Returns 0 or -1 (err filled). Written through lsqt_out (util.h). */
+/* Returns 0 or -1 (err filled). Written through lsqt_out (util.h): committed, or with
+ * HOLD left for lsqt_out_set_publish. */
 int lsqt_report_json(const char *path, const lsqt_state *st, const lsqt_slice_est *est,
-                     const lsqt_run_info *ri, char *err, size_t errcap);
+                     const lsqt_run_info *ri, lsqt_out_set *hold, char *err, size_t errcap);
 
 /* JSON pieces shared by the run's and lsqt-cl info's JSON: a number (null when not
  * finite), and slice s's object (detail: non-finite count and work counters too). */

@@ -69,6 +69,26 @@ void lsqt_out_cancel_flag(volatile sig_atomic_t *flag);
  * an earlier one, removes the temporary and fails with the reason (ENOSPC, EPIPE, ...). */
 int lsqt_out_commit(lsqt_out *o, char *err, size_t errcap);
 void lsqt_out_abort(lsqt_out *o);
+/* Outputs published together (one run's RAW files, one per band, and its JSON): each is
+ * written and closed as by lsqt_out_commit but left in its temporary (lsqt_out_hold adds
+ * it to SET), and lsqt_out_set_publish renames them all at the end, so that a failure or
+ * a kill while writing them leaves the previous files, not a mix of old and new. An
+ * output written in place (a device, a FIFO, stdout) is finished by lsqt_out_hold. */
+typedef struct lsqt_out_set {
+    int n, cap;
+    char **tmp, **target; /* heap strings, n of each */
+} lsqt_out_set;
+/* Returns 0, or -1 with err filled (the temporary removed, as lsqt_out_commit). */
+int lsqt_out_hold(lsqt_out *o, lsqt_out_set *set, char *err, size_t errcap);
+/* Renames every held temporary over its target and makes the renames durable (each
+ * folder synced once). Returns the number that failed (each printed to stderr as
+ * "lsqt-cl: error: cannot write ..."); the set is empty afterwards. */
+int lsqt_out_set_publish(lsqt_out_set *set);
+/* Removes every held temporary (nothing is published); the set is empty afterwards. */
+void lsqt_out_set_abort(lsqt_out_set *set);
+/* Removes the regular file that writing PATH would replace (symlinks followed; a device,
+ * FIFO or "-" holds nothing to remove). Returns 1 when one was removed, else 0. */
+int lsqt_out_remove_old(const char *path);
 /* For a writer that opens the file itself by name (OpenImageIO): the same rules, through
  * a temporary beside PATH that ends as PATH does (so the format follows the extension).
  * Write to lsqt_out_name(o), then lsqt_out_commit_named (fsync, rename over PATH) or
@@ -86,6 +106,11 @@ int lsqt_path_type(const char *path, const char **what);
 /* Would writes to A and B land on the same regular file (or both on stdout, "-")? Devices
  * and FIFOs may be shared (two outputs to /dev/null are fine). */
 int lsqt_same_file(const char *a, const char *b);
+/* What lsqt_same_file compares, as a string (heap): equal strings name one file. An
+ * existing regular file is its device and inode, a path to be made its absolute name, and
+ * "-" stdout; NULL for an existing device, FIFO or socket (several outputs may share one)
+ * or out of memory. Sorting these finds the clashes among thousands of paths. */
+char *lsqt_file_identity(const char *path);
 
 /* A run owns the state it writes: an advisory lock (fcntl, whole file) on "STATE.lock"
  * beside the state file (symlinks followed), taken before the state is read and held to
