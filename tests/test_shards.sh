@@ -169,4 +169,18 @@ rc=$?
 [ "$rc" = 2 ] && grep -q "sbatch scancel squeue not found: this needs a SLURM cluster's client commands" z.out &&
   grep -q "the same shards run one after another on this machine, with the same result: bash .*local-shards.sh 3 z.lsqt -p 100" z.out &&
   [ ! -e z.lsqt.slurm ] && ok || bad "submit.sh without SLURM: exit $rc, $(cat z.out)"
+# SLURM's client commands with no cluster behind them: sbatch's own error is one line of
+# the message, which says that no cluster answers and gives the same local command.
+mkdir -p nocl
+for c in dirname head cat readlink; do ln -sf "$(command -v $c)" nocl/$c; done
+printf '#!/bin/sh\ncat >/dev/null\necho "sbatch: error: resolve_ctls_from_dns_srv: res_nsearch error: Unknown host" >&2\necho "sbatch: error: fetch_config: DNS SRV lookup failed" >&2\nexit 1\n' >nocl/sbatch
+printf '#!/bin/sh\nexit 0\n' >nocl/scancel
+cp nocl/scancel nocl/squeue
+chmod +x nocl/sbatch nocl/scancel nocl/squeue
+PATH="$PWD/nocl" "$(command -v bash)" "$SUB" --wait 3 z.lsqt -p 100 >z.out 2>&1
+rc=$?
+[ "$rc" = 2 ] && grep -q "no SLURM cluster answers here (sbatch --test-only: sbatch: error: resolve_ctls_from_dns_srv" z.out &&
+  ! grep -q "fetch_config" z.out &&
+  grep -q "the same shards run one after another on this machine, with the same result: bash .*local-shards.sh 3 z.lsqt -p 100" z.out &&
+  [ ! -e z.lsqt.slurm ] && ok || bad "submit.sh without a SLURM cluster: exit $rc, $(cat z.out)"
 finish test_shards

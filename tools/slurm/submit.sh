@@ -60,6 +60,14 @@ for c in "${need[@]}"; do command -v "$c" >/dev/null || missing+=("$c"); done
 [ ${#missing[@]} -eq 0 ] || die "${missing[*]} not found: this needs a SLURM cluster's client commands (Debian: \
 slurm-client, with SLURM_CONF or /etc/slurm/slurm.conf naming the cluster). Without SLURM, the same shards run \
 one after another on this machine, with the same result: $local_cmd $n $file $*"
+# The client commands without a cluster that answers them (no controller configured or
+# reachable): asked once, before anything is made. --test-only submits nothing.
+read -r -a opts <<<"${SBATCH_OPTS:-}"
+if ! probe=$(printf '#!/bin/sh\ntrue\n' | sbatch --test-only "${opts[@]}" 2>&1); then
+  die "no SLURM cluster answers here (sbatch --test-only: $(head -1 <<<"$probe")). On a cluster, run this \
+where its controller is reachable (a login node). Without SLURM, the same shards run one after another on this \
+machine, with the same result: $local_cmd $n $file $*"
+fi
 
 # Absolute paths: a job may start in another folder, on another machine with the same mounts.
 abspath() { echo "$(cd "$(dirname "$1")" && pwd -P)/$(basename "$1")"; }
@@ -93,7 +101,6 @@ export LSQT_CL
 
 logdir=$file.slurm
 mkdir -p "$logdir"
-read -r -a opts <<<"${SBATCH_OPTS:-}"
 read -r -a array_opts <<<"${SBATCH_ARRAY_OPTS:-}"
 
 # The batch script of one step, fed to sbatch on stdin. It records the step's exit status in
