@@ -153,8 +153,8 @@ static void raw_shown(const lsqt_state *st, const char *path, char *buf, size_t 
         return;
     }
     char l0[48], l1[48], braces[128];
-    lsqt_band_label(st->n_bands, st->wavelengths, 0, l0, sizeof l0);
-    lsqt_band_label(st->n_bands, st->wavelengths, st->n_bands - 1, l1, sizeof l1);
+    lsqt_band_label_one(st->n_bands, st->wavelengths, 0, l0, sizeof l0);
+    lsqt_band_label_one(st->n_bands, st->wavelengths, st->n_bands - 1, l1, sizeof l1);
     snprintf(braces, sizeof braces, "{%s,%s%s}", l0, st->n_bands > 2 ? "...," : "", l1);
     lsqt_band_path(path, braces, buf, cap);
 }
