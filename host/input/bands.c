@@ -96,6 +96,16 @@ static int parse_list(const char *list, double **out, int *n, char *err, size_t 
     return 0;
 }
 
+/* v with the fewest digits that read back as v, into buf[32]. */
+static const char *shortest(double v, char *buf)
+{
+    for (int prec = 6; prec <= 17; prec++) {
+        snprintf(buf, 32, "%.*g", prec, v);
+        if (strtod(buf, NULL) == v) break;
+    }
+    return buf;
+}
+
 int lsqt_parse_wavelengths(const char *list, double **out, int *n, char *err, size_t errcap)
 {
     *out = NULL, *n = 0;
@@ -104,9 +114,10 @@ int lsqt_parse_wavelengths(const char *list, double **out, int *n, char *err, si
     lsqt_band_names names;
     int k = 0;
     if (lsqt_band_names_init(&names, *n, *out, &k)) {
-        snprintf(err, errcap, "bands %d and %d (%.17g and %.17g nm) are too close: their file labels (the "
+        char a[32], b[32];
+        snprintf(err, errcap, "bands %d and %d (%s and %s nm) are too close: their file labels (the "
                  "wavelength with at most 9 decimals) are the same; the bands must differ by 1e-9 nm or more",
-                 k + 1, k + 2, (*out)[k], (*out)[k + 1]);
+                 k + 1, k + 2, shortest((*out)[k], a), shortest((*out)[k + 1], b));
         free(*out);
         *out = NULL, *n = 0;
         return 2;
@@ -216,6 +227,21 @@ void lsqt_bands_free(lsqt_bands *b)
     free(b->table_paths);
     free(b->tables);
     b->n_tables = 0, b->table_paths = NULL, b->tables = NULL;
+}
+
+void lsqt_band_path_shown(const char *path, int n_bands, const double *wl, char *dst, size_t cap)
+{
+    if (n_bands <= 1) {
+        snprintf(dst, cap, "%s", path);
+        return;
+    }
+    lsqt_band_names nm;
+    lsqt_band_names_init(&nm, n_bands, wl, NULL);
+    char l0[48] = "?", l1[48] = "?", braces[128];
+    lsqt_band_label(&nm, 0, l0, sizeof l0);
+    lsqt_band_label(&nm, n_bands - 1, l1, sizeof l1);
+    snprintf(braces, sizeof braces, "{%s,%s%s}", l0, n_bands > 2 ? "...," : "", l1);
+    lsqt_band_path(path, braces, dst, cap);
 }
 
 void lsqt_band_path(const char *path, const char *label, char *dst, size_t cap)

@@ -53,4 +53,9 @@ void lsqt_bands_free(lsqt_bands *b);
  * panel.lsqt.550nm.raw. */
 void lsqt_band_path(const char *path, const char *label, char *dst, size_t cap);
 
+/* What a RAW PATH of n_bands bands (wl: their wavelengths or NULL) is written as, for
+ * messages: PATH itself for one band, else its band paths in braces, first and last:
+ * panel.lsqt.{450nm,...,650nm}.raw ("{R,B}" style without "..." for two bands). */
+void lsqt_band_path_shown(const char *path, int n_bands, const double *wl, char *dst, size_t cap);
+
 #endif
