@@ -42,7 +42,12 @@ expect 2 "bands 2 and 3 (500 and 500.0000000001 nm) are too close" -- "$BIN" t.l
 nothing t.lsqt "bands too close"
 
 # ---- 2. one limit of 4096 bands, for lists too ----
-python3 -c "print('Medium\nLayer z=0 LambertianBsdf fT=0 fR=' + ','.join(['0.5'] * 4097) + '\nMedium')" > big.lsqt
+# line 3 is wrong too: a list let through gets there, before any work, instead of running
+for n in 4096 4097; do
+  python3 -c "print('Medium\nLayer z=0 LambertianBsdf fT=0 fR=' + ','.join(['0.5'] * $n) + '\nMedium nope=1')" > big$n.lsqt
+done
+expect 2 "big4096.lsqt:3: error: band 1: unknown key at 'nope=1'" -- "$BIN" big4096.lsqt $S
+mv big4097.lsqt big.lsqt
 expect 2 "big.lsqt:2: error: too many values in a list" -- "$BIN" big.lsqt $S
 expect 2 "at most 4096 comma-separated values, one per band (this list has 4097)" -- "$BIN" big.lsqt $S
 nothing big.lsqt "4097 values"
