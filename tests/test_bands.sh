@@ -97,8 +97,8 @@ expect 0 "band: one, at 550 nm" -- "$BIN" info w1.lsqt.lss
 expect 0 "format: LSS version 7" -- "$BIN" info w1.lsqt.lss
 expect 0 "" -- "$BIN" w1.lsqt $S --wavelengths 550
 expect 0 "paths: 6000 per slice" -- "$BIN" info w1.lsqt.lss
-expect 2 "holds a run made with --wavelengths 550, this one is with --wavelengths 650" -- "$BIN" w1.lsqt $S --wavelengths 650
-expect 2 "this one is without --wavelengths" -- "$BIN" w1.lsqt $S
+expect 2 "it holds one band at 550 nm, this run has one band at 650 nm (band 1: 550 nm there, 650 nm here)" -- "$BIN" w1.lsqt $S --wavelengths 650
+expect 2 "it holds one band at 550 nm, this run has one band without a wavelength" -- "$BIN" w1.lsqt $S
 
 # Shared paths: bands 0 and 2 share (band 2 does not scatter, so its phase function does
 # not matter; the extinctions differ), band 1's phase function differs from band 0's.

@@ -155,7 +155,7 @@ awk 'NR > 3 && NR % 2 == 0 { s = $1; x = $2; y = $3; z = $4; v = $5 }
 # An LSS of another assembly, or a damaged one, is an error that leaves it untouched.
 cp L.lsqt.lss keep.lss
 printf 'Medium\nLayer z=0 LambertianBsdf fR=0.5\nMedium\n' > L.lsqt
-expect 2 "use -R" -- "$BIN" L.lsqt
+expect 2 "was made for a different assembly: its layers or values differ; to keep it, give this run a state of its own (--lss OTHER.lss); -R would discard" -- "$BIN" L.lsqt
 cmp -s keep.lss L.lsqt.lss && ok || bad "LSS changed after a refused run"
 head -c 1000 keep.lss > L.lsqt.lss
 expect 2 "truncated at byte 1000" -- "$BIN" L.lsqt

@@ -212,54 +212,99 @@ static void errors(void)
               xyz[0] == -7 && xyz[1] == -7 && xyz[2] == -7, "xyz: errors");
 }
 
+/* The labels of n bands (wl: NULL or their wavelengths) equal want[]. */
+static void labels_are(int n, const double *wl, const char *const *want, const char *what)
+{
+    lsqt_band_names nm;
+    char buf[64];
+    CHECK(lsqt_band_names_init(&nm, n, wl, NULL) == 0, "%s: names", what);
+    for (int b = 0; b < n; b++) {
+        const char *s = lsqt_band_label(&nm, b, buf, sizeof buf);
+        CHECK(s == buf && strcmp(s, want[b]) == 0, "%s, band %d: '%s', want '%s'", what, b, s ? s : "(null)", want[b]);
+    }
+}
+
 static void labels(void)
 {
     char buf[64];
-    const char *rgb[] = {"R", "G", "B"};
-    for (int b = 0; b < 3; b++) {
-        const char *s = lsqt_band_label(3, NULL, b, buf, sizeof buf);
-        CHECK(s == buf && strcmp(s, rgb[b]) == 0, "3 unnamed bands, band %d: '%s'", b, s ? s : "(null)");
-    }
-    for (int b = 0; b < 5; b++) {
-        char want[4] = {(char)('0' + b), 0};
-        const char *s = lsqt_band_label(5, NULL, b, buf, sizeof buf);
-        CHECK(s && strcmp(s, want) == 0, "5 unnamed bands, band %d: '%s'", b, s ? s : "(null)");
-    }
-    const double wl[] = {550, 412.5, 400.001, 400.002, 2500, 1e6};
-    const char *want[] = {"550nm", "412.5nm", "400.001nm", "400.002nm", "2500nm", "1000000nm"};
-    for (int b = 0; b < N_OF(wl); b++) {
-        const char *s = lsqt_band_label(N_OF(wl), wl, b, buf, sizeof buf);
-        CHECK(s && strcmp(s, want[b]) == 0, "%.17g nm: '%s', want '%s'", wl[b], s ? s : "(null)", want[b]);
-    }
-    /* three named bands are named by wavelength, not R G B */
-    const char *s = lsqt_band_label(3, wl, 0, buf, sizeof buf);
-    CHECK(s && strcmp(s, "550nm") == 0, "3 named bands: '%s'", s ? s : "(null)");
+    const char *rgb[] = {"R", "G", "B"}, *five[] = {"0", "1", "2", "3", "4"};
+    labels_are(3, NULL, rgb, "3 unnamed bands");
+    labels_are(5, NULL, five, "5 unnamed bands");
+    /* unnamed: the index padded to the width of n - 1, so that ls sorts them */
+    const char *eleven[] = {"00", "01", "02", "03", "04", "05", "06", "07", "08", "09", "10"};
+    labels_are(11, NULL, eleven, "11 unnamed bands");
+    lsqt_band_names nm;
+    lsqt_band_names_init(&nm, 101, NULL, NULL);
+    CHECK(lsqt_band_label(&nm, 7, buf, sizeof buf) && strcmp(buf, "007") == 0, "101 unnamed bands, band 7: '%s'", buf);
+    /* whole wavelengths of one width stay as they were */
+    const double vis[] = {450, 550, 650};
+    const char *vis_want[] = {"450nm", "550nm", "650nm"};
+    labels_are(3, vis, vis_want, "450,550,650");
+    /* one format for all: the integer part padded, the same decimals */
+    const double wide[] = {400, 412.5, 1000, 2500};
+    const char *wide_want[] = {"0400.0nm", "0412.5nm", "1000.0nm", "2500.0nm"};
+    labels_are(4, wide, wide_want, "400,412.5,1000,2500");
+    /* the least decimals that separate every pair: 8 here (500.5 and 500.50000001) */
+    const double close[] = {500, 500.0001, 500.5, 500.50000001};
+    const char *close_want[] = {"500.00000000nm", "500.00010000nm", "500.50000000nm", "500.50000001nm"};
+    labels_are(4, close, close_want, "500,500.0001,500.5,500.50000001");
+    /* rounding to the decimals can widen the integer part: 999.96 and 1000 need 2 */
+    const double carry[] = {999.96, 1000};
+    const char *carry_want[] = {"0999.96nm", "1000.00nm"};
+    labels_are(2, carry, carry_want, "999.96,1000");
+    const double big[] = {2, 1e6};
+    const char *big_want[] = {"0000002nm", "1000000nm"};
+    labels_are(2, big, big_want, "2,1e6");
+    /* no decimals up to 9 separate them: refused, naming the first of the two */
+    const double twins[] = {400, 500, 500.0000000001};
+    int clash = -1;
+    CHECK(lsqt_band_names_init(&nm, 3, twins, &clash) == -1 && clash == 1, "500 and 500.0000000001: clash %d", clash);
+    double *w = NULL;
+    int n = 0;
+    char err[512];
+    CHECK(lsqt_parse_wavelengths("400,500,500.0000000001", &w, &n, err, sizeof err) == 2 && !w && n == 0 &&
+              strstr(err, "bands 2 and 3"), "twins refused: %s", err);
+    CHECK(lsqt_parse_wavelengths("500,500.000000001", &w, &n, err, sizeof err) == 0 && n == 2, "1e-9 apart: %s", err);
+    lsqt_band_names_init(&nm, n, w, NULL);
+    CHECK(lsqt_band_label(&nm, 1, buf, sizeof buf) && strcmp(buf, "500.000000001nm") == 0, "1e-9 apart: '%s'", buf);
+    free(w);
+    /* a range: padded to the widest */
+    CHECK(lsqt_parse_wavelengths("400:2500:10", &w, &n, err, sizeof err) == 0 && n == 211, "400:2500:10: %s", err);
+    lsqt_band_names_init(&nm, n, w, NULL);
+    CHECK(lsqt_band_label(&nm, 0, buf, sizeof buf) && strcmp(buf, "0400nm") == 0, "400:2500:10, first: '%s'", buf);
+    CHECK(lsqt_band_label(&nm, n - 1, buf, sizeof buf) && strcmp(buf, "2500nm") == 0, "400:2500:10, last: '%s'", buf);
+    CHECK(lsqt_band_label_one(n, w, 60, buf, sizeof buf) && strcmp(buf, "1000nm") == 0, "label_one: '%s'", buf);
+    free(w);
     /* not a band, no room */
-    CHECK(lsqt_band_label(3, NULL, 3, buf, sizeof buf) == NULL && lsqt_band_label(3, NULL, -1, buf, sizeof buf) == NULL,
+    lsqt_band_names_init(&nm, 3, NULL, NULL);
+    CHECK(lsqt_band_label(&nm, 3, buf, sizeof buf) == NULL && lsqt_band_label(&nm, -1, buf, sizeof buf) == NULL &&
+              lsqt_band_label(&nm, 0, NULL, 8) == NULL && lsqt_band_label(NULL, 0, buf, sizeof buf) == NULL,
           "band out of range");
-    CHECK(lsqt_band_label(1, wl, 0, buf, 5) == NULL && lsqt_band_label(1, wl, 0, buf, 6) == buf &&
-              lsqt_band_label(11, NULL, 10, buf, 2) == NULL && lsqt_band_label(3, NULL, 0, NULL, 8) == NULL,
-          "cap: '550nm' needs 6 bytes");
-    /* every band of 0.001 nm steps, as --wavelengths makes them (start + i step), distinct:
-     * the labels increase with the wavelength, so adjacent ones differing is enough */
-    const char *lists[] = {"400:404:0.001", "999996:1000000:0.001"};
+    lsqt_band_names_init(&nm, 3, vis, NULL);
+    CHECK(lsqt_band_label(&nm, 0, buf, 5) == NULL && lsqt_band_label(&nm, 0, buf, 6) == buf,
+          "cap: '450nm' needs 6 bytes");
+    lsqt_band_names_init(&nm, 11, NULL, NULL);
+    CHECK(lsqt_band_label(&nm, 10, buf, 2) == NULL && lsqt_band_label(&nm, 10, buf, 3) == buf, "cap: '10' needs 3");
+    /* every band of 0.001 nm steps, as --wavelengths makes them (start + i step): each
+     * label sorts after the one before (so distinct, and ls lists them in order) */
+    const char *lists[] = {"400:404:0.001", "999996:1000000:0.001", "1:4096:1"};
+    const int counts[] = {4001, 4001, 4096};
     for (int i = 0; i < N_OF(lists); i++) {
-        double *w;
-        int n;
-        char err[256], prev[64] = "";
-        CHECK(lsqt_parse_wavelengths(lists[i], &w, &n, err, sizeof err) == 0 && n == 4001, "%s: %s", lists[i], err);
-        int same = 0;
+        char prev[64] = "";
+        CHECK(lsqt_parse_wavelengths(lists[i], &w, &n, err, sizeof err) == 0 && n == counts[i], "%s: %s", lists[i], err);
+        lsqt_band_names_init(&nm, n, w, NULL);
+        int order = 0;
         for (int b = 0; b < n; b++) {
-            if (!lsqt_band_label(n, w, b, buf, sizeof buf) || strcmp(buf, prev) == 0) same++;
+            if (!lsqt_band_label(&nm, b, buf, sizeof buf) || (b && strcmp(buf, prev) <= 0)) order++;
             strcpy(prev, buf);
         }
-        CHECK(same == 0, "%s: %d labels repeat the one before", lists[i], same);
+        CHECK(order == 0, "%s: %d labels do not sort after the one before", lists[i], order);
         free(w);
     }
     /* a caller's comma locale does not reach the file name, where such a locale exists */
     if (setlocale(LC_NUMERIC, "de_DE.UTF-8") || setlocale(LC_NUMERIC, "fr_FR.UTF-8")) {
-        s = lsqt_band_label(2, wl, 1, buf, sizeof buf);
-        CHECK(s && strcmp(s, "412.5nm") == 0, "under a comma locale: '%s'", s ? s : "(null)");
+        const char *wide_c[] = {"0400.0nm", "0412.5nm", "1000.0nm", "2500.0nm"};
+        labels_are(4, wide, wide_c, "under a comma locale");
         setlocale(LC_NUMERIC, "C");
     } else {
         printf("no comma locale here: the locale check did not run\n");

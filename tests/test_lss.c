@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include "check.h"
+#include "lsqt/bands.h"
 #include "lsqt/lss.h"
 #include "lsqt/util.h"
 
@@ -330,6 +331,37 @@ int main(void)
         CHECK(lsqt_lss_read(path, &b, err, sizeof err) != 0 && strstr(err, "corrupt LSS header"),
               "an RGL grid of 8 directions holding 16 accepted: '%s'", err);
         lsqt_state_free(&g);
+    }
+
+    /* The band limit: a state of LSQT_MAX_BANDS bands (one slice of one direction, the
+     * tallies zero but one in the first and one in the last band) round-trips, and the
+     * writer refuses one band more (the reader would), writing nothing. */
+    {
+        static double wl[LSQT_MAX_BANDS + 1];
+        for (int k = 0; k <= LSQT_MAX_BANDS; k++) wl[k] = 400 + 0.5 * k;
+        for (int extra = 0; extra <= 1; extra++) {
+            const int nb = LSQT_MAX_BANDS + extra;
+            char far[80];
+            snprintf(far, sizeof far, "%s/limit%d.lss", dir, nb);
+            lsqt_state m;
+            CHECK(lsqt_state_init_bands(&m, "# limit\nMedium eta=1\n", 9, 3, 1, 1, 0, nb, wl) == 0, "init %d", nb);
+            m.wi[2] = 1.0f;
+            const size_t per = lsqt_state_nee_count(&m) / (size_t)nb;
+            m.nee[0].lo = 5, m.nee[(size_t)(nb - 1) * per].lo = 7;
+            const int wrc = lsqt_lss_write(far, &m, err, sizeof err);
+            if (extra) {
+                CHECK(wrc != 0 && strstr(err, "4097 bands") && strstr(err, "at most 4096 bands") && access(far, F_OK) != 0,
+                      "4097 bands written: '%s'", err);
+            } else {
+                const int rc = wrc ? -1 : lsqt_lss_read(far, &b, err, sizeof err);
+                CHECK(rc == 0 && b.n_bands == nb && b.wavelengths && b.wavelengths[nb - 1] == wl[nb - 1] &&
+                          b.nee[0].lo == 5 && b.nee[(size_t)(nb - 1) * per].lo == 7 && b.nee[per].lo == 0,
+                      "%d bands do not round-trip: %s", nb, rc ? err : "values");
+                if (rc == 0) lsqt_state_free(&b);
+                unlink(far);
+            }
+            lsqt_state_free(&m);
+        }
     }
 
     /* Bands (version 7): every band's tallies and the wavelengths round-trip; bands without

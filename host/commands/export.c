@@ -243,7 +243,9 @@ static int put_values(ncw *w, const lsqt_state *st, const lsqt_slice_est *est, c
     for (int k = 0; k < g->no; k++) ax[k] = (double)k / (g->no - 1);
     if (w->status == NC_NOERR) nc_check(w, nc_put_var_double(w->id, v->v_co, ax), "cos_theta_o values");
     if (nb > 1) {
-        for (size_t b = 0; b < nb; b++) labels[b] = lsqt_band_label(g->nb, st->wavelengths, (int)b, lab[b], sizeof lab[b]);
+        lsqt_band_names names;
+        lsqt_band_names_init(&names, g->nb, st->wavelengths, NULL);
+        for (size_t b = 0; b < nb; b++) labels[b] = lsqt_band_label(&names, (int)b, lab[b], sizeof lab[b]);
         if (w->status == NC_NOERR) nc_check(w, nc_put_var_string(w->id, v->v_ch, labels), "channel values");
     }
     if (v->v_wl >= 0 && w->status == NC_NOERR)
@@ -489,8 +491,8 @@ static int export_nc(const char *prog, const char *input, const char *out, const
         char chan[80] = "";
         if (g.nb > 1) {
             char l0[32], l1[32];
-            snprintf(chan, sizeof chan, "channel %d: %s to %s, ", g.nb, lsqt_band_label(g.nb, st->wavelengths, 0, l0, sizeof l0),
-                     lsqt_band_label(g.nb, st->wavelengths, g.nb - 1, l1, sizeof l1));
+            snprintf(chan, sizeof chan, "channel %d: %s to %s, ", g.nb, lsqt_band_label_one(g.nb, st->wavelengths, 0, l0, sizeof l0),
+                     lsqt_band_label_one(g.nb, st->wavelengths, g.nb - 1, l1, sizeof l1));
         }
         printf("wrote %s: brdf%s over (%scos_theta_i %d, phi_d %d, cos_theta_o %d)%s, %llu paths per slice\n", out,
                st->transmits ? " and btdf" : "", chan, g.ni, g.nphi, g.no, g.below ? " from above and from below" : "",

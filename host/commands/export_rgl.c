@@ -250,9 +250,11 @@ int lsqt_rgl_write(const char *path, const lsqt_state *st, const lsqt_slice_est 
     if (nb > 1) { /* what the colour came from, and stderr's bands */
         at += (size_t)snprintf(desc + at, dcap - at, "%s from %d bands (stderr per band):",
                                spectral ? "spectra" : "rgb", nb);
+        lsqt_band_names names;
+        lsqt_band_names_init(&names, nb, st->wavelengths, NULL);
         for (int b = 0; b < nb; b++) {
             char lab[32];
-            at += (size_t)snprintf(desc + at, dcap - at, " %s", lsqt_band_label(nb, st->wavelengths, b, lab, sizeof lab));
+            at += (size_t)snprintf(desc + at, dcap - at, " %s", lsqt_band_label(&names, b, lab, sizeof lab));
         }
         at += (size_t)snprintf(desc + at, dcap - at, "; ");
     }

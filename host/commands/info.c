@@ -206,6 +206,8 @@ static void print_text(FILE *f, const char *path, const lsqt_state *st, const ls
         fputs("\n", f);
         p += n + (nl ? 1 : 0);
     }
+    lsqt_band_names names;
+    lsqt_band_names_init(&names, nb, st->wavelengths, NULL);
     for (int s = 0; s < st->n_slices; s++) {
         const lsqt_slice_est *e = &est[s];
         char b[32];
@@ -216,7 +218,7 @@ static void print_text(FILE *f, const char *path, const lsqt_state *st, const ls
         for (int k = 0; k < nb; k++) { /* band k's estimates of slice s: est[k * n_slices + s] */
             const lsqt_slice_est *x = e + (size_t)k * (size_t)st->n_slices;
             char lab[48];
-            if (nb > 1) fprintf(f, "  band %s\n", lsqt_band_label(nb, st->wavelengths, k, lab, sizeof lab));
+            if (nb > 1) fprintf(f, "  band %s\n", lsqt_band_label(&names, k, lab, sizeof lab));
             const char *ind = nb > 1 ? "  " : "";
             fprintf(f, "%s  R       %s +- %s\n", ind, exact(x->R.mean, b), err_str(x->R.err, u));
             fprintf(f, "%s  T       %s +- %s\n", ind, exact(x->T.mean, b), err_str(x->T.err, u));

@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "lsqt/bands.h"
 #include "lsqt/below.h"
 #include "lsqt/lss.h"
 #include "lsqt/raw.h"
@@ -394,8 +395,13 @@ static void say_merged(const merge_job *j, const merge_outs *o)
         snprintf(owed, sizeof owed, " (the run owes %llu more)", (unsigned long long)(sum->span_end - h));
     fprintf(info, "merged %d file%s: %llu paths per slice%s; wrote %s", n_in, n_in > 1 ? "s" : "",
             (unsigned long long)sum->paths, owed, g->out_lss);
-    for (int i = 1; i < O_N; i++)
-        if (o->path[i] && strcmp(o->path[i], "-") != 0) fprintf(info, ", %s", o->path[i]);
+    for (int i = 1; i < O_N; i++) {
+        if (!o->path[i] || strcmp(o->path[i], "-") == 0) continue;
+        char shown[LSQT_PATH_CAP + 160];
+        if (i == O_JSON) snprintf(shown, sizeof shown, "%s", o->path[i]);
+        else lsqt_band_path_shown(o->path[i], sum->n_bands, sum->wavelengths, shown, sizeof shown); /* one a band */
+        fprintf(info, ", %s", shown);
+    }
     fprintf(info, "\n");
 }
 

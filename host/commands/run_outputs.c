@@ -51,7 +51,7 @@ static int band_base(const char *raw, int n_bands, const double *wl, char *err, 
     int t = strcmp(raw, "-") == 0 ? LSQT_PATH_SPECIAL : lsqt_path_type(raw, &what);
     if (n_bands <= 1 || (t != LSQT_PATH_SPECIAL && t != LSQT_PATH_DIRECTORY)) return 0;
     char example[LSQT_PATH_CAP + 64], label[48];
-    lsqt_band_path(strcmp(raw, "-") == 0 ? "OUT" : raw, lsqt_band_label(n_bands, wl, 0, label, sizeof label), example,
+    lsqt_band_path(strcmp(raw, "-") == 0 ? "OUT" : raw, lsqt_band_label_one(n_bands, wl, 0, label, sizeof label), example,
                    sizeof example);
     snprintf(err, errcap, "a run with %d bands writes one RAW per band, named from the RAW name (%s, ...), and '%s' is "
              "%s%s: give -o a file name, or --no-raw to write no RAW (the LSS, --json and lsqt-cl export hold "
@@ -129,12 +129,14 @@ static int expand_files(outputs *o)
         if (o->path[i]) n += is_raw(i) ? (size_t)o->n_bands : 1;
     o->files = calloc(n ? n : 1, sizeof *o->files);
     if (!o->files) return 1;
+    lsqt_band_names names; /* --wavelengths has refused bands it cannot name apart */
+    (void)lsqt_band_names_init(&names, o->n_bands, o->wl, NULL);
     for (int j = 0; j < OUT_COUNT; j++) {
         const int k = order[j];
         const int nb = is_raw(k) ? o->n_bands : 1;
         for (int b = 0; o->path[k] && b < nb; b++) {
             char label[48], name[LSQT_PATH_CAP + 96];
-            if (nb > 1) lsqt_band_path(o->path[k], lsqt_band_label(nb, o->wl, b, label, sizeof label), name, sizeof name);
+            if (nb > 1) lsqt_band_path(o->path[k], lsqt_band_label(&names, b, label, sizeof label), name, sizeof name);
             else snprintf(name, sizeof name, "%s", o->path[k]);
             out_file *f = &o->files[o->n_files];
             if (!(f->path = malloc(strlen(name) + 1))) return 1;
@@ -266,20 +268,6 @@ int run_lock_states(const outputs *o, int quiet)
     return 0;
 }
 
-/* "X.raw" or, with bands, "X.{450nm,...,650nm}.raw" */
-static void raw_shown(int n_bands, const double *wl, const char *path, char *buf, size_t cap)
-{
-    if (n_bands <= 1) {
-        snprintf(buf, cap, "%s", path);
-        return;
-    }
-    char l0[48], l1[48], braces[128];
-    lsqt_band_label(n_bands, wl, 0, l0, sizeof l0);
-    lsqt_band_label(n_bands, wl, n_bands - 1, l1, sizeof l1);
-    snprintf(braces, sizeof braces, "{%s,%s%s}", l0, n_bands > 2 ? "...," : "", l1);
-    lsqt_band_path(path, braces, buf, cap);
-}
-
 /* A growing line of names ("a, b, c"), for the messages that list files. */
 typedef struct name_list {
     char *s;
@@ -365,7 +353,7 @@ int run_write_outputs(const outputs *o, const lsqt_cli *c, const lsqt_state *st,
             }
         if (!n || strcmp(o->path[k], "-") == 0) continue;
         char shown[LSQT_PATH_CAP + 200];
-        if (ok == n) raw_shown(is_raw(k) ? o->n_bands : 1, o->wl, o->path[k], shown, sizeof shown);
+        if (ok == n) lsqt_band_path_shown(o->path[k], is_raw(k) ? o->n_bands : 1, o->wl, shown, sizeof shown);
         else if (ok) snprintf(shown, sizeof shown, "%d of the %d band files of %s", ok, n, o->path[k]);
         if (ok) list_add(&wrote, shown);
     }

@@ -170,6 +170,41 @@ static int check_continuation(const lsqt_cli *c, const lsqt_state *st, const cha
     return 0;
 }
 
+/* n bands (wl: their wavelengths or NULL) in words: "3 bands at 450 to 650 nm". */
+static void bands_words(int n, const double *wl, char *buf, size_t cap)
+{
+    if (wl && n > 1) snprintf(buf, cap, "%d bands at %.10g to %.10g nm", n, wl[0], wl[n - 1]);
+    else if (wl) snprintf(buf, cap, "one band at %.10g nm", wl[0]);
+    else if (n > 1) snprintf(buf, cap, "%d bands without wavelengths (lists)", n);
+    else snprintf(buf, cap, "one band without a wavelength");
+}
+
+/* How the LSS's bands differ from the run's, into buf ("" when they agree), and what to
+ * do: a state of its own, or -R, which discards the LSS's. */
+static void bands_differ(const lsqt_state *st, const lsqt_assembly *a, const char *lss_path, char *buf, size_t cap)
+{
+    const int nb = lsqt_assembly_bands(a);
+    char was[128], now[128], first[160] = "";
+    bands_words(st->n_bands, st->wavelengths, was, sizeof was);
+    bands_words(nb, a->wavelengths, now, sizeof now);
+    int same = st->n_bands == nb && (st->wavelengths != NULL) == (a->wavelengths != NULL);
+    if (st->wavelengths && a->wavelengths) { /* the first band whose wavelength differs */
+        const int n = st->n_bands < nb ? st->n_bands : nb;
+        for (int b = 0; b < n; b++)
+            if (st->wavelengths[b] != a->wavelengths[b]) {
+                snprintf(first, sizeof first, " (band %d: %.10g nm there, %.10g nm here)", b + 1, st->wavelengths[b],
+                         a->wavelengths[b]);
+                same = 0;
+                break;
+            }
+    }
+    int at = same ? snprintf(buf, cap, ": its layers or values differ")
+                  : snprintf(buf, cap, ": it holds %s, this run has %s%s", was, now, first);
+    if (at < 0 || (size_t)at >= cap) return;
+    snprintf(buf + at, cap - (size_t)at, "; to keep it, give this run a state of its own (--lss OTHER.lss); -R "
+             "would discard the state of %s in '%s' and start over", was, lss_path);
+}
+
 /* The LSS at lss_path, read and checked: it must be whole, of this assembly, and agree
  * with the flags. Returns 0, or an exit status (printed; st freed). */
 static int continue_lss(lsqt_state *st, const lsqt_cli *c, const lsqt_assembly *a, const char *canonical,
@@ -180,20 +215,16 @@ static int continue_lss(lsqt_state *st, const lsqt_cli *c, const lsqt_assembly *
     if (lsqt_lss_read(lss_path, st, err, sizeof err)) {
         rc = fail(2, "%s (use -R to start over and replace it)%s", err, "");
     } else if (st->hash != lsqt_assembly_hash(a) || strcmp(st->canonical, canonical) != 0) {
+        bands_differ(st, a, lss_path, err, sizeof err);
         lsqt_state_free(st);
-        rc = fail(2, "'%s' was made for a different assembly; use -R to start over and replace it%s",
-                  lss_path, "");
+        rc = fail(2, "'%s' was made for a different assembly%s", lss_path, err);
     } else if ((st->wavelengths != NULL) != (a->wavelengths != NULL) ||
                (st->wavelengths && st->n_bands == lsqt_assembly_bands(a) &&
                 memcmp(st->wavelengths, a->wavelengths, (size_t)st->n_bands * sizeof *st->wavelengths))) {
         /* one band's wavelength is not in the assembly's text (bands' are) */
-        char was[64] = "without --wavelengths", now[64] = "without --wavelengths";
-        if (st->wavelengths) snprintf(was, sizeof was, "with --wavelengths %g", st->wavelengths[0]);
-        if (a->wavelengths) snprintf(now, sizeof now, "with --wavelengths %g", a->wavelengths[0]);
+        bands_differ(st, a, lss_path, err, sizeof err);
         lsqt_state_free(st);
-        snprintf(err, sizeof err, "'%s' holds a run made %s, this one is %s; use -R to start over and replace it",
-                 lss_path, was, now);
-        rc = fail(2, "%s%s", err, "");
+        rc = fail(2, "'%s' was made for other wavelengths%s", lss_path, err);
     } else if (st->stage == LSQT_STAGE_PILOT && lsqt_state_contiguous(st) == UINT64_MAX) {
         lsqt_state_free(st);
         rc = fail(2, "'%s' is one shard of an RRSS pilot: merge all of the pilot's shards first "

@@ -1,6 +1,7 @@
 /* Wavelength lists and spectral tables (lsqt/bands.h). */
 #include "lsqt/bands.h"
 #include "lsqt/cli.h"
+#include "lsqt/colour.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -25,16 +26,28 @@ static int range(const char *list, double **out, int *n, char *err, size_t errca
     double a, b, s;
     if (!c2 || strchr(c2 + 1, ':') || number(list, (size_t)(c1 - list), &a) ||
         number(c1 + 1, (size_t)(c2 - c1 - 1), &b) || number(c2 + 1, strlen(c2 + 1), &s)) {
-        snprintf(err, errcap, "--wavelengths '%s': expected START:STOP:STEP, three numbers in nm", list);
+        snprintf(err, errcap, "'%s': expected START:STOP:STEP, three numbers in nm", list);
         return 2;
     }
     if (!(s > 0) || !(b >= a) || !(a > 0) || b > WL_MAX) {
-        snprintf(err, errcap, "--wavelengths '%s': expected 0 < START <= STOP <= %g and STEP > 0", list, WL_MAX);
+        snprintf(err, errcap, "'%s': expected 0 < START <= STOP <= %g and STEP > 0", list, WL_MAX);
         return 2;
     }
     double k = (b - a) / s, whole = floor(k + 1e-9);
+    if (k - whole > 1e-9) { /* both ends are included: STEP must divide STOP - START */
+        const double up = whole + 1;
+        char alt[160];
+        if (whole >= 1)
+            snprintf(alt, sizeof alt, "a STEP of %.10g or %.10g, or STOP %.10g or %.10g", (b - a) / whole,
+                     (b - a) / up, a + whole * s, a + up * s);
+        else
+            snprintf(alt, sizeof alt, "a STEP of %.10g, or STOP %.10g", (b - a) / up, a + up * s);
+        snprintf(err, errcap, "'%s': STEP %g does not divide STOP - START (%g; both ends are included): use %s",
+                 list, s, b - a, alt);
+        return 2;
+    }
     if (whole + 1 > LSQT_MAX_BANDS) {
-        snprintf(err, errcap, "--wavelengths '%s': %.0f bands, at most %d", list, whole + 1, LSQT_MAX_BANDS);
+        snprintf(err, errcap, "'%s': %.0f bands, at most %d", list, whole + 1, LSQT_MAX_BANDS);
         return 2;
     }
     *n = (int)whole + 1;
@@ -48,14 +61,12 @@ static int range(const char *list, double **out, int *n, char *err, size_t errca
     return 0;
 }
 
-int lsqt_parse_wavelengths(const char *list, double **out, int *n, char *err, size_t errcap)
+static int parse_list(const char *list, double **out, int *n, char *err, size_t errcap)
 {
-    *out = NULL, *n = 0;
-    if (strchr(list, ':')) return range(list, out, n, err, errcap);
     int cap = 1;
     for (const char *p = list; *p; p++) cap += *p == ',';
     if (cap > LSQT_MAX_BANDS) {
-        snprintf(err, errcap, "--wavelengths: %d bands, at most %d", cap, LSQT_MAX_BANDS);
+        snprintf(err, errcap, "%d bands, at most %d", cap, LSQT_MAX_BANDS);
         return 2;
     }
     double *w = malloc((size_t)cap * sizeof *w);
@@ -68,13 +79,13 @@ int lsqt_parse_wavelengths(const char *list, double **out, int *n, char *err, si
         const char *e = strchr(p, ',');
         size_t len = e ? (size_t)(e - p) : strlen(p);
         if (number(p, len, &w[i]) || !(w[i] > 0) || w[i] > WL_MAX) {
-            snprintf(err, errcap, "--wavelengths: bad wavelength '%.*s' (band %d): expected a number of nm in (0, %g]",
+            snprintf(err, errcap, "bad wavelength '%.*s' (band %d): expected a number of nm in (0, %g]",
                      (int)(len > 40 ? 40 : len), p, i + 1, WL_MAX);
             free(w);
             return 2;
         }
         if (i > 0 && !(w[i] > w[i - 1])) {
-            snprintf(err, errcap, "--wavelengths: '%.*s' (band %d) is not above the band before it (%g): the "
+            snprintf(err, errcap, "'%.*s' (band %d) is not above the band before it (%g): the "
                      "wavelengths must increase", (int)(len > 40 ? 40 : len), p, i + 1, w[i - 1]);
             free(w);
             return 2;
@@ -82,6 +93,35 @@ int lsqt_parse_wavelengths(const char *list, double **out, int *n, char *err, si
         p = e ? e + 1 : p + len;
     }
     *out = w, *n = cap;
+    return 0;
+}
+
+/* v with the fewest digits that read back as v, into buf[32]. */
+static const char *shortest(double v, char *buf)
+{
+    for (int prec = 6; prec <= 17; prec++) {
+        snprintf(buf, 32, "%.*g", prec, v);
+        if (strtod(buf, NULL) == v) break;
+    }
+    return buf;
+}
+
+int lsqt_parse_wavelengths(const char *list, double **out, int *n, char *err, size_t errcap)
+{
+    *out = NULL, *n = 0;
+    if (strchr(list, ':') ? range(list, out, n, err, errcap) : parse_list(list, out, n, err, errcap)) return 2;
+    /* every band needs a file label of its own (lsqt_band_names) */
+    lsqt_band_names names;
+    int k = 0;
+    if (lsqt_band_names_init(&names, *n, *out, &k)) {
+        char a[32], b[32];
+        snprintf(err, errcap, "bands %d and %d (%s and %s nm) are too close: their file labels (the "
+                 "wavelength with at most 9 decimals) are the same; the bands must differ by 1e-9 nm or more",
+                 k + 1, k + 2, shortest((*out)[k], a), shortest((*out)[k + 1], b));
+        free(*out);
+        *out = NULL, *n = 0;
+        return 2;
+    }
     return 0;
 }
 
@@ -109,6 +149,13 @@ int lsqt_band_table_parse(const char *text, size_t len, const char *name, lsqt_b
     while (p < end) {
         const char *nl = memchr(p, '\n', (size_t)(end - p)), *le = nl ? nl : end, *hash = memchr(p, '#', (size_t)(le - p));
         line++;
+        const char *nul = memchr(p, '\0', (size_t)(le - p));
+        if (nul) { /* it would end the number it is in unseen */
+            snprintf(err, errcap, "%s:%d: a NUL byte (column %d): a table is text, rows of a wavelength in nm and its "
+                     "value", name, line, (int)(nul - p) + 1);
+            lsqt_band_table_free(t);
+            return 2;
+        }
         const char *f[3];
         size_t fn[3];
         int k = fields(p, hash ? hash : le, f, fn);
@@ -180,6 +227,21 @@ void lsqt_bands_free(lsqt_bands *b)
     free(b->table_paths);
     free(b->tables);
     b->n_tables = 0, b->table_paths = NULL, b->tables = NULL;
+}
+
+void lsqt_band_path_shown(const char *path, int n_bands, const double *wl, char *dst, size_t cap)
+{
+    if (n_bands <= 1) {
+        snprintf(dst, cap, "%s", path);
+        return;
+    }
+    lsqt_band_names nm;
+    lsqt_band_names_init(&nm, n_bands, wl, NULL);
+    char l0[48] = "?", l1[48] = "?", braces[128];
+    lsqt_band_label(&nm, 0, l0, sizeof l0);
+    lsqt_band_label(&nm, n_bands - 1, l1, sizeof l1);
+    snprintf(braces, sizeof braces, "{%s,%s%s}", l0, n_bands > 2 ? "...," : "", l1);
+    lsqt_band_path(path, braces, dst, cap);
 }
 
 void lsqt_band_path(const char *path, const char *label, char *dst, size_t cap)

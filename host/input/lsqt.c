@@ -145,6 +145,7 @@ typedef struct parser {
     const char *name;
     lsqt_diag *diag;
     int line;
+    const char *line_end; /* the end of the line being read (before any comment) */
     medium_rec *media;
     int n_media, cap_media;
     lsqt_layer *layers;
@@ -481,6 +482,8 @@ static const lsqt_band_table *band_table(parser *P, span tok, span file)
 {
     lsqt_bands *b = P->bands;
     char path[LSQT_PATH_CAP], err[512];
+    if (file.n == 0)
+        return fail(P, P->line, &tok, "an empty table path", "a file name after '@': KEY=@FILE"), NULL;
     int n = snprintf(path, sizeof path, "%s%s%.*s", file.n && file.p[0] != '/' && b->dir ? b->dir : "",
                      file.n && file.p[0] != '/' && b->dir ? "/" : "", (int)file.n, file.p);
     if (n < 0 || (size_t)n >= sizeof path) {
@@ -494,8 +497,16 @@ static const lsqt_band_table *band_table(parser *P, span tok, span file)
     char *text = lsqt_read_text(path, LSQT_INPUT_MAX, &len, err, sizeof err);
     lsqt_band_table t;
     if (!text || lsqt_band_table_parse(text, len, path, &t, err, sizeof err)) {
+        /* a path with a space reads as the path's start and a word after it */
+        const char *q = tok.p + tok.n, *end = P->line_end ? P->line_end : q;
+        while (q < end && (*q == ' ' || *q == '\t')) q++;
+        const char *w = q;
+        while (q < end && *q != ' ' && *q != '\t' && *q != '=') q++;
+        const int spaced = !text && w > tok.p + tok.n && w < end && (q == end || *q != '=');
         free(text);
-        fail(P, P->line, &tok, "unreadable table", "a table of wavelength (nm) and value rows: %s", err);
+        fail(P, P->line, &tok, "unreadable table", "a table of wavelength (nm) and value rows: %s%s", err,
+             spaced ? " (a token ends at a space: a table's path cannot contain spaces; rename the file or link it "
+                      "under a name without them)" : "");
         return NULL;
     }
     free(text);
@@ -514,6 +525,16 @@ static const lsqt_band_table *band_table(parser *P, span tok, span file)
     strcpy(copy, path);
     b->table_paths[b->n_tables] = copy, b->tables[b->n_tables] = t;
     return &b->tables[b->n_tables++];
+}
+
+/* v with the fewest digits that read back as v ("699.9999", not "700"), into buf[32]. */
+static const char *shortest(double v, char *buf)
+{
+    for (int prec = 6; prec <= 17; prec++) {
+        snprintf(buf, 32, "%.*g", prec, v);
+        if (strtod(buf, NULL) == v) break;
+    }
+    return buf;
 }
 
 /* A number key written as a list or @FILE: its value in band P->band into *v (range
@@ -538,14 +559,22 @@ static int band_value(parser *P, const lsqt_key *k, span tok, span text, double 
         if (!t)
             return 2;
         double wl = P->bands->wl[P->band];
-        if (lsqt_band_table_at(t, wl, v))
-            return fail(P, P->line, &tok, "wavelength outside the table",
-                        "a table that covers %g nm (it covers %g to %g nm)", wl, t->wl[0], t->wl[t->n - 1]);
+        if (lsqt_band_table_at(t, wl, v)) {
+            char a[32], lo[32], hi[32];
+            return fail(P, P->line, &tok, "wavelength outside the table", "a table that covers %s nm (it covers %s to "
+                        "%s nm%s)", shortest(wl, a), shortest(t->wl[0], lo), shortest(t->wl[t->n - 1], hi),
+                        t->wl[t->n - 1] < 10 && wl >= 100
+                            ? "; its wavelengths look like um: a table's wavelengths are in nm, um x 1000" : "");
+        }
         why = check_range(k, *v);
     } else {
         int count = 1;
         for (size_t i = 0; i < text.n; i++)
             count += text.p[i] == ',';
+        if (count > LSQT_MAX_BANDS)
+            return fail(P, P->line, &tok, "too many values in a list",
+                        "at most %d comma-separated values, one per band (this list has %d): a run has at most "
+                        "%d bands", LSQT_MAX_BANDS, count, LSQT_MAX_BANDS);
         if (nb == 0) { /* no --wavelengths: the first list sets the band count */
             P->bands->n = count, P->bands->count_line = P->line;
         } else if (nb == 1)
@@ -937,6 +966,7 @@ static int parse_lines(parser *P, const char *text, size_t len)
         if (P->line == INT_MAX)
             return fail(P, P->line, NULL, "too many lines", "fewer than %d lines", INT_MAX);
         P->line++;
+        P->line_end = hash ? hash : line_end;
         if (next_token(&cur, hash ? hash : line_end, &head) &&
             read_line(P, cur, hash ? hash : line_end, head))
             return 2;

@@ -125,6 +125,17 @@ static void put_f32(wbuf *w, float f)
     put_u32(w, v);
 }
 
+/* The counts an LSS header may hold, for the writer and the reader alike (the writer
+ * never writes what the reader refuses): bands says the file is version 7 (bands, or
+ * one named band), named that the wavelengths follow the text. */
+static int counts_ok(uint64_t n_slices, uint64_t n_wi, uint64_t tl, uint64_t n_ranges, int bands, uint64_t nb,
+                     uint64_t named)
+{
+    return n_slices >= 1 && n_slices <= 4096 * 8 && n_wi >= 1 && n_wi <= 65536 && tl <= (1u << 24) &&
+           n_ranges <= (1u << 20) &&
+           (!bands || ((nb >= 2 || (nb == 1 && named == 1)) && nb <= LSQT_MAX_BANDS && named <= 1));
+}
+
 /* Everything but the CRC; file_bytes is the whole file's size, announced in the header. */
 static void put_state(wbuf *w, const lsqt_state *st, uint64_t file_bytes)
 {
@@ -179,6 +190,16 @@ int lsqt_lss_write(const char *path, const lsqt_state *st, char *err, size_t err
 {
     /* Two passes: the first only counts the bytes, so that the header can announce the
      * file's size (a reader tells a truncated file from a damaged one). */
+    const int bands = st->n_bands > 1 || st->wavelengths;
+    if (st->n_slices < 0 || st->n_wi < 0 || st->n_ranges < 0 || st->n_bands < 1 ||
+        !counts_ok((uint64_t)st->n_slices, (uint64_t)st->n_wi, strlen(st->canonical), (uint64_t)st->n_ranges, bands,
+                   (uint64_t)st->n_bands, st->wavelengths != NULL)) {
+        snprintf(err, errcap, "cannot write '%s': %d bands, %d slices, %d directions, %d ranges or %zu bytes of "
+                 "assembly text are more than an LSS may hold (at most %d bands, %d slices, 65536 directions, %u "
+                 "ranges, %u bytes)", path, st->n_bands, st->n_slices, st->n_wi, st->n_ranges, strlen(st->canonical),
+                 LSQT_MAX_BANDS, 4096 * 8, 1u << 20, 1u << 24);
+        return -1;
+    }
     wbuf w = {NULL, 0, 0, NULL, 0};
     put_state(&w, st, 0);
     const uint64_t file_bytes = w.total + 4;
@@ -387,8 +408,7 @@ static void announced_size(lss_header *h)
 {
     const uint32_t n_slices = h->n_slices, n_wi = h->n_wi, tl = h->tl, n_ranges = h->n_ranges;
     const uint32_t nb = h->version >= 7 ? h->n_bands : 1;
-    int sane = n_slices >= 1 && n_slices <= 4096 * 8 && n_wi >= 1 && n_wi <= 65536 && tl <= (1u << 24) &&
-               n_ranges <= (1u << 20) && (h->version < 7 || ((nb >= 2 || (nb == 1 && h->named == 1)) && nb <= LSQT_MAX_BANDS && h->named <= 1));
+    int sane = counts_ok(n_slices, n_wi, tl, n_ranges, h->version >= 7, nb, h->named);
     const size_t tallies = (size_t)LSQT_BATCHES * (n_wi + LSQT_T_COUNT + LSQT_HIST_BINS) * nb;
     const size_t fixed = sane ? h->header + (size_t)tl + (h->named ? (size_t)nb * 8 : 0) + (size_t)n_ranges * 16 +
                                     (20 + (size_t)n_wi * 12) * n_slices + 4

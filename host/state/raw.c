@@ -58,9 +58,11 @@ int lsqt_raw_write_bands(const char *path, const lsqt_state *st, const lsqt_slic
     }
     /* every band's file, then all renamed: a failure leaves the previous files whole */
     lsqt_out_set set = {0, 0, NULL, NULL};
+    lsqt_band_names names;
+    lsqt_band_names_init(&names, st->n_bands, st->wavelengths, NULL);
     for (int b = 0; b < st->n_bands; b++) {
         char label[48], name[LSQT_PATH_CAP + 96];
-        lsqt_band_path(path, lsqt_band_label(st->n_bands, st->wavelengths, b, label, sizeof label), name,
+        lsqt_band_path(path, lsqt_band_label(&names, b, label, sizeof label), name,
                        sizeof name);
         const lsqt_state view = lsqt_state_band(st, b);
         if (lsqt_raw_write(name, &view, est + (size_t)b * (size_t)st->n_slices, mode, skipped, &set, err, errcap)) {

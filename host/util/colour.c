@@ -236,23 +236,79 @@ int lsqt_spectrum_to_srgb(int n, const double *wl_nm, const double *v, double rg
 
 /* "%.10g": up to 1e6 nm (the parser's bound) 10 digits keep 0.001 nm steps apart. A
  * caller's setlocale may make printf's point ','; a file name keeps '.'. */
-const char *lsqt_band_label(int n_bands, const double *wl_or_null, int b, char *buf, size_t cap)
+/* Band b's wavelength with d decimals, the integer part zero-padded to w digits, '.' as
+ * the decimal point whatever the locale; no "nm". Returns the length, or -1. */
+static int wl_label(double wl, int w, int d, char *buf, size_t cap)
 {
-    if (!buf || b < 0 || b >= n_bands) return NULL;
-    int len;
-    if (wl_or_null)
-        len = snprintf(buf, cap, "%.10gnm", wl_or_null[b]);
-    else if (n_bands == 3)
-        len = snprintf(buf, cap, "%c", "RGB"[b]);
-    else
-        len = snprintf(buf, cap, "%d", b);
-    if (len < 0 || (size_t)len >= cap) return NULL;
+    int len = snprintf(buf, cap, "%0*.*f", d ? w + 1 + d : w, d, wl);
+    if (len < 0 || (size_t)len >= cap) return -1;
     const char *point = localeconv()->decimal_point;
     size_t pl = strlen(point);
-    char *p = wl_or_null && pl && strcmp(point, ".") ? strstr(buf, point) : NULL;
+    char *p = d && pl && strcmp(point, ".") ? strstr(buf, point) : NULL;
     if (p) { /* the label only gets shorter */
         *p = '.';
         memmove(p + 1, p + pl, strlen(p + pl) + 1);
+        len -= (int)pl - 1;
     }
-    return buf;
+    return len;
+}
+
+int lsqt_band_names_init(lsqt_band_names *nm, int n_bands, const double *wl_or_null, int *clash)
+{
+    nm->n_bands = n_bands, nm->wl = wl_or_null, nm->width = 1, nm->decimals = 0;
+    if (!wl_or_null) {
+        for (int m = n_bands - 1; m >= 10; m /= 10) nm->width++;
+        return 0;
+    }
+    if (n_bands < 1) return 0;
+    char a[64], b[64];
+    for (int d = 0; d <= 9; d++) {
+        /* the largest wavelength has the widest integer part (after rounding, too) */
+        int len = wl_label(wl_or_null[n_bands - 1], 1, d, a, sizeof a);
+        if (len < 0) break;
+        nm->width = d ? len - 1 - d : len, nm->decimals = d;
+        int k = 0, exact = 1;
+        const double scale = pow(10.0, d);
+        wl_label(wl_or_null[0], 1, d, a, sizeof a);
+        for (; k < n_bands; k++) {
+            /* every label shows its wavelength (to 1e-9 nm: 412.5 is not "412") */
+            exact = exact && fabs(wl_or_null[k] - round(wl_or_null[k] * scale) / scale) <= 1e-9;
+            if (k + 1 == n_bands) break;
+            /* increasing: only neighbours can share a label */
+            wl_label(wl_or_null[k + 1], 1, d, b, sizeof b);
+            if (strcmp(a, b) == 0) break;
+            memcpy(a, b, sizeof a);
+        }
+        if (k + 1 == n_bands && (exact || d == 9)) return 0;
+        if (d == 9 && k + 1 < n_bands) {
+            if (clash) *clash = k;
+            return -1;
+        }
+    }
+    if (clash) *clash = 0;
+    return -1;
+}
+
+const char *lsqt_band_label(const lsqt_band_names *nm, int b, char *buf, size_t cap)
+{
+    if (!buf || !nm || b < 0 || b >= nm->n_bands) return NULL;
+    int len;
+    if (nm->wl) {
+        len = wl_label(nm->wl[b], nm->width, nm->decimals, buf, cap);
+        if (len < 0 || (size_t)len + 2 >= cap) return NULL;
+        memcpy(buf + len, "nm", 3);
+        return buf;
+    }
+    if (nm->n_bands == 3)
+        len = snprintf(buf, cap, "%c", "RGB"[b]);
+    else
+        len = snprintf(buf, cap, "%0*d", nm->width, b);
+    return len < 0 || (size_t)len >= cap ? NULL : buf;
+}
+
+const char *lsqt_band_label_one(int n_bands, const double *wl_or_null, int b, char *buf, size_t cap)
+{
+    lsqt_band_names nm;
+    lsqt_band_names_init(&nm, n_bands, wl_or_null, NULL);
+    return lsqt_band_label(&nm, b, buf, cap);
 }

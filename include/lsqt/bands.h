@@ -9,10 +9,12 @@
 /* Most bands a run may have (400:2500:1 is 2101). */
 #define LSQT_MAX_BANDS 4096
 
-/* Parses LIST, "450,550,650" or "START:STOP:STEP" (both ends included when STOP is
- * START plus a whole number of steps, to 1e-9 of a step), into *out (heap, *n values,
- * strictly increasing, each in (0, 1e6] nm). Returns 0, or 2 with a message that names
- * the token in err. */
+/* Parses LIST, "450,550,650" or "START:STOP:STEP" (both ends included: STOP must be
+ * START plus a whole number of steps, to 1e-9 of a step, else refused with the steps and
+ * stops that work), into *out (heap, *n values, at most LSQT_MAX_BANDS, strictly
+ * increasing, each in (0, 1e6] nm, every two far enough apart for distinct file labels,
+ * lsqt_band_names). Returns 0, or 2 with a message that names the token in err (without
+ * a "--wavelengths" prefix: the caller adds it). */
 int lsqt_parse_wavelengths(const char *list, double **out, int *n, char *err, size_t errcap);
 
 /* A table of (wavelength nm, value) rows, wavelengths strictly increasing. */
@@ -52,5 +54,10 @@ void lsqt_bands_free(lsqt_bands *b);
 /* PATH with ".LABEL" (lsqt_band_label, lsqt/colour.h) before its final ".raw" (or at its end): panel.lsqt.raw ->
  * panel.lsqt.550nm.raw. */
 void lsqt_band_path(const char *path, const char *label, char *dst, size_t cap);
+
+/* What a RAW PATH of n_bands bands (wl: their wavelengths or NULL) is written as, for
+ * messages: PATH itself for one band, else the first and last band's labels in braces:
+ * panel.lsqt.{450nm,...,650nm}.raw, panel.lsqt.{450nm,650nm}.raw for two bands. */
+void lsqt_band_path_shown(const char *path, int n_bands, const double *wl, char *dst, size_t cap);
 
 #endif

@@ -39,12 +39,34 @@ int lsqt_spectrum_to_xyz(int n, const double *wl_nm, const double *v, double xyz
  * as lsqt_spectrum_to_xyz. */
 int lsqt_spectrum_to_srgb(int n, const double *wl_nm, const double *v, double rgb[3]);
 
-/* The label of band b in file names, into buf: with wavelengths (wl_or_null[b] nm) the
- * number in "%.10g" and "nm", "550nm", "412.5nm" (10 digits: wavelengths up to 1e6 nm
- * that differ by 0.001 nm or more get distinct labels); without, "R", "G", "B" for three
- * bands, else the index, "0", "1", ... Returns buf, or NULL when b is not a band, buf is
- * NULL or the label does not fit in cap bytes. */
-const char *lsqt_band_label(int n_bands, const double *wl_or_null, int b, char *buf, size_t cap);
+/* How the bands of a run are named in file names, computed once from all of them (O(n)):
+ * with wavelengths, one format for every band: the integer part zero-padded to the width
+ * of the largest wavelength's, and the same number of decimals for every band, the least
+ * in 0..9 that makes all labels distinct and shows every wavelength to 1e-9 nm (9 where
+ * none does): "450nm", "0400nm".."2500nm", "400.0nm" "400.5nm", so that the labels are unique and `ls` sorts them in wavelength order
+ * (the wavelengths increase). Without wavelengths: "R", "G", "B" for three bands, else
+ * the index zero-padded to the width of n - 1 ("00".."11" for 12 bands). */
+typedef struct lsqt_band_names {
+    int n_bands;
+    const double *wl; /* NULL: unnamed bands; not copied, must outlive the names */
+    int width;        /* digits of the integer part (wavelengths) or of the index */
+    int decimals;     /* wavelengths: decimals of every label */
+} lsqt_band_names;
+
+/* Fills *nm for n_bands bands (wl_or_null: their wavelengths, increasing). Returns 0, or
+ * -1 when no number of decimals up to 9 tells two adjacent wavelengths apart: then
+ * *clash (when not NULL) is the first band b whose label equals band b + 1's, and the
+ * names use 9 decimals. */
+int lsqt_band_names_init(lsqt_band_names *nm, int n_bands, const double *wl_or_null, int *clash);
+
+/* The label of band b in file names, into buf (see lsqt_band_names). Returns buf, or NULL
+ * when b is not a band, buf is NULL or the label does not fit in cap bytes. */
+const char *lsqt_band_label(const lsqt_band_names *nm, int b, char *buf, size_t cap);
+
+/* The label of band b of a run of n_bands bands (wl_or_null: their wavelengths), for a
+ * caller that names one or two bands: computes the names (O(n)) each call; a caller that
+ * labels every band computes lsqt_band_names once instead. */
+const char *lsqt_band_label_one(int n_bands, const double *wl_or_null, int b, char *buf, size_t cap);
 
 #ifdef __cplusplus
 }

@@ -265,7 +265,7 @@ Colour colour_of(const lsqt_state &st, const Options &o, char *err, size_t cap)
     if (o.channel >= 0) {
         c.b0 = o.channel;
         std::snprintf(buf, sizeof buf, "band %d (%s) of %d in grey (--channel)", o.channel,
-                      lsqt_band_label(n, st.wavelengths, o.channel, lab, sizeof lab), n);
+                      lsqt_band_label_one(n, st.wavelengths, o.channel, lab, sizeof lab), n);
         c.what = buf;
         return c;
     }
