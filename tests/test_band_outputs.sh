@@ -80,6 +80,24 @@ else
   echo "skip: cannot mknod here (not root?): device checks skipped"
 fi
 
+# Published together: while one band's RAW waits for a FIFO's reader, the band before it
+# is still the previous file (a kill now would leave no mix of old and new); once read,
+# every band is this run's.
+rm -f x.lsqt.*
+mkfifo x.lsqt.550nm.raw
+echo old >x.lsqt.450nm.raw
+"$BIN" "${W[@]}" "${R[@]}" x.lsqt >held.log 2>&1 &
+pid=$!
+for _ in $(seq 300); do grep -q "waiting for a process to read the FIFO" held.log && break; sleep 0.1; done
+grep -q "waiting for a process to read the FIFO" held.log && [ -s x.lsqt.lss ] && ok || bad "no FIFO wait: $(cat held.log)"
+[ "$(cat x.lsqt.450nm.raw)" = old ] && ok || bad "a band's RAW was replaced before the others were written"
+timeout 60 cat x.lsqt.550nm.raw >got550.raw
+wait $pid
+rc=$?
+[ "$rc" = 0 ] && head -1 x.lsqt.450nm.raw | grep -q "^RAWBH10A" && head -1 got550.raw | grep -q "^RAWBH10A" &&
+  head -1 x.lsqt.650nm.raw | grep -q "^RAWBH10A" && ok || bad "after the FIFO was read: exit $rc, $(cat held.log)"
+rm -f x.lsqt.* got550.raw held.log
+
 # --no-raw: the LSS and the JSON only; with -o or -H it contradicts itself; from stdin
 # without --lss or --json it would write nothing.
 rm -f ./*.lss

@@ -171,4 +171,17 @@ expect 2 "unknown option '--rgbx'" -- "$BIN" export R.lsqt.lss -o x.nc --rgbx
 expect 2 "'missing.lss'" -- "$BIN" export missing.lss -o x.nc
 [ ! -e x.nc ] && [ ! -e R.txt ] && ok || bad "a refused export wrote a file"
 ls ./*.tmp.* >/dev/null 2>&1 && bad "temporary files left behind" || ok
+
+# A full file system (a small tmpfs, as root): exit 1 naming the cause, no temporary, the
+# previous file whole, and no crash (HDF5 met a full disk badly).
+if cli_tmpfs small 1m; then
+  expect 0 "" -- "$BIN" export R.lsqt.lss -o small/x.nc -q
+  cp small/x.nc keep_small.nc
+  head -c "$(($(df -B1 --output=avail small | tail -1) - 8192))" /dev/zero >small/filler
+  expect 1 "cannot write 'small/x.nc': No space left on device" -- "$BIN" export R.lsqt.lss -o small/x.nc
+  cmp -s small/x.nc keep_small.nc && ok || bad "a full disk changed the previous NetCDF"
+  [ -z "$(find small -name '*.tmp.*')" ] && ok || bad "temporaries left on the full file system"
+else
+  echo "skip: cannot mount a tmpfs here (not root?): the full file system check skipped"
+fi
 finish test_export

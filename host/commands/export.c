@@ -5,12 +5,15 @@
  * that is not on a grid is refused: export writes what was simulated, never a resampling. */
 #include "lsqt/export.h"
 
+#include <errno.h>
 #include <math.h>
 #include <netcdf.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/statvfs.h>
+#include <unistd.h>
 
 #include "lsqt/colour.h"
 #include "lsqt/directions.h"
@@ -67,11 +70,29 @@ static void usage(FILE *f, const char *prog)
 typedef struct ncw {
     int id, status;
     const char *what;
+    int sys_errno; /* errno at the first failure: NetCDF says "HDF error" for a full disk */
 } ncw;
 
 static void nc_check(ncw *w, int status, const char *what)
 {
-    if (w->status == NC_NOERR && status != NC_NOERR) w->status = status, w->what = what;
+    if (w->status == NC_NOERR && status != NC_NOERR) w->status = status, w->what = what, w->sys_errno = errno;
+}
+
+/* NetCDF's reason for W's failure, with the cause it hides where the system names one (a
+ * full disk or quota is "NetCDF: HDF error" otherwise): errno at the failure, or a file
+ * system of PATH with no room left. */
+static const char *nc_why(const ncw *w, const char *path, char *buf, size_t cap)
+{
+    const char *slash = strrchr(path, '/');
+    char dir[LSQT_PATH_CAP];
+    snprintf(dir, sizeof dir, "%.*s", slash ? (int)(slash - path) + 1 : 1, slash ? path : ".");
+    struct statvfs fs;
+    const int full = statvfs(dir, &fs) == 0 && (unsigned long long)fs.f_bavail * fs.f_frsize < 65536ULL;
+    if (w->sys_errno == ENOSPC || w->sys_errno == EDQUOT || (full && w->status != NC_NOERR))
+        snprintf(buf, cap, "%s (%s)", strerror(w->sys_errno == EDQUOT ? EDQUOT : ENOSPC), nc_strerror(w->status));
+    else
+        snprintf(buf, cap, "%s", nc_strerror(w->status));
+    return buf;
 }
 
 static void put_text(ncw *w, int var, const char *name, const char *text)
@@ -295,13 +316,36 @@ static int read_back(const char *tmp, const grid *g, char *err, size_t errcap)
     return 0;
 }
 
+/* A NetCDF file failed part way and was left open (write_nc): the process must not run
+ * HDF5's exit handlers. */
+static int g_nc_abandoned;
+
+/* Bytes the file will take, roughly (its values as doubles, plus the headers); the free
+ * space of the folder of PATH is checked against it before writing, because a netCDF-4
+ * file that meets a full disk is what the library handles worst. Returns 0, or -1 with
+ * err filled. */
+static int check_room(const char *path, const lsqt_state *st, const grid *g, char *err, size_t errcap)
+{
+    const double values = (double)g->nb * g->ni * g->nphi * g->no * (st->transmits ? 2 : 1) * (g->below ? 2 : 1) * 2;
+    const double need = values * 8.0 + 16384.0 + 64.0 * (g->ni + g->nphi + g->no + g->nb); /* headers: 16 KiB */
+    const char *slash = strrchr(path, '/');
+    char dir[LSQT_PATH_CAP];
+    snprintf(dir, sizeof dir, "%.*s", slash ? (int)(slash - path) + 1 : 1, slash ? path : ".");
+    struct statvfs fs;
+    if (statvfs(dir, &fs) != 0 || (double)fs.f_bavail * (double)fs.f_frsize >= need) return 0;
+    snprintf(err, errcap, "cannot write '%s': %s (it needs about %.0f bytes, the file system has %.0f free)", path,
+             strerror(ENOSPC), need, (double)fs.f_bavail * (double)fs.f_frsize);
+    return -1;
+}
+
 static int write_nc(const char *tmp, const char *input, const lsqt_state *st, const lsqt_slice_est *est,
                     const grid *g, char *err, size_t errcap)
 {
-    ncw w = {-1, NC_NOERR, NULL};
+    ncw w = {-1, NC_NOERR, NULL, 0};
+    char why[256];
     nc_check(&w, nc_create(tmp, NC_CLOBBER | NC_NETCDF4, &w.id), "create");
     if (w.status != NC_NOERR) {
-        snprintf(err, errcap, "cannot create '%s': %s", tmp, nc_strerror(w.status));
+        snprintf(err, errcap, "cannot create '%s': %s", tmp, nc_why(&w, tmp, why, sizeof why));
         return -1;
     }
     nc_vars v;
@@ -310,13 +354,15 @@ static int write_nc(const char *tmp, const char *input, const lsqt_state *st, co
     put_provenance(&w, input, st, g);
     if (w.status == NC_NOERR) nc_check(&w, nc_enddef(w.id), "enddef");
     if (put_values(&w, st, est, g, &v, err, errcap)) {
-        nc_close(w.id);
+        g_nc_abandoned = 1;
         return -1;
     }
-    const int closed = nc_close(w.id);
-    nc_check(&w, closed, "close");
+    /* A file that failed is abandoned: closing or aborting it (netCDF 4.9, HDF5 1.10)
+     * crashes in HDF5, and so do HDF5's own exit handlers (export_nc then ends with _exit). */
+    if (w.status == NC_NOERR) nc_check(&w, nc_close(w.id), "close");
+    else g_nc_abandoned = 1;
     if (w.status != NC_NOERR) {
-        snprintf(err, errcap, "cannot write '%s' (%s): %s", tmp, w.what, nc_strerror(w.status));
+        snprintf(err, errcap, "cannot write '%s' (%s): %s", tmp, w.what, nc_why(&w, tmp, why, sizeof why));
         return -1;
     }
     return read_back(tmp, g, err, errcap);
@@ -481,6 +527,7 @@ static int export_nc(const char *prog, const char *input, const char *out, const
     lsqt_slice_est *est = lsqt_estimates(st);
     lsqt_out o;
     if (!est) rc = lsqt_prog_error(prog, 1, "out of memory");
+    else if (check_room(out, st, &g, msg, sizeof msg)) rc = lsqt_prog_error(prog, 1, msg);
     else if (lsqt_out_open_named(&o, out, msg, sizeof msg)) rc = lsqt_prog_error(prog, 1, msg);
     else if (write_nc(lsqt_out_name(&o), input, st, est, &g, msg, sizeof msg)) {
         lsqt_out_abort(&o);
@@ -500,6 +547,10 @@ static int export_nc(const char *prog, const char *input, const char *out, const
     }
     if (est) lsqt_estimates_free(est, st->n_slices);
     free(g.side[0]), free(g.side[1]);
+    if (g_nc_abandoned) { /* the temporary is gone (lsqt_out_abort); HDF5 must not see exit */
+        fflush(stdout), fflush(stderr);
+        _exit(rc);
+    }
     return rc;
 }
 
