@@ -36,7 +36,7 @@ static int calibrate(const lsqt_cli *c, const char *dir, uint64_t n, double *wal
     snprintf(raw, sizeof raw, "%s/c.raw", dir);
     snprintf(lss, sizeof lss, "%s/c.lss", dir);
     k.plan = 0, k.paths = n, k.paths_given = 1, k.total_paths = 0, k.restart = 1, k.quiet = 1, k.verbose = 0;
-    k.output = raw, k.lss = lss, k.json = NULL, k.target_error = 0, k.time_limit = 0, k.checkpoint = 0;
+    k.output = c->no_raw ? NULL : raw, k.lss = lss, k.json = NULL, k.target_error = 0, k.time_limit = 0, k.checkpoint = 0;
     const double w0 = lsqt_now(), c0 = cpu_seconds();
     const int rc = run_command(&k);
     *wall = lsqt_now() - w0, *cpu = cpu_seconds() - c0;
