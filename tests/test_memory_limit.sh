@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# --max-memory: a run whose estimated peak memory (memory.h) exceeds it is refused with
+# exit 2 before anything is simulated or written, naming the figure and the flags that
+# need less; under it (and with 0, no limit) the run goes on; --plan shows the estimate.
+# usage: test_memory_limit.sh LSQT_CL
+# shellcheck source=cli_lib.sh
+source "$(dirname "${BASH_SOURCE[0]}")/cli_lib.sh"
+cli_args BIN -- "$@"
+cli_workdir
+printf 'Medium\nLayer z=0 LambertianBsdf fR=0.6 fT=0\nMedium\n' >L.lsqt
+W=(--wavelengths 400:700:10 -p 300)
+
+# 31 bands of the default grid: over 0.5 GB of tallies on the host, as much on the device
+expect 2 "more than the 100 MB allowed (--max-memory)" -- "$BIN" "${W[@]}" --max-memory 100M -o A.raw --lss A.lss L.lsqt
+expect 2 "Fewer bands per run (split --wavelengths" -- "$BIN" "${W[@]}" --max-memory 0.1G -o A.raw --lss A.lss L.lsqt
+[ -z "$(ls -A | grep -v '^L.lsqt$')" ] && ok || bad "a refused run wrote: $(ls -A)"
+# its figure: about 0.6 GB (the pilot's tallies twice, runtime); 1 GB lets it run
+out=$("$BIN" "${W[@]}" --max-memory 100M -o A.raw --lss A.lss L.lsqt 2>&1)
+python3 -c "import re, sys; v = float(re.search(r'need about ([0-9.]+) MB', sys.argv[1]).group(1)); sys.exit(not 450 < v < 800)" "$out" &&
+  ok || bad "the estimate of 31 bands: $out"
+expect 0 "" -- "$BIN" -q "${W[@]}" --max-memory 1G -o B.raw --lss B.lss L.lsqt
+[ -s B.lss ] && [ -s B.400nm.raw ] && ok || bad "the run under --max-memory wrote: $(ls -A)"
+expect 0 "" -- "$BIN" -q -p 300 --max-memory 0 -o C.raw --lss C.lss L.lsqt
+# one band: far below the default (80 % of the memory available)
+expect 0 "" -- "$BIN" -q -p 300 -o D.raw --lss D.lss L.lsqt
+expect 2 "--max-memory" -- "$BIN" -p 300 --max-memory 12Q L.lsqt
+mkdir tmp
+TMPDIR=$PWD/tmp "$BIN" --plan -wo 4 -wi 16 --wi-spread L.lsqt >plan.out 2>plan.err &&
+  grep -q "^peak memory of the run: about [0-9.]* MB (tallies: [0-9.]* MB on the host" plan.out && ok ||
+  bad "--plan's memory line: $(cat plan.out plan.err)"
+
+finish test_memory_limit
