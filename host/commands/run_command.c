@@ -274,7 +274,11 @@ static int check_memory(const lsqt_cli *c, const lsqt_assembly *a, const lsqt_st
 {
     const int pilot = st->stage == LSQT_STAGE_PILOT, rx = pilot ? (int)st->rx : c->rx;
     lsqt_memory_shape m = {st->n_bands, pilot && rx ? st->n_slices / rx : st->n_slices, st->n_wi, 0, 1,
-                           st->use_double, a->n_layers};
+                           st->use_double, a->n_layers, 0};
+    /* the paths per slice it holds at the end (0: a target error without -p, unbounded) */
+    if (c->total_paths) m.paths = c->total_paths;
+    else if (!(c->target_error > 0 && !c->paths_given)) m.paths = st->paths + c->paths;
+    if (m.paths && m.paths < st->span_end) m.paths = st->span_end;
     if (pilot || (st->dir_method == LSQT_DIRS_RRSS && st->paths == 0)) m.pilot_rx = rx;
     for (int s = 1; s < st->n_slices; s++)
         if ((st->slice_flags[s] ^ st->slice_flags[0]) & LSQT_SLICE_BELOW) m.sides = 2;

@@ -11,11 +11,27 @@
  * peaks at 110 MB (tools/bench_memory.py). */
 #define RUNTIME_BYTES (128 * MB)
 
-uint64_t lsqt_memory_tallies(int n_bands, int n_slices, int n_wi, int hist_slices)
+#define PAGE ((uint64_t)4096)
+
+/* The resident bytes of ROWS rows of B batches of W tallies each when only the first K
+ * batches of a row are written: K W words from each row's start, on at most two pages
+ * more than they fill (where they start and end inside one). */
+static uint64_t rows_bytes(uint64_t rows, uint64_t w, uint64_t k)
 {
-    const uint64_t nb = n_bands > 1 ? (uint64_t)n_bands : 1, ns = (uint64_t)n_slices, B = LSQT_BATCHES;
-    const uint64_t per_band = ns * B * (uint64_t)n_wi + ns * B * LSQT_T_COUNT + (uint64_t)hist_slices * B * LSQT_HIST_BINS;
-    return nb * per_band * sizeof(lsqt_u128); /* state.h: nee, scalars, hist */
+    const uint64_t full = LSQT_BATCHES * w * sizeof(lsqt_u128), part = k * w * sizeof(lsqt_u128);
+    if (k >= LSQT_BATCHES) return rows * full;
+    const uint64_t row = (part + PAGE - 1) / PAGE * PAGE + PAGE;
+    return rows * (row < full ? row : full);
+}
+
+uint64_t lsqt_memory_tallies(int n_bands, int n_slices, int n_wi, int hist_slices, uint64_t paths)
+{
+    const uint64_t nb = n_bands > 1 ? (uint64_t)n_bands : 1, ns = (uint64_t)n_slices;
+    const uint64_t chunks = (paths + LSQT_CHUNK - 1) / LSQT_CHUNK, k = paths && chunks < LSQT_BATCHES ? chunks : LSQT_BATCHES;
+    /* state.h: per band [slice][batch][n_wi] nee, [slice][batch][LSQT_T_COUNT] scalars,
+     * [histogram][batch][LSQT_HIST_BINS] exit histograms */
+    return nb * (rows_bytes(ns, (uint64_t)n_wi, k) + rows_bytes(ns, LSQT_T_COUNT, k) +
+                 rows_bytes((uint64_t)hist_slices, LSQT_HIST_BINS, k));
 }
 
 /* The device's direction tables and directions of one band block, each band counted as
@@ -32,8 +48,8 @@ lsqt_memory lsqt_memory_estimate(const lsqt_memory_shape *m)
     lsqt_memory r;
     memset(&r, 0, sizeof r);
     const uint64_t nb = m->n_bands > 1 ? (uint64_t)m->n_bands : 1, ns = (uint64_t)m->n_slices;
-    r.state = lsqt_memory_tallies(m->n_bands, m->n_slices, m->n_wi, m->n_slices) + ns * (uint64_t)m->n_wi * 16;
-    r.device = lsqt_memory_tallies(m->n_bands, m->n_slices, m->n_wi, m->n_slices) + device_tables(m, m->n_slices);
+    r.state = lsqt_memory_tallies(m->n_bands, m->n_slices, m->n_wi, m->n_slices, m->paths) + ns * (uint64_t)m->n_wi * 16;
+    r.device = lsqt_memory_tallies(m->n_bands, m->n_slices, m->n_wi, m->n_slices, m->paths) + device_tables(m, m->n_slices);
     /* the sides of a state from below are copies of its slices (below.h); the estimates
      * of every band for the outputs */
     r.extra = (m->sides > 1 ? r.state : 0) + nb * ns * (sizeof(lsqt_slice_est) + (uint64_t)m->n_wi * sizeof(lsqt_est));
@@ -41,7 +57,7 @@ lsqt_memory lsqt_memory_estimate(const lsqt_memory_shape *m)
     uint64_t top = r.state + r.device + r.extra;
     if (m->pilot_rx > 0) { /* a slice's rx candidate blocks share one histogram (rrss.c) */
         const int ps = m->n_slices * m->pilot_rx;
-        r.pilot = lsqt_memory_tallies(m->n_bands, ps, m->n_wi, m->n_slices) + (uint64_t)ps * (uint64_t)m->n_wi * 16;
+        r.pilot = lsqt_memory_tallies(m->n_bands, ps, m->n_wi, m->n_slices, m->paths) + (uint64_t)ps * (uint64_t)m->n_wi * 16;
         const uint64_t pilot_run = 2 * r.pilot + device_tables(m, ps), choose = r.pilot + r.state;
         if (pilot_run > top) top = pilot_run;
         if (choose > top) top = choose;

@@ -481,17 +481,17 @@ int lsqt_rrss_choose(const lsqt_state *ps, lsqt_state *st, lsqt_rrss_info *info,
             for (int band = 0; band < nbands; band++) {
                 const lsqt_state to = lsqt_state_band(st, band), from = lsqt_state_band(ps, band);
                 for (size_t b = 0; b < B; b++)
-                    to.nee[((size_t)sl * B + b) * (size_t)n + (size_t)k] =
-                        from.nee[((size_t)v * B + b) * (size_t)n + (size_t)kk];
+                    lsqt_tallies_copy(to.nee + ((size_t)sl * B + b) * (size_t)n + (size_t)k,
+                                      from.nee + ((size_t)v * B + b) * (size_t)n + (size_t)kk, 1);
             }
             k++;
         }
         /* the paths are those of every block: their scalars and histogram are block 0's */
         for (int band = 0; band < nbands; band++) {
             const lsqt_state to = lsqt_state_band(st, band), from = lsqt_state_band(ps, band);
-            memcpy(to.scalars + (size_t)sl * B * LSQT_T_COUNT, from.scalars + (size_t)sl * rx * B * LSQT_T_COUNT,
-                   B * LSQT_T_COUNT * sizeof *st->scalars);
-            memcpy(lsqt_state_hist_of(&to, sl), lsqt_state_hist_of(&from, sl * rx), B * LSQT_HIST_BINS * sizeof *st->hist);
+            lsqt_tallies_copy(to.scalars + (size_t)sl * B * LSQT_T_COUNT, from.scalars + (size_t)sl * rx * B * LSQT_T_COUNT,
+                              B * LSQT_T_COUNT);
+            lsqt_tallies_copy(lsqt_state_hist_of(&to, sl), lsqt_state_hist_of(&from, sl * rx), B * LSQT_HIST_BINS);
         }
     }
     info->select_seconds = lsqt_now() - t_sel;

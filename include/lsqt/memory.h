@@ -1,7 +1,10 @@
 /* What a run will hold in memory at its peak, before it allocates: the host state, the
- * RRSS pilot's state, the device's buffers (on a CPU device such as PoCL, host memory too)
- * and the copies made around them, from the run's shape alone. One function serves the
- * run's refusal (--max-memory) and --plan's report. */
+ * RRSS pilot's state, the device's buffers (on a CPU device such as PoCL, host memory too;
+ * on a GPU they are counted all the same) and the copies made around them, from the run's
+ * shape and its paths. Tallies cost only the pages of the ones that can be nonzero
+ * (state.h's lsqt_tallies_copy, session.h's host): a run of P paths per slice reaches the
+ * first ceil(P / LSQT_CHUNK) of the LSQT_BATCHES batches of every slice, and only their
+ * pages are counted. One function serves the run's refusal (--max-memory) and --plan. */
 #ifndef LSQT_MEMORY_H
 #define LSQT_MEMORY_H
 
@@ -19,6 +22,8 @@ typedef struct lsqt_memory_shape {
     int sides;      /* 2: slices from above and from below (--from-below), else 1 */
     int use_double; /* --double: directions and tables in double */
     int n_layers;   /* layers of the stack (the device's direction tables) */
+    uint64_t paths; /* paths per slice the state holds at the end (0: not bounded, as a
+                     * --target-error run without -p: every batch counted) */
 } lsqt_memory_shape;
 
 typedef struct lsqt_memory {
@@ -32,8 +37,10 @@ typedef struct lsqt_memory {
 } lsqt_memory;
 
 /* Bytes of the tallies of a state of this many bands, slices and directions, with
- * hist_slices exit histograms per band (n_slices; a pilot's slices share theirs). */
-uint64_t lsqt_memory_tallies(int n_bands, int n_slices, int n_wi, int hist_slices);
+ * hist_slices exit histograms per band (n_slices; a pilot's slices share theirs), that
+ * can be resident when it holds PATHS per slice (0: every batch; then all of them, the
+ * allocation's size). */
+uint64_t lsqt_memory_tallies(int n_bands, int n_slices, int n_wi, int hist_slices, uint64_t paths);
 /* The estimate for SHAPE. */
 lsqt_memory lsqt_memory_estimate(const lsqt_memory_shape *shape);
 /* The memory this process may use: MemAvailable (/proc/meminfo), less where a cgroup's

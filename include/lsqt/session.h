@@ -38,6 +38,12 @@ typedef struct lsqt_session {
     int nb;
     int band_of[LSQT_BAND_BLOCK_MAX];
     cl_mem bandw;
+    /* On a CPU device the tally buffers (nee, scalars, hist) are this memory, mapped zero
+     * pages (CL_MEM_USE_HOST_PTR; host_bytes each): only the pages that come to hold a
+     * nonzero tally are ever resident (a fill with zeros would make every page so). NULL
+     * on a GPU, whose buffers are filled on the device. */
+    void *host[3];
+    size_t host_bytes[3];
     /* A run with bands: this session is the first block's (band 0's), and blocks[i - 1]
      * block i's, each with its own tables and tallies; blocks of one width share one
      * program. A launch runs every block over the same path indices. */
