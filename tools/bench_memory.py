@@ -8,7 +8,8 @@ docs/performance.md, "Memory").
 Every run is a Lambertian base (fR 0.6) with --wavelengths over 400 nm onwards in 10 nm
 steps (or none for one band), -p PATHS (default 1000: the tallies' size does not depend on
 the paths), seed 0, a fresh LSS. Cases: 1, 32 and 200 bands on the default grid (-wo 12
--wi 80, RRSS), 1051 bands at -wo 5, and the grid -wo 90 -wi 1024 with 1 and 200 bands.
+-wi 80, RRSS), 1051 bands at -wo 5, the grid -wo 90 -wi 1024 with 1 and 200 bands, and 32
+bands at 100000 paths (every one of the 32 batches reached: the tallies' full size).
 --max-memory (default 6G) is passed on, so a case whose estimate exceeds it is refused by
 lsqt-cl itself (exit 2, reported as such) instead of taking the machine's memory. Peak RSS
 is the lsqt-cl process's ru_maxrss (os.wait4)."""
@@ -22,14 +23,15 @@ import tempfile
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 TEXT = "Medium\nLayer z=0 LambertianBsdf fR=0.6 fT=0\nMedium\n"
-# (label, bands, flags)
+# (label, bands, flags, paths: None for -p)
 CASES = [
-    ("default grid", 1, []),
-    ("default grid", 32, []),
-    ("default grid", 200, []),
-    ("-wo 5", 1051, ["-wo", "5"]),
-    ("-wo 90 -wi 1024", 1, ["-wo", "90", "-wi", "1024"]),
-    ("-wo 90 -wi 1024", 200, ["-wo", "90", "-wi", "1024"]),
+    ("default grid", 1, [], None),
+    ("default grid", 32, [], None),
+    ("default grid", 200, [], None),
+    ("-wo 5", 1051, ["-wo", "5"], None),
+    ("-wo 90 -wi 1024", 1, ["-wo", "90", "-wi", "1024"], None),
+    ("-wo 90 -wi 1024", 200, ["-wo", "90", "-wi", "1024"], None),
+    ("default grid, -p 100000", 32, [], 100000),
 ]
 UNITS = {"MB": 2**20, "GB": 2**30}
 
@@ -68,8 +70,8 @@ def main():
     print("| case | bands | peak RSS (MB) | LSS (MB) | 2 LSS + 300 MB | estimate (MB) | exit |")
     print("|---|---:|---:|---:|---:|---:|---|")
     with tempfile.TemporaryDirectory() as work:
-        for label, bands, flags in CASES:
-            r = run(a.exe, bands, flags, a.p, a.max_memory, work)
+        for label, bands, flags, paths in CASES:
+            r = run(a.exe, bands, flags, paths or a.p, a.max_memory, work)
             r.update(case=label, bands=bands)
             rows.append(r)
             refused = r["rc"] == 2
