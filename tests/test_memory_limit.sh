@@ -31,7 +31,7 @@ expect 0 "" -- "$BIN" -q -p 300 -o D.raw --lss D.lss L.lsqt
 expect 2 "--max-memory" -- "$BIN" -p 300 --max-memory 12Q L.lsqt
 mkdir tmp
 TMPDIR=$PWD/tmp "$BIN" --plan -wo 4 -wi 16 --wi-spread L.lsqt >plan.out 2>plan.err &&
-  grep -q "^peak memory of the run: about [0-9.]* MB (tallies: [0-9.]* MB on the host" plan.out && ok ||
+  grep -q "^peak memory of a run of 8192 paths per slice or more: about [0-9.]* MB (tallies: [0-9.]* MB on the host" plan.out && ok ||
   bad "--plan's memory line: $(cat plan.out plan.err)"
 
 finish test_memory_limit

@@ -145,11 +145,16 @@ int plan_command(const lsqt_cli *c)
     fprintf(f, "; calibrated in %.3g s (wall)\n", lsqt_now() - t_start);
     fprintf(f, "time per 1e6 paths per slice: %.3g s wall, %.3g CPU-s; start-up about %.2g s\n", wall_pp * 1e6,
             cpu_pp * 1e6, start);
-    if (g_run_memory.peak) { /* the calibration's run_command estimated it: the same shape as the run */
-        char b[4][32];
-        fprintf(f, "peak memory of the run: about %s (tallies: %s on the host, %s on the device; RRSS pilot %s)\n",
-                lsqt_memory_format(g_run_memory.peak, b[0], 32), lsqt_memory_format(g_run_memory.state, b[1], 32),
-                lsqt_memory_format(g_run_memory.device, b[2], 32), lsqt_memory_format(g_run_memory.pilot, b[3], 32));
+    if (g_run_shape.n_bands) { /* the calibration's shape is the run's; its paths are the run's -p */
+        const uint64_t asked_paths = c->total_paths ? c->total_paths : c->paths_given ? c->paths : 0;
+        lsqt_memory_shape m = g_run_shape;
+        m.paths = asked_paths;
+        const lsqt_memory e = lsqt_memory_estimate(&m);
+        char b[4][32], what[64] = "of 8192 paths per slice or more";
+        if (asked_paths) snprintf(what, sizeof what, "of %llu paths per slice", (unsigned long long)asked_paths);
+        fprintf(f, "peak memory of a run %s: about %s (tallies: %s on the host, %s on the device; RRSS pilot %s)\n",
+                what, lsqt_memory_format(e.peak, b[0], 32), lsqt_memory_format(e.state, b[1], 32),
+                lsqt_memory_format(e.device, b[2], 32), lsqt_memory_format(e.pilot, b[3], 32));
     }
     fprintf(f, "largest relative error of a slice's BSDF values at %llu paths (error ~ 1/sqrt(paths)):\n",
             (unsigned long long)n);

@@ -38,9 +38,9 @@ void sigint_at_stop(void (*fn)(void));
 /* run_command.c: everything lsqt-cl does with an input once its flags are read; returns
  * the exit status. */
 int run_command(const lsqt_cli *c);
-/* The estimate of the last run_command's peak memory (memory.h; its peak 0 before one),
- * which --plan reports. */
-extern lsqt_memory g_run_memory;
+/* The shape of the last run_command's memory estimate (memory.h; n_bands 0 before one),
+ * which --plan estimates again for the paths of the run it plans. */
+extern lsqt_memory_shape g_run_shape;
 /* plan.c: --plan (two calibration runs through run_command, then the prediction). */
 int plan_command(const lsqt_cli *c);
 

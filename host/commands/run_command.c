@@ -265,7 +265,7 @@ static int open_device(const lsqt_cli *c, const lsqt_state *st, const outputs *o
     return rc;
 }
 
-lsqt_memory g_run_memory;
+lsqt_memory_shape g_run_shape;
 
 /* The run's peak memory against --max-memory (default: 80 % of what this machine, or
  * its cgroup, has available), before the device or the tallies are touched. Returns 0,
@@ -282,8 +282,8 @@ static int check_memory(const lsqt_cli *c, const lsqt_assembly *a, const lsqt_st
     if (pilot || (st->dir_method == LSQT_DIRS_RRSS && st->paths == 0)) m.pilot_rx = rx;
     for (int s = 1; s < st->n_slices; s++)
         if ((st->slice_flags[s] ^ st->slice_flags[0]) & LSQT_SLICE_BELOW) m.sides = 2;
-    g_run_memory = lsqt_memory_estimate(&m);
-    const lsqt_memory *e = &g_run_memory;
+    g_run_shape = m;
+    const lsqt_memory est = lsqt_memory_estimate(&m), *e = &est;
     const uint64_t avail = c->max_memory_given ? 0 : lsqt_memory_available();
     const uint64_t limit = c->max_memory_given ? c->max_memory : avail / 10 * 8;
     char b[5][32];

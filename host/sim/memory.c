@@ -8,7 +8,7 @@
 
 #define MB ((uint64_t)1 << 20)
 /* PoCL with its kernel build and the program's own: a one-band run of the default grid
- * peaks at 110 MB (tools/bench_memory.py). */
+ * peaks at 96 MB (tools/bench_memory.py). */
 #define RUNTIME_BYTES (128 * MB)
 
 #define PAGE ((uint64_t)4096)
