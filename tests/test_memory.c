@@ -101,8 +101,11 @@ static void check_resident(void)
      * page that a read of a never-written page maps; RSS does not): only the pages of
      * nonzero tallies are written */
     const uint64_t rss0 = rss_bytes();
-    CHECK(lsqt_session_read(&s, &st, err, sizeof err) == 0, "read: %s", err);
+    CHECK(lsqt_session_read(&s, &st, 1, err, sizeof err) == 0, "read: %s", err);
     const uint64_t grew = rss_bytes() - rss0;
+    /* the last read (release) gave the device's tallies back: nothing more to launch */
+    CHECK(!s.nee && !s.hist && !s.host[0] && !s.host[2], "the tallies' buffers are kept after the last read");
+    CHECK(lsqt_session_launch(&s, PATHS, 2 * PATHS, err, sizeof err) == 1, "a launch after the last read");
     lsqt_session_close(&s);
     CHECK(grew <= bound + 64 * 4096, "the state's tallies: RSS grew by %llu bytes as they were read, the estimate %llu "
           "(all %llu)", (unsigned long long)grew, (unsigned long long)bound, (unsigned long long)dense);

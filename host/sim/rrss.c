@@ -402,6 +402,7 @@ int lsqt_rrss_pilot(lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *
     if (candidates(&s, ns, m, st->transmits, cand, &info->short_slices, err, errcap)) goto done;
     memcpy(ps->wi, cand, (size_t)ns * m * 4 * sizeof *cand); /* block j of slice s is candidates j n ... */
     if (lsqt_session_set_directions(&s, ps, err, errcap)) goto done;
+    s.last_read_releases = 1;
     if (pilot_run(&s, ps, begin, n_paths, o, info, err, errcap)) goto done;
     info->seconds = lsqt_now() - t1;
     rc = 0;
@@ -421,6 +422,7 @@ int lsqt_rrss_pilot_continue(lsqt_context *cx, const lsqt_assembly *a, lsqt_stat
     if (lsqt_session_open_grouped(&s, cx, a, ps, (int)ps->rx, o->extra_options, o->local_size, o->verbose, err, errcap))
         return 1;
     const double t1 = lsqt_now();
+    s.last_read_releases = 1;
     int rc = pilot_run(&s, ps, begin, n_paths, o, info, err, errcap);
     info->seconds = lsqt_now() - t1;
     lsqt_session_close(&s);

@@ -656,6 +656,10 @@ int lsqt_session_launch(lsqt_session *s, uint64_t begin, uint64_t end, char *err
         if (rc) return 1;
     }
     if (end <= begin) return 0;
+    if (!s->nee) {
+        snprintf(err, errcap, "the session's tallies were released by its last read");
+        return 1;
+    }
     int no_memory = 0;
     cl_int e = s->records ? launch_records(s, begin, end, &no_memory) : run_chunks(s, s->walk, 6, begin, end, s->local_size);
     if (e != CL_SUCCESS) {
@@ -668,10 +672,31 @@ int lsqt_session_launch(lsqt_session *s, uint64_t begin, uint64_t end, char *err
 
 static int read_block(lsqt_session *s, lsqt_state *st, char *err, size_t errcap);
 
-int lsqt_session_read(lsqt_session *s, lsqt_state *st, char *err, size_t errcap)
+/* A block's tally buffers released (and a CPU device's pages unmapped). */
+static void release_tallies(lsqt_session *s)
 {
-    for (int b = 0; b < (s->n_blocks > 1 ? s->n_blocks : 1); b++)
-        if (read_block(b ? &s->blocks[b - 1] : s, st, err, errcap)) return 1;
+    cl_mem *bufs[3] = {&s->nee, &s->scalars, &s->hist};
+    for (int i = 0; i < 3; i++) {
+        if (*bufs[i]) clReleaseMemObject(*bufs[i]);
+        *bufs[i] = NULL;
+    }
+    clFinish(s->cx->queue); /* (nothing uses the pages now) */
+    for (int i = 0; i < 3; i++)
+        if (s->host[i]) munmap(s->host[i], s->host_bytes[i]);
+    memset(s->host, 0, sizeof s->host);
+}
+
+int lsqt_session_read(lsqt_session *s, lsqt_state *st, int release, char *err, size_t errcap)
+{
+    for (int b = 0; b < (s->n_blocks > 1 ? s->n_blocks : 1); b++) {
+        lsqt_session *blk = b ? &s->blocks[b - 1] : s;
+        if (!blk->nee) {
+            snprintf(err, errcap, "the session's tallies were released by its last read");
+            return 1;
+        }
+        if (read_block(blk, st, err, errcap)) return 1;
+        if (release) release_tallies(blk);
+    }
     return 0;
 }
 
