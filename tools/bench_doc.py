@@ -252,16 +252,16 @@ Their sizes are those the targets are set at; `command` above runs each (`-R` st
 
 
 def kept_gpu_section(path=DOC):
-    """The page's "## GPUs", "## Bands", "## The RRSS pilot" and "## Beside the original"
-    sections, each to the next "## " heading or the end: measured on a GPU machine, or by
-    tools/bench_bands.py, bench_pilot.py and bench_original.py, which this command does not
-    run, so they are kept."""
+    """The page's "## GPUs", "## Bands", "## The RRSS pilot", "## Memory" and "## Beside the
+    original" sections, each to the next "## " heading or the end: measured on a GPU machine,
+    or by tools/bench_bands.py, bench_pilot.py, bench_memory.py and bench_original.py, which
+    this command does not run, so they are kept."""
     try:
         with open(path, encoding="utf-8") as f:
             text = f.read()
     except OSError:
         return ""
-    found = [m.group(0).rstrip("\n") + "\n" for m in re.finditer(r"^## (?:GPUs|Bands|The RRSS pilot|Beside the original)\n.*?(?=^## |\Z)", text, re.S | re.M)]
+    found = [m.group(0).rstrip("\n") + "\n" for m in re.finditer(r"^## (?:GPUs|Bands|The RRSS pilot|Memory|Beside the original)\n.*?(?=^## |\Z)", text, re.S | re.M)]
     return "\n".join(found)
 
 

@@ -60,6 +60,10 @@ static void help_usage_and_sampling(FILE *f)
           "                              u^2 90 deg, phi_m = 360 deg v - 180 deg from wo's, u and v\n"
           "                              on linspace(0, 1, NU)); NT 2-1024, NU 2-44\n"
           , f);
+    fputs("      --max-memory SIZE       refuse (exit 2, before simulating) a run whose estimated\n"
+          "                              peak memory exceeds SIZE (e.g. 500M, 8G; 0: no limit;\n"
+          "                              default 80 % of the memory available); --plan shows it\n",
+          f);
 }
 
 /* --help, part 2: the flags of the sides, the seed, the device and the outputs. */
@@ -151,7 +155,28 @@ void lsqt_cli_help(FILE *f)
     help_stops_and_notes(f);
 }
 
+/* --max-memory SIZE: bytes, with K, M, G or T (binary; a trailing B allowed), e.g.
+ * 500M, 1.5G. Returns 0 or -1. */
+static int parse_size(const char *v, uint64_t *out)
+{
+    char *end = NULL;
+    const double x = strtod(v, &end);
+    if (end == v || !(x >= 0) || x > 1e18) return -1;
+    const char *u = "KMGT", *k = *end ? strchr(u, toupper((unsigned char)*end)) : NULL;
+    double scale = 1;
+    if (*end) {
+        if (!k) return -1;
+        scale = ldexp(1.0, 10 * (int)(k - u + 1));
+        end++;
+        if (*end == 'B' || *end == 'b') end++;
+    }
+    if (*end || x * scale > 1.8e19) return -1;
+    *out = (uint64_t)(x * scale);
+    return 0;
+}
+
 enum flag_id {
+    F_MAX_MEMORY,
     F_PATHS, F_WO, F_WO_ANGLES, F_WI, F_WI_FILE, F_RX, F_RP, F_RESTART, F_SEED, F_THREADS, F_OUTPUT,
     F_HEMI, F_SPREAD, F_GRID, F_RGL_GRID, F_WAVELENGTHS, F_BELOW, F_CHECKPOINT, F_SHARD, F_REFINE, F_DEVICE, F_LIST, F_DOUBLE, F_TIME, F_TARGET, F_LSS, F_JSON, F_QUIET, F_VERBOSE, F_HELP, F_VERSION, F_TOTAL, F_PLAN, F_NO_RAW
 };
@@ -160,6 +185,7 @@ static const struct flag {
     const char *short_name, *long_name;
     int id, takes_value;
 } flags[] = {
+    {NULL, "--max-memory", F_MAX_MEMORY, 1},
     {"-p", "--path-count", F_PATHS, 1},      {"-wo", "--wo-count", F_WO, 1},
     {NULL, "--wo-angles", F_WO_ANGLES, 1},   {"-wi", "--wi-count", F_WI, 1},
     {NULL, "--wi-file", F_WI_FILE, 1},
@@ -258,6 +284,7 @@ static int apply(const struct flag *fl, const char *name, const char *v, lsqt_cl
     case F_WI_FILE: if (!*v) expect = "a file of directions"; c->wi_file = v; c->sampling_given = 1; break;
     case F_RX: if (lsqt_parse_count(v, 2, 8, &n)) expect = "an integer in 2-8"; else c->rx = (int)n; c->rx_given = c->sampling_given = 1; break;
     case F_RP: if (lsqt_parse_double(v, &d) || !(d > 0 && d <= 1)) expect = "a number in (0, 1]"; else c->rp = d; c->rp_given = c->sampling_given = 1; break;
+    case F_MAX_MEMORY: if (parse_size(v, &c->max_memory)) expect = "a size such as 500M, 8G or 0 (no limit)"; else c->max_memory_given = 1; break;
     case F_SEED: if (lsqt_parse_u64(v, &c->seed)) expect = "an integer in 0-18446744073709551615 (decimal digits)"; c->seed_given = c->sampling_given = 1; break;
     case F_THREADS: if (lsqt_parse_count(v, 1, 4096, &n)) expect = "an integer in 1-4096"; else c->threads = (int)n; break;
     case F_TIME: if (lsqt_parse_double(v, &d) || !(d > 0)) expect = "a positive number of seconds"; else c->time_limit = d; break;

@@ -10,7 +10,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <signal.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "lsqt/lss.h"
@@ -35,7 +37,7 @@ static int calibrate(const lsqt_cli *c, const char *dir, uint64_t n, double *wal
     char raw[LSQT_PATH_CAP + 16], lss[LSQT_PATH_CAP + 16];
     snprintf(raw, sizeof raw, "%s/c.raw", dir);
     snprintf(lss, sizeof lss, "%s/c.lss", dir);
-    k.plan = 0, k.paths = n, k.paths_given = 1, k.total_paths = 0, k.restart = 1, k.quiet = 1, k.verbose = 0;
+    k.plan = LSQT_PLAN_CALIBRATION, k.paths = n, k.paths_given = 1, k.total_paths = 0, k.restart = 1, k.quiet = 1, k.verbose = 0;
     k.output = c->no_raw ? NULL : raw, k.lss = lss, k.json = NULL, k.target_error = 0, k.time_limit = 0, k.checkpoint = 0;
     const double w0 = lsqt_now(), c0 = cpu_seconds();
     const int rc = run_command(&k);
@@ -58,6 +60,32 @@ static void remove_dir(const char *dir)
     if (rmdir(dir)) fprintf(stderr, "note: --plan left its folder %s (%s)\n", dir, strerror(errno));
 }
 
+/* The calibration folder of this process, removed by a stop at once (signals.c) too. */
+static char g_dir[LSQT_PATH_CAP];
+static void remove_own_dir(void)
+{
+    if (g_dir[0]) remove_dir(g_dir);
+}
+
+/* Folders TMP/lsqt-plan.PID.* of earlier --plan runs that were killed (SIGKILL, or a
+ * stop at once before this version removed them): PID no longer runs, the folder is ours. */
+static void remove_stale_dirs(const char *tmp)
+{
+    DIR *d = opendir(tmp);
+    char p[LSQT_PATH_CAP + 300];
+    for (struct dirent *e; d && (e = readdir(d));) {
+        char *end = NULL;
+        if (strncmp(e->d_name, "lsqt-plan.", 10) != 0) continue;
+        const long pid = strtol(e->d_name + 10, &end, 10);
+        struct stat sb;
+        snprintf(p, sizeof p, "%s/%s", tmp, e->d_name);
+        if (end == e->d_name + 10 || *end != '.' || pid <= 0 || pid == (long)getpid()) continue;
+        if (kill((pid_t)pid, 0) == 0 || errno != ESRCH) continue; /* it runs (or is not ours to ask) */
+        if (lstat(p, &sb) == 0 && S_ISDIR(sb.st_mode) && sb.st_uid == getuid()) remove_dir(p);
+    }
+    if (d) closedir(d);
+}
+
 static void print_time(FILE *f, double s)
 {
     if (s < 120) fprintf(f, "%.3g s", s);
@@ -75,11 +103,14 @@ int plan_command(const lsqt_cli *c)
     const double t_start = lsqt_now();
     const char *tmp = getenv("TMPDIR");
     char dir[LSQT_PATH_CAP];
-    snprintf(dir, sizeof dir, "%s/lsqt-plan.XXXXXX", tmp && *tmp ? tmp : "/tmp");
+    remove_stale_dirs(tmp && *tmp ? tmp : "/tmp");
+    snprintf(dir, sizeof dir, "%s/lsqt-plan.%ld.XXXXXX", tmp && *tmp ? tmp : "/tmp", (long)getpid());
     if (!mkdtemp(dir)) {
         fprintf(stderr, "lsqt-cl: error: --plan: cannot make a temporary folder %s: %s\n", dir, strerror(errno));
         return 1;
     }
+    snprintf(g_dir, sizeof g_dir, "%s", dir);
+    sigint_at_stop(remove_own_dir);
     if (!c->quiet) fprintf(stderr, "plan: calibrating (two short runs of the same command)...\n");
     double w1 = 0, c1 = 0, w2 = 0, c2 = 0;
     uint64_t n = PLAN_LONG;
@@ -94,9 +125,13 @@ int plan_command(const lsqt_cli *c)
     memset(&st, 0, sizeof st);
     char err[LSQT_PATH_CAP + 1024], lss[LSQT_PATH_CAP + 16];
     snprintf(lss, sizeof lss, "%s/c.lss", dir);
-    if (!rc && g_stop) rc = fprintf(stderr, "lsqt-cl: --plan interrupted (%s): no plan\n", signal_name(g_stop)) > 0;
+    if (g_stop) /* an interrupted calibration run has rc 1 and has said nothing */
+        rc = fprintf(stderr, "lsqt-cl: --plan interrupted (%s): no plan; its calibration runs are removed, "
+                             "nothing was written\n", signal_name(g_stop)) > 0;
     if (!rc && lsqt_lss_read(lss, &st, err, sizeof err)) rc = fprintf(stderr, "lsqt-cl: error: %s\n", err) > 0;
     remove_dir(dir);
+    sigint_at_stop(NULL);
+    g_dir[0] = 0;
     if (rc) return rc;
     /* per path: the difference of the two runs (start-up, tables, the RRSS choice drop out) */
     const double dn = (double)(n - PLAN_SHORT);
@@ -110,6 +145,17 @@ int plan_command(const lsqt_cli *c)
     fprintf(f, "; calibrated in %.3g s (wall)\n", lsqt_now() - t_start);
     fprintf(f, "time per 1e6 paths per slice: %.3g s wall, %.3g CPU-s; start-up about %.2g s\n", wall_pp * 1e6,
             cpu_pp * 1e6, start);
+    if (g_run_shape.n_bands) { /* the calibration's shape is the run's; its paths are the run's -p */
+        const uint64_t asked_paths = c->total_paths ? c->total_paths : c->paths_given ? c->paths : 0;
+        lsqt_memory_shape m = g_run_shape;
+        m.paths = asked_paths;
+        const lsqt_memory e = lsqt_memory_estimate(&m);
+        char b[4][32], what[64] = "of 8192 paths per slice or more";
+        if (asked_paths) snprintf(what, sizeof what, "of %llu paths per slice", (unsigned long long)asked_paths);
+        fprintf(f, "peak memory of a run %s: about %s (tallies: %s on the host, %s on the device; RRSS pilot %s)\n",
+                what, lsqt_memory_format(e.peak, b[0], 32), lsqt_memory_format(e.state, b[1], 32),
+                lsqt_memory_format(e.device, b[2], 32), lsqt_memory_format(e.pilot, b[3], 32));
+    }
     fprintf(f, "largest relative error of a slice's BSDF values at %llu paths (error ~ 1/sqrt(paths)):\n",
             (unsigned long long)n);
     fprintf(f, "  slice  theta_o  max_rel_err  paths for 1%%  paths for 0.1%%\n");

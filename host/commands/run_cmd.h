@@ -10,6 +10,7 @@
 
 #include "lsqt/assembly.h"
 #include "lsqt/cli.h"
+#include "lsqt/memory.h"
 #include "lsqt/state.h"
 #include "lsqt/tally.h"
 #include "lsqt/report.h"
@@ -30,10 +31,16 @@ extern volatile sig_atomic_t g_armed; /* the input is read: Ctrl-C now means "fi
 /* Before any other thread exists, so that every thread inherits the blocked signals. */
 void sigint_setup(void);
 const char *signal_name(int sig);
+/* FN runs (on the signals' thread) before a stop at once exits: what must not be left
+ * behind (--plan's folder). NULL: nothing. */
+void sigint_at_stop(void (*fn)(void));
 
 /* run_command.c: everything lsqt-cl does with an input once its flags are read; returns
  * the exit status. */
 int run_command(const lsqt_cli *c);
+/* The shape of the last run_command's memory estimate (memory.h; n_bands 0 before one),
+ * which --plan estimates again for the paths of the run it plans. */
+extern lsqt_memory_shape g_run_shape;
 /* plan.c: --plan (two calibration runs through run_command, then the prediction). */
 int plan_command(const lsqt_cli *c);
 

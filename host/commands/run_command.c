@@ -160,10 +160,13 @@ static lsqt_run_plan run_plan(const lsqt_cli *c, const lsqt_state *st, const cha
     return p;
 }
 
-/* A signal stopped the run: exit 1, saying what was written. */
-static int interrupted(const lsqt_sim_stats *stats, int rc)
+/* A signal stopped the run: exit 1, saying what was written (a calibration run of --plan
+ * says nothing: plan.c removes what it wrote and says so). */
+static int interrupted(const lsqt_cli *c, const lsqt_sim_stats *stats, int rc)
 {
-    if (stats->interrupted && g_stop) {
+    if (stats->interrupted && g_stop && c->plan == LSQT_PLAN_CALIBRATION) {
+        rc = 1; /* --plan's calibration: plan.c says what became of it */
+    } else if (stats->interrupted && g_stop) {
         fprintf(stderr, "lsqt-cl: interrupted (%s): %s the paths done so far\n", signal_name(g_stop),
                 rc ? "tried to write" : "wrote");
         rc = 1;
@@ -186,7 +189,7 @@ static int report_pilot_shard(const lsqt_cli *c, const outputs *out, const lsqt_
                 c->shard_k, c->shard_n, (unsigned long long)sg->part_lo, (unsigned long long)sg->part_hi,
                 (unsigned long long)sg->pilot, stats.seconds, ls, c->shard_n);
     if (!c->quiet && c->output) fprintf(stderr, "note: a pilot shard writes no RAW (-o is not used)\n");
-    return interrupted(&stats, rc);
+    return interrupted(c, &stats, rc);
 }
 
 /* What the summary and the JSON say of this run: the device, its speed, its work (less
@@ -239,7 +242,7 @@ static int report_run(const lsqt_cli *c, const outputs *out, const lsqt_state *s
                 (unsigned long long)sg->part_lo, (unsigned long long)sg->part_hi, (unsigned long long)sg->run_lo,
                 (unsigned long long)sg->run_hi, sg->part_lo == sg->part_hi ? " (nothing to do: an empty part)" : "");
     lsqt_estimates_free(est, st->n_slices);
-    return interrupted(&sg->stats, rc);
+    return interrupted(c, &sg->stats, rc);
 }
 
 /* Every output location is checked before any work, so a long run never ends in an
@@ -257,6 +260,50 @@ static int open_device(const lsqt_cli *c, const lsqt_state *st, const outputs *o
     if (rc) lsqt_context_release(cx);
     else if (c->verbose) fprintf(stderr, "device: %s [%s]\n", cx->dev.name, cx->dev.platform_name);
     return rc;
+}
+
+lsqt_memory_shape g_run_shape;
+
+/* The run's peak memory against --max-memory (default: 80 % of what this machine, or
+ * its cgroup, has available), before the device or the tallies are touched. Returns 0,
+ * or 2 (printed) when it does not fit. */
+static int check_memory(const lsqt_cli *c, const lsqt_assembly *a, const lsqt_state *st)
+{
+    const int pilot = st->stage == LSQT_STAGE_PILOT, rx = pilot ? (int)st->rx : c->rx;
+    lsqt_memory_shape m = {st->n_bands, pilot && rx ? st->n_slices / rx : st->n_slices, st->n_wi, 0, 1,
+                           st->use_double, a->n_layers, 0};
+    /* the paths per slice it holds at the end (0: a target error without -p, unbounded) */
+    if (c->total_paths) m.paths = c->total_paths;
+    else if (!(c->target_error > 0 && !c->paths_given)) m.paths = st->paths + c->paths;
+    if (m.paths && m.paths < st->span_end) m.paths = st->span_end;
+    if (pilot || (st->dir_method == LSQT_DIRS_RRSS && st->paths == 0)) m.pilot_rx = rx;
+    for (int s = 1; s < st->n_slices; s++)
+        if ((st->slice_flags[s] ^ st->slice_flags[0]) & LSQT_SLICE_BELOW) m.sides = 2;
+    g_run_shape = m;
+    const lsqt_memory est = lsqt_memory_estimate(&m), *e = &est;
+    const uint64_t avail = c->max_memory_given ? 0 : lsqt_memory_available();
+    const uint64_t limit = c->max_memory_given ? c->max_memory : avail / 10 * 8;
+    char b[5][32];
+    if (c->verbose)
+        fprintf(stderr, "memory: about %s at the peak (state %s, device %s, RRSS pilot %s); limit %s\n",
+                lsqt_memory_format(e->peak, b[0], 32), lsqt_memory_format(e->state, b[1], 32),
+                lsqt_memory_format(e->device, b[2], 32), lsqt_memory_format(e->pilot, b[3], 32),
+                limit ? lsqt_memory_format(limit, b[4], 32) : "none");
+    if (!limit || e->peak <= limit) return 0;
+    char why[64];
+    if (c->max_memory_given) snprintf(why, sizeof why, "--max-memory");
+    else snprintf(why, sizeof why, "80 %% of the %s available", lsqt_memory_format(avail, b[4], 32));
+    fprintf(stderr,
+            "lsqt-cl: error: this run would need about %s of memory at its peak, more than the %s allowed (%s): "
+            "%d band%s x %d slices x %d directions hold %s of tallies on the host and %s on the device%s%s%s. "
+            "Nothing was simulated. Fewer bands per run (split --wavelengths into several runs, each with its "
+            "own --lss), fewer slices or directions (-wo, -wi, --grid) or no --from-below need less; "
+            "--max-memory SIZE (0: no limit) sets the limit\n",
+            lsqt_memory_format(e->peak, b[0], 32), lsqt_memory_format(limit, b[1], 32), why, m.n_bands,
+            m.n_bands == 1 ? "" : "s", st->n_slices, st->n_wi, lsqt_memory_format(e->state, b[2], 32),
+            lsqt_memory_format(e->device, b[3], 32), e->pilot ? ", and the RRSS pilot " : "",
+            e->pilot ? lsqt_memory_format(e->pilot, b[4], 32) : "", e->pilot ? " (-rx sets its size)" : "");
+    return 2;
 }
 
 /* The device's work on the state (stages.h), then the outputs. Returns the exit status. */
@@ -308,7 +355,8 @@ int run_command(const lsqt_cli *c)
     if (!rc) rc = run_open_state(&st, c, &a, out.base, wi_dirs, n_wi_dirs, n_mirrored, &continued);
     free(wi_dirs);
     if (!rc) rc = run_plan_sides(c, from_stdin, &a, &st, continued, &out, err, sizeof err);
-    if (!rc) {
+    if (!rc && (rc = check_memory(c, &a, &st))) lsqt_state_free(&st);
+    else if (!rc) {
         rc = simulate(c, &a, &st, &out);
         lsqt_state_free(&st);
     }

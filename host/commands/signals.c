@@ -20,6 +20,9 @@ static sigset_t g_sigint;
 static pthread_mutex_t g_watch_lock = PTHREAD_MUTEX_INITIALIZER;
 static pthread_cond_t g_watch_cond = PTHREAD_COND_INITIALIZER;
 static int g_watch_started = 0;
+static void (*volatile g_at_stop)(void) = NULL; /* sigint_at_stop's */
+
+void sigint_at_stop(void (*fn)(void)) { g_at_stop = fn; }
 
 static void *sigint_watch(void *arg)
 {
@@ -35,6 +38,8 @@ static void *sigint_watch(void *arg)
             g_stop = sig;
             continue;
         }
+        void (*at_stop)(void) = g_at_stop;
+        if (at_stop) at_stop();
         static const char msg[] = "\nlsqt-cl: interrupted: stopping now, nothing more written\n";
         if (write(STDERR_FILENO, msg, sizeof msg - 1) < 0) { /* nowhere left to say it */
         }

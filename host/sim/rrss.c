@@ -402,6 +402,7 @@ int lsqt_rrss_pilot(lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *
     if (candidates(&s, ns, m, st->transmits, cand, &info->short_slices, err, errcap)) goto done;
     memcpy(ps->wi, cand, (size_t)ns * m * 4 * sizeof *cand); /* block j of slice s is candidates j n ... */
     if (lsqt_session_set_directions(&s, ps, err, errcap)) goto done;
+    s.last_read_releases = 1;
     if (pilot_run(&s, ps, begin, n_paths, o, info, err, errcap)) goto done;
     info->seconds = lsqt_now() - t1;
     rc = 0;
@@ -421,6 +422,7 @@ int lsqt_rrss_pilot_continue(lsqt_context *cx, const lsqt_assembly *a, lsqt_stat
     if (lsqt_session_open_grouped(&s, cx, a, ps, (int)ps->rx, o->extra_options, o->local_size, o->verbose, err, errcap))
         return 1;
     const double t1 = lsqt_now();
+    s.last_read_releases = 1;
     int rc = pilot_run(&s, ps, begin, n_paths, o, info, err, errcap);
     info->seconds = lsqt_now() - t1;
     lsqt_session_close(&s);
@@ -481,17 +483,17 @@ int lsqt_rrss_choose(const lsqt_state *ps, lsqt_state *st, lsqt_rrss_info *info,
             for (int band = 0; band < nbands; band++) {
                 const lsqt_state to = lsqt_state_band(st, band), from = lsqt_state_band(ps, band);
                 for (size_t b = 0; b < B; b++)
-                    to.nee[((size_t)sl * B + b) * (size_t)n + (size_t)k] =
-                        from.nee[((size_t)v * B + b) * (size_t)n + (size_t)kk];
+                    lsqt_tallies_copy(to.nee + ((size_t)sl * B + b) * (size_t)n + (size_t)k,
+                                      from.nee + ((size_t)v * B + b) * (size_t)n + (size_t)kk, 1);
             }
             k++;
         }
         /* the paths are those of every block: their scalars and histogram are block 0's */
         for (int band = 0; band < nbands; band++) {
             const lsqt_state to = lsqt_state_band(st, band), from = lsqt_state_band(ps, band);
-            memcpy(to.scalars + (size_t)sl * B * LSQT_T_COUNT, from.scalars + (size_t)sl * rx * B * LSQT_T_COUNT,
-                   B * LSQT_T_COUNT * sizeof *st->scalars);
-            memcpy(lsqt_state_hist_of(&to, sl), lsqt_state_hist_of(&from, sl * rx), B * LSQT_HIST_BINS * sizeof *st->hist);
+            lsqt_tallies_copy(to.scalars + (size_t)sl * B * LSQT_T_COUNT, from.scalars + (size_t)sl * rx * B * LSQT_T_COUNT,
+                              B * LSQT_T_COUNT);
+            lsqt_tallies_copy(lsqt_state_hist_of(&to, sl), lsqt_state_hist_of(&from, sl * rx), B * LSQT_HIST_BINS);
         }
     }
     info->select_seconds = lsqt_now() - t_sel;

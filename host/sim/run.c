@@ -91,6 +91,7 @@ int lsqt_simulate_range(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st
     memset(stats, 0, sizeof *stats);
     lsqt_session s;
     if (lsqt_session_open(&s, cx, a, st, o->extra_options, o->local_size, o->verbose, err, errcap)) return 1;
+    s.last_read_releases = 1;
     int rc = lsqt_run_range(&s, st, begin, add_paths, o, stats, err, errcap);
     lsqt_session_close(&s);
     return rc;
@@ -203,7 +204,7 @@ int lsqt_run_range(lsqt_session *sp, lsqt_state *st, uint64_t begin, uint64_t ad
         stats->launches++;
         chunks_per_launch = next_launch_chunks(chunks_per_launch, dt);
         if (pos == check) {
-            if (lsqt_session_read(sp, st, err, errcap) || hold(st, base, n_base, first, pos, err, errcap)) goto done;
+            if (lsqt_session_read(sp, st, 0, err, errcap) || hold(st, base, n_base, first, pos, err, errcap)) goto done;
             cur_err = lsqt_max_rel_err(st);
             if (!isnan(cur_err) && cur_err <= goal) {
                 stats->stop_reason = LSQT_STOP_TARGET;
@@ -213,7 +214,7 @@ int lsqt_run_range(lsqt_session *sp, lsqt_state *st, uint64_t begin, uint64_t ad
         }
         if (o->checkpoint && o->checkpoint_every > 0 && lsqt_now() - last_ck >= o->checkpoint_every && pos < target) {
             /* the state so far, exactly as a run of pos paths leaves it */
-            if (lsqt_session_read(sp, st, err, errcap) || hold(st, base, n_base, first, pos, err, errcap)) goto done;
+            if (lsqt_session_read(sp, st, 0, err, errcap) || hold(st, base, n_base, first, pos, err, errcap)) goto done;
             o->checkpoint(st, o->checkpoint_ctx);
             last_ck = lsqt_now();
         }
@@ -223,7 +224,8 @@ int lsqt_run_range(lsqt_session *sp, lsqt_state *st, uint64_t begin, uint64_t ad
     }
     if (o->progress) fprintf(stderr, "\n");
     if (o->verbose) fprintf(stderr, "%d launches in %.3g s\n", stats->launches, lsqt_now() - t0);
-    if (lsqt_session_read(sp, st, err, errcap) || hold(st, base, n_base, first, pos, err, errcap)) goto done;
+    if (lsqt_session_read(sp, st, sp->last_read_releases, err, errcap) || hold(st, base, n_base, first, pos, err, errcap))
+        goto done;
     stats->paths_added = pos - first;
     stats->seconds = lsqt_now() - t0;
     if (lsqt_tally_flags_error(st->flags, err, errcap)) goto done;

@@ -1,16 +1,20 @@
+/* MAP_ANONYMOUS (mmap of zero pages) is not in POSIX 2008 */
+#define _DEFAULT_SOURCE
 #include "lsqt/session.h"
 
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
 
 #include "lsqt/tables.h"
 
 static cl_mem make_buffer(lsqt_context *cx, cl_mem_flags fl, size_t size, void *host, cl_int *e)
 {
     if (*e != CL_SUCCESS) return NULL;
-    return clCreateBuffer(cx->ctx, fl | (host ? CL_MEM_COPY_HOST_PTR : 0), size, host, e);
+    const cl_mem_flags copy = host && !(fl & CL_MEM_USE_HOST_PTR) ? CL_MEM_COPY_HOST_PTR : 0;
+    return clCreateBuffer(cx->ctx, fl | copy, size, host, e);
 }
 
 /* The code path: a CPU's (wide vectors, one work-item per work-group, the four-block
@@ -151,8 +155,8 @@ static void block_tallies(const lsqt_session *s, const lsqt_state *st, int which
         for (size_t j = 0; j < nb; j++) {
             if (s->band_of[j] < 0) continue;
             lsqt_u128 *band = which == 0 ? v[j].nee : v[j].scalars;
-            if (back) memcpy(band, all + j * n, n * sizeof *all);
-            else memcpy(all + j * n, band, n * sizeof *all);
+            if (back) lsqt_tallies_copy(band, all + j * n, n);
+            else lsqt_tallies_copy(all + j * n, band, n);
         }
         return;
     }
@@ -172,24 +176,27 @@ static void block_tallies(const lsqt_session *s, const lsqt_state *st, int which
                 lsqt_u128 *row = all + (k * per + i) * nb;
                 for (size_t j = 0; j < nb; j++)
                     if (!h[j]) continue;
-                    else if (back) h[j][i] = row[j];
-                    else row[j] = h[j][i];
+                    else if (back) lsqt_tallies_copy(&h[j][i], &row[j], 1);
+                    else lsqt_tallies_copy(&row[j], &h[j][i], 1);
             }
         }
 }
 
-/* Buffer BUF (BYTES) gets ST's tallies WHICH: zeros filled on the device for a state
- * without paths (a fresh run, a pilot: no staging copy of what may be a GB of zeros),
- * else written in place through a map. */
+/* Buffer BUF (BYTES) gets ST's tallies WHICH: for a state without paths (a fresh run, a
+ * pilot) zeros, filled on the device (no staging copy of what may be a GB of zeros) or
+ * already there (a CPU device's mapped zero pages, s->host); else written in place
+ * through a map, only the nonzero words into a CPU device's zero pages. */
 static cl_int put_tallies(const lsqt_session *s, const lsqt_state *st, int which, cl_mem buf, size_t bytes)
 {
     cl_command_queue q = s->cx->queue;
     const cl_ulong zero = 0;
-    if (st->paths == 0) return clEnqueueFillBuffer(q, buf, &zero, sizeof zero, 0, bytes, 0, NULL, NULL);
+    const int zeros = s->host[which] != NULL;
+    if (st->paths == 0) return zeros ? CL_SUCCESS : clEnqueueFillBuffer(q, buf, &zero, sizeof zero, 0, bytes, 0, NULL, NULL);
     cl_int e = CL_SUCCESS;
-    lsqt_u128 *p = clEnqueueMapBuffer(q, buf, CL_TRUE, CL_MAP_WRITE_INVALIDATE_REGION, 0, bytes, 0, NULL, NULL, &e);
+    lsqt_u128 *p = clEnqueueMapBuffer(q, buf, CL_TRUE, zeros ? CL_MAP_WRITE : CL_MAP_WRITE_INVALIDATE_REGION, 0, bytes, 0,
+                                      NULL, NULL, &e);
     if (e != CL_SUCCESS) return e;
-    memset(p, 0, bytes); /* a padding slot's part */
+    if (!zeros) memset(p, 0, bytes); /* a padding slot's part */
     block_tallies(s, st, which, p, 0);
     return clEnqueueUnmapMemObject(q, buf, p, 0, NULL, NULL);
 }
@@ -253,19 +260,24 @@ static int upload(lsqt_session *s, const lsqt_assembly *full, const lsqt_band_bl
     const size_t tab_size = (size_t)st->n_slices * ((size_t)n * LSQT_LAYER_TAB_ROWS + LSQT_MEDIA_TAB_ROWS) * pad * dir_size; /* LSQT_SLICE_TAB */
     s->tab = make_buffer(cx, rw, tab_size, NULL, &e);
     const size_t nb = (size_t)s->nb;
-    s->nee = make_buffer(cx, rw, nb * s->n_nee * sizeof *st->nee, NULL, &e);
-    s->scalars = make_buffer(cx, rw, nb * s->n_scalars * sizeof *st->scalars, NULL, &e);
-    s->hist = make_buffer(cx, rw, nb * s->n_hist * sizeof *st->hist, NULL, &e);
+    const size_t tally_bytes[3] = {nb * s->n_nee * sizeof *st->nee, nb * s->n_scalars * sizeof *st->scalars,
+                                   nb * s->n_hist * sizeof *st->hist};
+    cl_mem *tally_buf[3] = {&s->nee, &s->scalars, &s->hist};
+    for (int i = 0; i < 3; i++) {
+        if (cx->dev.is_cpu && e == CL_SUCCESS) { /* mapped zero pages, the device's own memory */
+            void *m = mmap(NULL, tally_bytes[i], PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+            if (m == MAP_FAILED) e = CL_OUT_OF_HOST_MEMORY;
+            else s->host[i] = m, s->host_bytes[i] = tally_bytes[i];
+        }
+        *tally_buf[i] = make_buffer(cx, rw | (s->host[i] ? CL_MEM_USE_HOST_PTR : 0), tally_bytes[i], s->host[i], &e);
+    }
     s->bandw = make_buffer(cx, ro, n_bw * dir_size, st->use_double ? (void *)bw : (void *)bw_f, &e);
     s->flags = make_buffer(cx, rw, sizeof flags0, &flags0, &e);
     if (e != CL_SUCCESS) {
         snprintf(err, errcap, "cannot allocate device buffers: %s (%d)", lsqt_cl_error_name(e), (int)e);
         goto done;
     }
-    const size_t tally_bytes[3] = {nb * s->n_nee * sizeof *st->nee, nb * s->n_scalars * sizeof *st->scalars,
-                                   nb * s->n_hist * sizeof *st->hist};
-    cl_mem tally_buf[3] = {s->nee, s->scalars, s->hist};
-    for (int i = 0; i < 3 && e == CL_SUCCESS; i++) e = put_tallies(s, st, i, tally_buf[i], tally_bytes[i]);
+    for (int i = 0; i < 3 && e == CL_SUCCESS; i++) e = put_tallies(s, st, i, *tally_buf[i], tally_bytes[i]);
     if (e != CL_SUCCESS) {
         snprintf(err, errcap, "cannot put the tallies on the device: %s (%d)", lsqt_cl_error_name(e), (int)e);
         goto done;
@@ -644,6 +656,10 @@ int lsqt_session_launch(lsqt_session *s, uint64_t begin, uint64_t end, char *err
         if (rc) return 1;
     }
     if (end <= begin) return 0;
+    if (!s->nee) {
+        snprintf(err, errcap, "the session's tallies were released by its last read");
+        return 1;
+    }
     int no_memory = 0;
     cl_int e = s->records ? launch_records(s, begin, end, &no_memory) : run_chunks(s, s->walk, 6, begin, end, s->local_size);
     if (e != CL_SUCCESS) {
@@ -656,10 +672,31 @@ int lsqt_session_launch(lsqt_session *s, uint64_t begin, uint64_t end, char *err
 
 static int read_block(lsqt_session *s, lsqt_state *st, char *err, size_t errcap);
 
-int lsqt_session_read(lsqt_session *s, lsqt_state *st, char *err, size_t errcap)
+/* A block's tally buffers released (and a CPU device's pages unmapped). */
+static void release_tallies(lsqt_session *s)
 {
-    for (int b = 0; b < (s->n_blocks > 1 ? s->n_blocks : 1); b++)
-        if (read_block(b ? &s->blocks[b - 1] : s, st, err, errcap)) return 1;
+    cl_mem *bufs[3] = {&s->nee, &s->scalars, &s->hist};
+    for (int i = 0; i < 3; i++) {
+        if (*bufs[i]) clReleaseMemObject(*bufs[i]);
+        *bufs[i] = NULL;
+    }
+    clFinish(s->cx->queue); /* (nothing uses the pages now) */
+    for (int i = 0; i < 3; i++)
+        if (s->host[i]) munmap(s->host[i], s->host_bytes[i]);
+    memset(s->host, 0, sizeof s->host);
+}
+
+int lsqt_session_read(lsqt_session *s, lsqt_state *st, int release, char *err, size_t errcap)
+{
+    for (int b = 0; b < (s->n_blocks > 1 ? s->n_blocks : 1); b++) {
+        lsqt_session *blk = b ? &s->blocks[b - 1] : s;
+        if (!blk->nee) {
+            snprintf(err, errcap, "the session's tallies were released by its last read");
+            return 1;
+        }
+        if (read_block(blk, st, err, errcap)) return 1;
+        if (release) release_tallies(blk);
+    }
     return 0;
 }
 
@@ -760,5 +797,7 @@ void lsqt_session_close(lsqt_session *s)
     if (s->exits) clReleaseKernel(s->exits);
     if (s->estimate) clReleaseKernel(s->estimate);
     if (s->prog) clReleaseProgram(s->prog);
+    for (int i = 0; i < 3; i++) /* (every command that used them has finished) */
+        if (s->host[i]) munmap(s->host[i], s->host_bytes[i]);
     memset(s, 0, sizeof *s);
 }

@@ -205,15 +205,17 @@ static int run_whole(const stage_ctx *k, lsqt_state *st, lsqt_stages *o, char *e
     if (o->have_ps && !rc) rc = choose(k, st, finish_pilot, &add, o, err, errcap);
     lsqt_sim_opts ro = *k->so; /* the progress bar says which part of the run it is */
     ro.phase = o->have_ps ? "refining the chosen directions" : NULL;
+    /* the pilot's tallies are the chosen state's now: freed before the rest of the run
+     * opens its session (they are kept only for an interrupted pilot's LSS) */
+    if (o->have_ps && !o->rinfo.interrupted) {
+        lsqt_state_free(&o->ps);
+        o->have_ps = 0;
+    }
     if (!rc && !o->rinfo.interrupted) rc = lsqt_simulate_sides(k->cx, k->a, st, add, &ro, &o->stats, err, errcap);
     o->stats.seconds += o->rinfo.seconds;
     o->stats.paths_added = st->paths - paths_before;
     if (o->rinfo.interrupted)
         o->stats.interrupted = 1, o->stats.stop_reason = *k->so->stop ? LSQT_STOP_INTERRUPT : LSQT_STOP_TIME;
-    if (o->have_ps && !o->rinfo.interrupted) {
-        lsqt_state_free(&o->ps);
-        o->have_ps = 0;
-    }
     return rc;
 }
 

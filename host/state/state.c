@@ -50,15 +50,21 @@ int lsqt_state_group_hist(lsqt_state *st, int g)
     return 0;
 }
 
+void lsqt_tallies_copy(lsqt_u128 *dst, const lsqt_u128 *src, size_t n)
+{
+    for (size_t i = 0; i < n; i++)
+        if (dst[i].lo != src[i].lo || dst[i].hi != src[i].hi) dst[i] = src[i];
+}
+
 void lsqt_state_copy_slice_tallies(lsqt_state *dst, int ds, const lsqt_state *src, int ss)
 {
     const size_t B = LSQT_BATCHES, nw = (size_t)src->n_wi;
     for (size_t b = 0; b < bands_of(src); b++) {
         lsqt_state d = lsqt_state_band(dst, (int)b), s = lsqt_state_band(src, (int)b);
-        memcpy(d.nee + (size_t)ds * B * nw, s.nee + (size_t)ss * B * nw, B * nw * sizeof *s.nee);
-        memcpy(d.scalars + (size_t)ds * B * LSQT_T_COUNT, s.scalars + (size_t)ss * B * LSQT_T_COUNT,
-               B * LSQT_T_COUNT * sizeof *s.scalars);
-        memcpy(lsqt_state_hist_of(&d, ds), lsqt_state_hist_of(&s, ss), B * LSQT_HIST_BINS * sizeof *s.hist);
+        lsqt_tallies_copy(d.nee + (size_t)ds * B * nw, s.nee + (size_t)ss * B * nw, B * nw);
+        lsqt_tallies_copy(d.scalars + (size_t)ds * B * LSQT_T_COUNT, s.scalars + (size_t)ss * B * LSQT_T_COUNT,
+                          B * LSQT_T_COUNT);
+        lsqt_tallies_copy(lsqt_state_hist_of(&d, ds), lsqt_state_hist_of(&s, ss), B * LSQT_HIST_BINS);
     }
 }
 

@@ -12,6 +12,8 @@ extern "C" {
 
 #define LSQT_MAX_WO 1024
 
+enum { LSQT_PLAN_CALIBRATION = 2 };
+
 typedef struct lsqt_cli {
     const char *input;        /* file or "-" */
     uint64_t paths;           /* -p, per slice */
@@ -22,6 +24,8 @@ typedef struct lsqt_cli {
     int rx;                   /* -rx */
     int wi_spread;            /* --wi-spread: the even spread instead of RRSS */
     double rp;                /* -rp */
+    uint64_t max_memory;      /* --max-memory: bytes a run may use (0: no limit); max_memory_given */
+    int max_memory_given;
     int restart;              /* -R */
     uint64_t seed;            /* -s */
     int seed_given;
@@ -42,7 +46,8 @@ typedef struct lsqt_cli {
     int quiet, verbose;
     int help;
     int version;            /* --version */
-    int plan;               /* --plan: calibrate and predict, simulate nothing to keep */
+    int plan;               /* --plan: calibrate and predict, simulate nothing to keep;
+                             * LSQT_PLAN_CALIBRATION: one of its calibration runs */
     int sampling_given;       /* a flag that fixes the sampling (-wo, -wi, -s, ...) was given */
     int shard_k, shard_n;     /* --shard K/N (shard_n 0: not sharded) */
     int refine;               /* --refine: a shard does only what its state owes */

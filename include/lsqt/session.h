@@ -38,6 +38,15 @@ typedef struct lsqt_session {
     int nb;
     int band_of[LSQT_BAND_BLOCK_MAX];
     cl_mem bandw;
+    /* On a CPU device the tally buffers (nee, scalars, hist) are this memory, mapped zero
+     * pages (CL_MEM_USE_HOST_PTR; host_bytes each): only the pages that come to hold a
+     * nonzero tally are ever resident (a fill with zeros would make every page so). NULL
+     * on a GPU, whose buffers are filled on the device. */
+    void *host[3];
+    size_t host_bytes[3];
+    /* 1: the caller runs one range on this session (lsqt_simulate_range, the RRSS pilot),
+     * so lsqt_run_range's last read releases each block's tallies as it reads them */
+    int last_read_releases;
     /* A run with bands: this session is the first block's (band 0's), and blocks[i - 1]
      * block i's, each with its own tables and tallies; blocks of one width share one
      * program. A launch runs every block over the same path indices. */
@@ -84,8 +93,11 @@ int lsqt_session_exits(lsqt_session *s, uint64_t begin, uint32_t n, float *out, 
 int lsqt_session_launch(lsqt_session *s, uint64_t begin, uint64_t end, char *err, size_t errcap);
 
 /* Copies the device tallies into ST and ORs the device flags into ST's (paths are the
- * caller's to count). Returns 0, or 1 with err filled. */
-int lsqt_session_read(lsqt_session *s, lsqt_state *st, char *err, size_t errcap);
+ * caller's to count). With release, the session's last read: each block's tally buffers
+ * are released once read, so the state and the device hold a block's tallies twice one
+ * block at a time, not every block's at once (the session cannot launch again). Returns
+ * 0, or 1 with err filled. */
+int lsqt_session_read(lsqt_session *s, lsqt_state *st, int release, char *err, size_t errcap);
 
 void lsqt_session_close(lsqt_session *s);
 

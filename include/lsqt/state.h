@@ -68,6 +68,11 @@ lsqt_state lsqt_state_band(const lsqt_state *st, int b);
 int lsqt_state_group_hist(lsqt_state *st, int g);
 /* Slice s's histogram in ST (or in a band view of it): [LSQT_BATCHES][LSQT_HIST_BINS]. */
 lsqt_u128 *lsqt_state_hist_of(const lsqt_state *st, int s);
+/* DST gets SRC's n tallies, a word written only where it differs: the zero words of a
+ * fresh (calloc'd) DST are never written, so their pages stay unmapped and a state costs
+ * the memory of the pages its nonzero tallies are on (the exit histograms of a short run
+ * are mostly zero: its batches not yet reached, bins never hit). */
+void lsqt_tallies_copy(lsqt_u128 *dst, const lsqt_u128 *src, size_t n);
 /* Slice ss's tallies of SRC, in every band, into slice ds of DST (same bands, n_wi). */
 void lsqt_state_copy_slice_tallies(lsqt_state *dst, int ds, const lsqt_state *src, int ss);
 void lsqt_state_free(lsqt_state *st);
