@@ -124,6 +124,7 @@ for e in lss raw; do cmp -s sh.lsqt.$e one.lsqt.$e && ok || bad "lsqt-local-shar
 # lsqt-slurm-submit with a stand-in sbatch: it keeps each batch script and its LSQT_CL.
 cat >"$T/slurm/sbatch" <<'EOF'
 #!/bin/bash
+case " $* " in *" --test-only "*) cat >/dev/null; echo "sbatch: Job 1 to start at now" >&2; exit 0 ;; esac
 n=$(find "$SB_DIR" -name 'job*.sh' | wc -l)
 cat >"$SB_DIR/job$n.sh"
 printf '%s\n' "$LSQT_CL" >"$SB_DIR/job$n.lsqt_cl"
