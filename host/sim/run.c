@@ -193,7 +193,16 @@ int lsqt_run_range(lsqt_session *sp, lsqt_state *st, uint64_t begin, uint64_t ad
                 (unsigned long long)(target - first), st->n_slices, sp->local_size,
                 goal > 0 ? ", or fewer if the target error is reached" : "");
     stats->stop_reason = LSQT_STOP_PATHS;
+    /* The device's buffers hold ST's tallies until the next read, which copies every word
+     * back: in between, the host's copy is given back (a 32-band run's held both), dropped
+     * again after each read the loop goes on from. Nothing reads ST's tallies before the
+     * read (an error leaves them undefined: lsqt_run_range). */
+    int on_host = sp->nee != NULL;
     while (pos < target) {
+        if (on_host) {
+            lsqt_state_drop_tallies(st);
+            on_host = 0;
+        }
         uint64_t end = (pos / LSQT_CHUNK + chunks_per_launch) * LSQT_CHUNK;
         if (end > target) end = target;
         if (end > check) end = check;
@@ -205,6 +214,7 @@ int lsqt_run_range(lsqt_session *sp, lsqt_state *st, uint64_t begin, uint64_t ad
         chunks_per_launch = next_launch_chunks(chunks_per_launch, dt);
         if (pos == check) {
             if (lsqt_session_read(sp, st, 0, err, errcap) || hold(st, base, n_base, first, pos, err, errcap)) goto done;
+            on_host = 1;
             cur_err = lsqt_max_rel_err(st);
             if (!isnan(cur_err) && cur_err <= goal) {
                 stats->stop_reason = LSQT_STOP_TARGET;
@@ -215,6 +225,7 @@ int lsqt_run_range(lsqt_session *sp, lsqt_state *st, uint64_t begin, uint64_t ad
         if (o->checkpoint && o->checkpoint_every > 0 && lsqt_now() - last_ck >= o->checkpoint_every && pos < target) {
             /* the state so far, exactly as a run of pos paths leaves it */
             if (lsqt_session_read(sp, st, 0, err, errcap) || hold(st, base, n_base, first, pos, err, errcap)) goto done;
+            on_host = 1;
             o->checkpoint(st, o->checkpoint_ctx);
             last_ck = lsqt_now();
         }
