@@ -79,6 +79,8 @@ static void progress_draw(const char *phase, uint64_t done, uint64_t total, uint
     fflush(stderr);
 }
 
+static uint64_t *base_ranges(const lsqt_state *st, uint64_t begin, int *n, char *err, size_t errcap);
+
 int lsqt_simulate(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint64_t add_paths,
                   const lsqt_sim_opts *o, lsqt_sim_stats *stats, char *err, size_t errcap)
 {
@@ -90,7 +92,17 @@ int lsqt_simulate_range(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st
 {
     memset(stats, 0, sizeof *stats);
     lsqt_session s;
-    if (lsqt_session_open(&s, cx, a, st, o->extra_options, o->local_size, o->verbose, err, errcap)) return 1;
+    /* Without a target error nothing reads ST's tallies before the run's first read: the
+     * session takes them as it uploads them (a 32-band run held both copies meanwhile),
+     * unless lsqt_run_range is to refuse the range (ST is kept as it is then). */
+    char e2[256];
+    int n_base = 0;
+    uint64_t *base = o->target_error > 0 ? NULL : base_ranges(st, begin, &n_base, e2, sizeof e2);
+    const int take = base != NULL;
+    free(base);
+    if (take ? lsqt_session_open_taking(&s, cx, a, st, o->extra_options, o->local_size, o->verbose, err, errcap)
+             : lsqt_session_open(&s, cx, a, st, o->extra_options, o->local_size, o->verbose, err, errcap))
+        return 1;
     s.last_read_releases = 1;
     int rc = lsqt_run_range(&s, st, begin, add_paths, o, stats, err, errcap);
     lsqt_session_close(&s);
