@@ -695,20 +695,17 @@ int lsqt_session_launch(lsqt_session *s, uint64_t begin, uint64_t end, char *err
     return 0;
 }
 
-static int read_block(lsqt_session *s, lsqt_state *st, char *err, size_t errcap);
+static int read_block(lsqt_session *s, lsqt_state *st, int release, char *err, size_t errcap);
 
-/* A block's tally buffers released (and a CPU device's pages unmapped). */
-static void release_tallies(lsqt_session *s)
+/* A block's tally buffer I released (and a CPU device's pages unmapped). */
+static void release_tally(lsqt_session *s, int i)
 {
     cl_mem *bufs[3] = {&s->nee, &s->scalars, &s->hist};
-    for (int i = 0; i < 3; i++) {
-        if (*bufs[i]) clReleaseMemObject(*bufs[i]);
-        *bufs[i] = NULL;
-    }
+    if (*bufs[i]) clReleaseMemObject(*bufs[i]);
+    *bufs[i] = NULL;
     clFinish(s->cx->queue); /* (nothing uses the pages now) */
-    for (int i = 0; i < 3; i++)
-        if (s->host[i]) munmap(s->host[i], s->host_bytes[i]);
-    memset(s->host, 0, sizeof s->host);
+    if (s->host[i]) munmap(s->host[i], s->host_bytes[i]);
+    s->host[i] = NULL;
 }
 
 int lsqt_session_read(lsqt_session *s, lsqt_state *st, int release, char *err, size_t errcap)
@@ -719,14 +716,14 @@ int lsqt_session_read(lsqt_session *s, lsqt_state *st, int release, char *err, s
             snprintf(err, errcap, "the session's tallies were released by its last read");
             return 1;
         }
-        if (read_block(blk, st, err, errcap)) return 1;
-        if (release) release_tallies(blk);
+        if (read_block(blk, st, release, err, errcap)) return 1;
     }
     return 0;
 }
 
-/* A block's tallies into its bands' parts of ST. */
-static int read_block(lsqt_session *s, lsqt_state *st, char *err, size_t errcap)
+/* A block's tallies into its bands' parts of ST; with release, each buffer released once
+ * it is read (the host's copy grows as the device's goes). */
+static int read_block(lsqt_session *s, lsqt_state *st, int release, char *err, size_t errcap)
 {
     cl_command_queue q = s->cx->queue;
     cl_uint fl = 0;
@@ -739,6 +736,7 @@ static int read_block(lsqt_session *s, lsqt_state *st, char *err, size_t errcap)
         if (e != CL_SUCCESS) break;
         block_tallies(s, st, i, t, 1);
         e = clEnqueueUnmapMemObject(q, bufs[i], t, 0, NULL, NULL);
+        if (e == CL_SUCCESS && release) release_tally(s, i);
     }
     if (e == CL_SUCCESS) e = clEnqueueReadBuffer(q, s->flags, CL_TRUE, 0, sizeof fl, &fl, 0, NULL, NULL);
     if (e != CL_SUCCESS) {
