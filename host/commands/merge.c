@@ -284,7 +284,7 @@ static int choose_pilot(merge_job *j)
     lsqt_state chosen;
     lsqt_rrss_info ri;
     memset(&ri, 0, sizeof ri);
-    if (lsqt_rrss_choose(&j->sum, &chosen, &ri, j->err, sizeof j->err)) return lsqt_prog_error(j->prog, 1, j->err);
+    if (lsqt_rrss_choose_using(&j->sum, &chosen, &ri, j->err, sizeof j->err)) return lsqt_prog_error(j->prog, 1, j->err);
     if (!j->g.quiet) lsqt_rrss_notes(stderr, &ri);
     if (!j->g.quiet)
         fprintf(stderr, "RRSS: directions chosen from a pilot of %llu paths per slice; the run owes %llu "

@@ -79,6 +79,8 @@ static void progress_draw(const char *phase, uint64_t done, uint64_t total, uint
     fflush(stderr);
 }
 
+static uint64_t *base_ranges(const lsqt_state *st, uint64_t begin, int *n, char *err, size_t errcap);
+
 int lsqt_simulate(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint64_t add_paths,
                   const lsqt_sim_opts *o, lsqt_sim_stats *stats, char *err, size_t errcap)
 {
@@ -90,7 +92,17 @@ int lsqt_simulate_range(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st
 {
     memset(stats, 0, sizeof *stats);
     lsqt_session s;
-    if (lsqt_session_open(&s, cx, a, st, o->extra_options, o->local_size, o->verbose, err, errcap)) return 1;
+    /* Without a target error nothing reads ST's tallies before the run's first read: the
+     * session takes them as it uploads them (a 32-band run held both copies meanwhile),
+     * unless lsqt_run_range is to refuse the range (ST is kept as it is then). */
+    char e2[256];
+    int n_base = 0;
+    uint64_t *base = o->target_error > 0 ? NULL : base_ranges(st, begin, &n_base, e2, sizeof e2);
+    const int take = base != NULL;
+    free(base);
+    if (take ? lsqt_session_open_taking(&s, cx, a, st, o->extra_options, o->local_size, o->verbose, err, errcap)
+             : lsqt_session_open(&s, cx, a, st, o->extra_options, o->local_size, o->verbose, err, errcap))
+        return 1;
     s.last_read_releases = 1;
     int rc = lsqt_run_range(&s, st, begin, add_paths, o, stats, err, errcap);
     lsqt_session_close(&s);
@@ -193,7 +205,16 @@ int lsqt_run_range(lsqt_session *sp, lsqt_state *st, uint64_t begin, uint64_t ad
                 (unsigned long long)(target - first), st->n_slices, sp->local_size,
                 goal > 0 ? ", or fewer if the target error is reached" : "");
     stats->stop_reason = LSQT_STOP_PATHS;
+    /* The device's buffers hold ST's tallies until the next read, which copies every word
+     * back: in between, the host's copy is given back (a 32-band run's held both), dropped
+     * again after each read the loop goes on from. Nothing reads ST's tallies before the
+     * read (an error leaves them undefined: lsqt_run_range). */
+    int on_host = sp->nee != NULL;
     while (pos < target) {
+        if (on_host) {
+            lsqt_state_drop_tallies(st);
+            on_host = 0;
+        }
         uint64_t end = (pos / LSQT_CHUNK + chunks_per_launch) * LSQT_CHUNK;
         if (end > target) end = target;
         if (end > check) end = check;
@@ -205,6 +226,7 @@ int lsqt_run_range(lsqt_session *sp, lsqt_state *st, uint64_t begin, uint64_t ad
         chunks_per_launch = next_launch_chunks(chunks_per_launch, dt);
         if (pos == check) {
             if (lsqt_session_read(sp, st, 0, err, errcap) || hold(st, base, n_base, first, pos, err, errcap)) goto done;
+            on_host = 1;
             cur_err = lsqt_max_rel_err(st);
             if (!isnan(cur_err) && cur_err <= goal) {
                 stats->stop_reason = LSQT_STOP_TARGET;
@@ -215,6 +237,7 @@ int lsqt_run_range(lsqt_session *sp, lsqt_state *st, uint64_t begin, uint64_t ad
         if (o->checkpoint && o->checkpoint_every > 0 && lsqt_now() - last_ck >= o->checkpoint_every && pos < target) {
             /* the state so far, exactly as a run of pos paths leaves it */
             if (lsqt_session_read(sp, st, 0, err, errcap) || hold(st, base, n_base, first, pos, err, errcap)) goto done;
+            on_host = 1;
             o->checkpoint(st, o->checkpoint_ctx);
             last_ck = lsqt_now();
         }

@@ -205,7 +205,7 @@ static cl_int put_tallies(const lsqt_session *s, const lsqt_state *st, int which
  * lgamma(1 + Lambda) per slice, layer and direction) are made on the device, once. A
  * block of bands has its own tables (band_blocks.h). */
 static int upload(lsqt_session *s, const lsqt_assembly *full, const lsqt_band_block *blk, const lsqt_state *st,
-                  char *err, size_t errcap)
+                  lsqt_state *take, char *err, size_t errcap)
 {
     lsqt_context *cx = s->cx;
     const lsqt_assembly *a = lsqt_assembly_band(full, blk->band[0]);
@@ -281,6 +281,13 @@ static int upload(lsqt_session *s, const lsqt_assembly *full, const lsqt_band_bl
     if (e != CL_SUCCESS) {
         snprintf(err, errcap, "cannot put the tallies on the device: %s (%d)", lsqt_cl_error_name(e), (int)e);
         goto done;
+    }
+    for (int j = 0; take && j < s->nb; j++) { /* lsqt_session_open_taking: the block's bands are the device's now */
+        if (s->band_of[j] < 0) continue;
+        lsqt_state v = lsqt_state_band(take, s->band_of[j]);
+        lsqt_tallies_drop(v.nee, lsqt_state_nee_count(&v));
+        lsqt_tallies_drop(v.scalars, lsqt_state_scalar_count(&v));
+        lsqt_tallies_drop(v.hist, lsqt_state_hist_count(&v));
     }
     e = set_kernel_args(s);
     if (e == CL_SUCCESS) {
@@ -396,7 +403,7 @@ static int make_kernels(lsqt_session *s, const lsqt_state *st, int gpu, char *er
  * and tallies. A and ST are the run's (every band). */
 static int open_block(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st,
                       const lsqt_band_block *blk, int slice_group, const char *extra_options, size_t local_size,
-                      int verbose, cl_program prog, char *err, size_t errcap)
+                      int verbose, cl_program prog, lsqt_state *take, char *err, size_t errcap)
 {
     memset(s, 0, sizeof *s);
     s->cx = cx;
@@ -452,7 +459,7 @@ static int open_block(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a,
         lsqt_session_close(s);
         return 1;
     }
-    if (upload(s, a, blk, st, err, errcap)) {
+    if (upload(s, a, blk, st, take, err, errcap)) {
         lsqt_session_close(s);
         return 1;
     }
@@ -480,9 +487,26 @@ static int block_width(lsqt_context *cx, const lsqt_state *st, int slice_group, 
     return width;
 }
 
+static int open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st,
+                        int slice_group, const char *extra_options, size_t local_size, int verbose, lsqt_state *take,
+                        char *err, size_t errcap);
+
 int lsqt_session_open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st,
                               int slice_group, const char *extra_options, size_t local_size, int verbose,
                               char *err, size_t errcap)
+{
+    return open_grouped(s, cx, a, st, slice_group, extra_options, local_size, verbose, NULL, err, errcap);
+}
+
+int lsqt_session_open_taking(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st,
+                             const char *extra_options, size_t local_size, int verbose, char *err, size_t errcap)
+{
+    return open_grouped(s, cx, a, st, 1, extra_options, local_size, verbose, st, err, errcap);
+}
+
+static int open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st,
+                        int slice_group, const char *extra_options, size_t local_size, int verbose, lsqt_state *take,
+                        char *err, size_t errcap)
 {
     const int nb = lsqt_assembly_bands(a);
     if (nb != (st->n_bands > 1 ? st->n_bands : 1)) {
@@ -503,7 +527,8 @@ int lsqt_session_open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_asse
             fprintf(stderr, "%d bands in %d block%s of up to %d sharing their paths\n", nb, n_blocks,
                     n_blocks == 1 ? "" : "s", blocks[0].nb);
     }
-    int rc = open_block(s, cx, a, st, &blocks[0], slice_group, extra_options, local_size, verbose, NULL, err, errcap);
+    int rc = open_block(s, cx, a, st, &blocks[0], slice_group, extra_options, local_size, verbose, NULL, take, err,
+                        errcap);
     if (!rc && n_blocks > 1) {
         s->blocks = calloc((size_t)n_blocks - 1, sizeof *s->blocks);
         if (!s->blocks) {
@@ -517,7 +542,7 @@ int lsqt_session_open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_asse
         for (int j = 0; j < i && !prog; j++)
             if (blocks[j].nb == blocks[i].nb) prog = j ? s->blocks[j - 1].prog : s->prog;
         rc = open_block(&s->blocks[i - 1], cx, a, st, &blocks[i], slice_group, extra_options, local_size, verbose,
-                        prog, err, errcap);
+                        prog, take, err, errcap);
         if (!rc) s->n_blocks = i + 1;
     }
     if (blocks != &one) free(blocks);
@@ -670,20 +695,17 @@ int lsqt_session_launch(lsqt_session *s, uint64_t begin, uint64_t end, char *err
     return 0;
 }
 
-static int read_block(lsqt_session *s, lsqt_state *st, char *err, size_t errcap);
+static int read_block(lsqt_session *s, lsqt_state *st, int release, char *err, size_t errcap);
 
-/* A block's tally buffers released (and a CPU device's pages unmapped). */
-static void release_tallies(lsqt_session *s)
+/* A block's tally buffer I released (and a CPU device's pages unmapped). */
+static void release_tally(lsqt_session *s, int i)
 {
     cl_mem *bufs[3] = {&s->nee, &s->scalars, &s->hist};
-    for (int i = 0; i < 3; i++) {
-        if (*bufs[i]) clReleaseMemObject(*bufs[i]);
-        *bufs[i] = NULL;
-    }
+    if (*bufs[i]) clReleaseMemObject(*bufs[i]);
+    *bufs[i] = NULL;
     clFinish(s->cx->queue); /* (nothing uses the pages now) */
-    for (int i = 0; i < 3; i++)
-        if (s->host[i]) munmap(s->host[i], s->host_bytes[i]);
-    memset(s->host, 0, sizeof s->host);
+    if (s->host[i]) munmap(s->host[i], s->host_bytes[i]);
+    s->host[i] = NULL;
 }
 
 int lsqt_session_read(lsqt_session *s, lsqt_state *st, int release, char *err, size_t errcap)
@@ -694,14 +716,14 @@ int lsqt_session_read(lsqt_session *s, lsqt_state *st, int release, char *err, s
             snprintf(err, errcap, "the session's tallies were released by its last read");
             return 1;
         }
-        if (read_block(blk, st, err, errcap)) return 1;
-        if (release) release_tallies(blk);
+        if (read_block(blk, st, release, err, errcap)) return 1;
     }
     return 0;
 }
 
-/* A block's tallies into its bands' parts of ST. */
-static int read_block(lsqt_session *s, lsqt_state *st, char *err, size_t errcap)
+/* A block's tallies into its bands' parts of ST; with release, each buffer released once
+ * it is read (the host's copy grows as the device's goes). */
+static int read_block(lsqt_session *s, lsqt_state *st, int release, char *err, size_t errcap)
 {
     cl_command_queue q = s->cx->queue;
     cl_uint fl = 0;
@@ -714,6 +736,7 @@ static int read_block(lsqt_session *s, lsqt_state *st, char *err, size_t errcap)
         if (e != CL_SUCCESS) break;
         block_tallies(s, st, i, t, 1);
         e = clEnqueueUnmapMemObject(q, bufs[i], t, 0, NULL, NULL);
+        if (e == CL_SUCCESS && release) release_tally(s, i);
     }
     if (e == CL_SUCCESS) e = clEnqueueReadBuffer(q, s->flags, CL_TRUE, 0, sizeof fl, &fl, 0, NULL, NULL);
     if (e != CL_SUCCESS) {

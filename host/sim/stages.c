@@ -173,7 +173,9 @@ static int choose(const stage_ctx *k, lsqt_state *st, int finish_pilot, uint64_t
     lsqt_state chosen;
     lsqt_rrss_info ci;
     memset(&ci, 0, sizeof ci);
-    int rc = lsqt_rrss_choose(&o->ps, &chosen, &ci, err, errcap);
+    /* the pilot is freed next unless it was interrupted (its LSS is the pilot's then) */
+    int rc = o->rinfo.interrupted ? lsqt_rrss_choose(&o->ps, &chosen, &ci, err, errcap)
+                                  : lsqt_rrss_choose_using(&o->ps, &chosen, &ci, err, errcap);
     if (!rc) {
         o->rinfo.density_fallback = ci.density_fallback;
         o->rinfo.seconds += ci.select_seconds;

@@ -1,8 +1,14 @@
+/* madvise, MADV_DONTNEED (Linux) are not in POSIX 2008 */
+#define _DEFAULT_SOURCE
 #include "lsqt/state.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
+#ifdef __linux__
+#include <sys/mman.h>
+#endif
 
 static size_t bands_of(const lsqt_state *st) { return st->n_bands > 1 ? (size_t)st->n_bands : 1; }
 
@@ -202,6 +208,38 @@ void lsqt_state_clear_tallies(lsqt_state *st)
     st->n_ranges = 0;
     st->paths = 0;
     st->flags = 0;
+}
+
+/* BYTES at P zeroed: the whole pages inside given back (they read as zeros again, as an
+ * anonymous private mapping's do, whether malloc made it by mmap or on its heap; a chunk's
+ * own bytes hold none of malloc's bookkeeping), the partial ones at the ends memset. */
+static void zero_pages(void *p, size_t bytes)
+{
+    char *c = p, *lo = c, *hi = c;
+#ifdef __linux__
+    const long pg = sysconf(_SC_PAGESIZE);
+    if (pg > 0 && bytes >= 2 * (size_t)pg) {
+        const uintptr_t a = (uintptr_t)c, m = (uintptr_t)pg - 1;
+        lo = (char *)((a + m) & ~m);
+        hi = (char *)((a + bytes) & ~m);
+        if (hi <= lo || madvise(lo, (size_t)(hi - lo), MADV_DONTNEED) != 0) lo = hi = c;
+    }
+#endif
+    if (lo == hi) {
+        memset(c, 0, bytes);
+        return;
+    }
+    memset(c, 0, (size_t)(lo - c));
+    memset(hi, 0, (size_t)(c + bytes - hi));
+}
+
+void lsqt_tallies_drop(lsqt_u128 *t, size_t n) { zero_pages(t, n * sizeof *t); }
+
+void lsqt_state_drop_tallies(lsqt_state *st)
+{
+    lsqt_tallies_drop(st->nee, lsqt_state_nee_count(st));
+    lsqt_tallies_drop(st->scalars, lsqt_state_scalar_count(st));
+    lsqt_tallies_drop(st->hist, lsqt_state_hist_count(st));
 }
 
 void lsqt_shard_part(uint64_t begin, uint64_t end, int k, int n, uint64_t *lo, uint64_t *hi)

@@ -45,7 +45,9 @@ int lsqt_rrss(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, int rx, 
  *  - lsqt_rrss_pilot_continue runs paths [begin, begin + n_paths) more of the pilot PS
  *    (a checkpoint, an interrupted pilot or pilot shard);
  *  - lsqt_rrss_choose makes ST (fresh; free it) from a pilot PS: the selection, the kept
- *    directions with their pilot tallies, PS's ranges, pilot_paths = PS's paths.
+ *    directions with their pilot tallies, PS's ranges, pilot_paths = PS's paths;
+ *  - lsqt_rrss_choose_using the same from a PS it uses up: each slice's candidate tallies
+ *    are zeroed and their pages given back once copied (PS is only to be freed then).
  * Each returns 0, or 1 with err filled. */
 int lsqt_rrss_pilot(lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st, int rx, uint64_t pilot_total,
                     uint64_t run_paths, uint64_t begin, uint64_t n_paths, const lsqt_sim_opts *o, lsqt_state *ps,
@@ -53,6 +55,7 @@ int lsqt_rrss_pilot(lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *
 int lsqt_rrss_pilot_continue(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *ps, uint64_t begin,
                              uint64_t n_paths, const lsqt_sim_opts *o, lsqt_rrss_info *info, char *err, size_t errcap);
 int lsqt_rrss_choose(const lsqt_state *ps, lsqt_state *st, lsqt_rrss_info *info, char *err, size_t errcap);
+int lsqt_rrss_choose_using(lsqt_state *ps, lsqt_state *st, lsqt_rrss_info *info, char *err, size_t errcap);
 
 /* The notes a user needs about INFO (fallbacks), one line each. */
 void lsqt_rrss_notes(FILE *f, const lsqt_rrss_info *info);

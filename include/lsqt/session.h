@@ -80,6 +80,13 @@ int lsqt_session_open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_asse
                               int slice_group, const char *extra_options, size_t local_size, int verbose,
                               char *err, size_t errcap);
 
+/* lsqt_session_open, where the session takes ST's tallies: each band block's are given
+ * back on the host (lsqt_tallies_drop) once they are on the device, until a read copies
+ * them all back (lsqt_run_range's). For a caller that reads none of ST's tallies before
+ * then; on an error they are undefined. */
+int lsqt_session_open_taking(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st,
+                             const char *extra_options, size_t local_size, int verbose, char *err, size_t errcap);
+
 /* Uploads ST's directions again (same count) and remakes their tables. Returns 0 or 1. */
 int lsqt_session_set_directions(lsqt_session *s, const lsqt_state *st, char *err, size_t errcap);
 

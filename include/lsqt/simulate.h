@@ -60,7 +60,9 @@ int lsqt_simulate_range(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st
                         const lsqt_sim_opts *o, lsqt_sim_stats *stats, char *err, size_t errcap);
 
 /* The launch loop of lsqt_simulate on an open session (whose tallies are ST's), paths
- * [begin, begin + add_paths). */
+ * [begin, begin + add_paths). While it launches, ST's tallies are only the session's
+ * (the host's pages given back) until a read copies them all back; on an error (1) they
+ * are undefined and ST is not to be used further. */
 int lsqt_run_range(lsqt_session *s, lsqt_state *st, uint64_t begin, uint64_t add_paths, const lsqt_sim_opts *o,
                    lsqt_sim_stats *stats, char *err, size_t errcap);
 

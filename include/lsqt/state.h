@@ -104,6 +104,13 @@ void lsqt_shard_part(uint64_t begin, uint64_t end, int k, int n, uint64_t *lo, u
 const char *lsqt_state_differs(const lsqt_state *a, const lsqt_state *b);
 /* Zero tallies, no ranges, no flags: the same directions, ready for another part of a run. */
 void lsqt_state_clear_tallies(lsqt_state *st);
+/* Zero tallies, nothing else changed, their whole pages given back to the system (on
+ * Linux: madvise MADV_DONTNEED, which leaves zero pages; elsewhere a memset). For a state
+ * whose tallies a session's device buffers hold until its next read, which restores every
+ * word (lsqt_run_range): the host's copy then costs nothing in between. */
+void lsqt_state_drop_tallies(lsqt_state *st);
+/* The same for N tallies at T (a part of a state's). */
+void lsqt_tallies_drop(lsqt_u128 *t, size_t n);
 
 /* A tally as a number: units (fixed point divides by LSQT_FIX_SCALE), and exact sums. */
 double lsqt_u128_to_double(lsqt_u128 v);
