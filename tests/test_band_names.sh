@@ -98,7 +98,7 @@ cmp -s keep.lss k.lsqt.lss && ok || bad "the LSS changed after a refused run"
 
 # ---- 6. merge names the RAWs it wrote ----
 for k in 0 1; do "$BIN" k.lsqt $S --wavelengths 450,550,650 --lss sh.lss --shard $k/2 || bad "shard $k"; done
-expect 0 "wrote m1.lss, m1.{450nm,...,650nm}.raw" -- "$BIN" merge m1.lss sh.shard-0-of-2.lss sh.shard-1-of-2.lss -o m1.raw
+expect 0 "wrote m1.{450nm,...,650nm}.raw, m1.lss" -- "$BIN" merge m1.lss sh.shard-0-of-2.lss sh.shard-1-of-2.lss -o m1.raw
 [ -f m1.450nm.raw ] && [ -f m1.650nm.raw ] && [ ! -e m1.raw ] && ok || bad "merge: m1's RAWs: $(ls m1*)"
 
 finish test_band_names.sh

@@ -111,6 +111,23 @@ expect 2 "--no-raw writes no RAW file, and -H names one" -- "$BIN" "${W[@]}" "${
 expect 2 "--no-raw: this run would write nothing" -- "$BIN" "${W[@]}" "${R[@]}" - --no-raw <x.lsqt
 nothing_new "refused --no-raw runs"
 
+# Merge plans its files as a run does: every band's RAW checked before anything is
+# written (a directory in one band's place: nothing written), no output on another or on
+# an input shard (OUT.lss may be one: the sum replaces it), no per-band names beside stdout.
+for k in 0 1; do expect 0 "" -- "$BIN" "${W[@]}" "${R[@]}" x.lsqt --wi-spread --lss m.lss --shard $k/2; done
+mkdir mm.550nm.raw
+snapshot
+expect 1 "cannot write 'mm.550nm.raw': it is a directory (nothing written)" -- "$BIN" merge mm.lss m.shard-0-of-2.lss m.shard-1-of-2.lss -o mm.raw
+nothing_new "merge with a directory at one band's RAW"
+rmdir mm.550nm.raw
+snapshot
+expect 2 "two outputs would be written to 'mm.450nm.raw'" -- "$BIN" merge mm.lss m.shard-0-of-2.lss m.shard-1-of-2.lss -o mm.raw --json mm.450nm.raw
+expect 2 "the output 'm.shard-1-of-2.lss' would replace the input 'm.shard-1-of-2.lss'" -- "$BIN" merge mm.lss m.shard-0-of-2.lss m.shard-1-of-2.lss --json m.shard-1-of-2.lss
+expect 2 "writes one RAW per band, named from the RAW name (OUT.450nm, ...), and '-' is stdout" -- "$BIN" merge mm.lss m.shard-0-of-2.lss m.shard-1-of-2.lss -o -
+nothing_new "refused merges"
+expect 0 "wrote m.shard-0-of-2.{450nm,...,650nm}.raw, m.shard-0-of-2.lss" -- "$BIN" merge m.shard-0-of-2.lss m.shard-0-of-2.lss m.shard-1-of-2.lss
+"$BIN" info m.shard-0-of-2.lss | grep -q "^paths: 500 per slice" && ok || bad "the sum did not replace the input it was named after: $("$BIN" info m.shard-0-of-2.lss | head -5)"
+
 # A full file system (a small tmpfs, as root). 32 bands; the reference continues in a
 # folder of its own, so each RAW of this run has a reference with the same bytes.
 if cli_tmpfs small 4m; then

@@ -10,6 +10,7 @@
 #include "lsqt/bands.h"
 #include "lsqt/below.h"
 #include "lsqt/lss.h"
+#include "lsqt/outputs.h"
 #include "lsqt/raw.h"
 #include "lsqt/report.h"
 #include "lsqt/rrss.h"
@@ -296,20 +297,19 @@ static int choose_pilot(merge_job *j)
 }
 
 /* Outputs: the LSS, the RAW (named from OUT.lss; -H: R and T), JSON, and for a two-sided
- * state the RAW of the side from below (lsqt-cl's names, below.h). */
-enum { O_LSS, O_RAW, O_RAW_T, O_RAW_B, O_RAW_BT, O_JSON, O_N };
+ * state the RAW of the side from below (lsqt-cl's names, below.h); with bands each RAW
+ * one file per band. */
 typedef struct merge_outs {
-    const char *path[O_N]; /* NULL: not written */
-    char names[O_N][LSQT_PATH_CAP + 48];
-    int two; /* the state is two-sided */
+    lsqt_outputs f;
+    char names[4][LSQT_PATH_CAP + 48]; /* the RAW kinds' names */
 } merge_outs;
 
-/* Names every output and checks them against each other. Returns 0 or 2 (printed). */
+/* Names every output, every band's, and checks them against each other and the inputs
+ * (OUT.lss may be one of them). Returns 0 or 2 (1 out of memory), printed. */
 static int name_outputs(merge_job *j, merge_outs *o)
 {
     const merge_args *g = &j->g;
     const char *raw = g->raw, *out_lss = g->out_lss;
-    const int hemi = g->hemi;
     char raw_name[LSQT_PATH_CAP + 16], below_name[LSQT_PATH_CAP + 32];
     if (raw) snprintf(raw_name, sizeof raw_name, "%s", raw);
     else {
@@ -318,91 +318,56 @@ static int name_outputs(merge_job *j, merge_outs *o)
         snprintf(raw_name, sizeof raw_name, "%.*s.raw", (int)n, out_lss);
     }
     lsqt_below_raw_name(raw_name, below_name, sizeof below_name);
-    const int two = o->two = lsqt_state_below_count(&j->sum) > 0;
-    const char *outs0[O_N] = {out_lss, NULL, NULL, NULL, NULL, g->json};
-    memcpy(o->path, outs0, sizeof outs0);
+    const int two = lsqt_state_below_count(&j->sum) > 0;
+    o->f.path[LSQT_OUT_LSS] = out_lss;
+    o->f.path[LSQT_OUT_JSON] = g->json;
+    o->f.hemi = g->hemi;
+    o->f.n_bands = j->sum.n_bands, o->f.wl = j->sum.wavelengths;
     for (int side = 0; side < 1 + two; side++) {
         const char *base = side ? below_name : raw_name;
-        char *m = o->names[side ? O_RAW_B : O_RAW], *t = o->names[side ? O_RAW_BT : O_RAW_T];
-        if (hemi) {
+        const int km = side ? LSQT_OUT_RAW_B : LSQT_OUT_RAW, kt = side ? LSQT_OUT_RAW_BT : LSQT_OUT_RAW_T;
+        char *m = o->names[km], *t = o->names[kt];
+        if (g->hemi) {
             lsqt_raw_hemi_name(base, "R", m, sizeof o->names[0]);
             lsqt_raw_hemi_name(base, "T", t, sizeof o->names[0]);
         } else {
             snprintf(m, sizeof o->names[0], "%s", base);
         }
-        o->path[side ? O_RAW_B : O_RAW] = m;
-        o->path[side ? O_RAW_BT : O_RAW_T] = hemi && j->sum.transmits ? t : NULL;
+        o->f.path[km] = m;
+        o->f.path[kt] = g->hemi && j->sum.transmits ? t : NULL;
     }
     if (two && (!raw_name[0] || strcmp(raw_name, "-") == 0))
         return lsqt_prog_error(j->prog, 2,
                                "a two-sided state has a second RAW named from the first: give -o a file name");
-    for (int i = 0; i < O_N; i++)
-        for (int k = i + 1; k < O_N; k++)
-            if (o->path[i] && o->path[k] && lsqt_same_file(o->path[i], o->path[k])) {
-                snprintf(j->err, sizeof j->err, "two outputs would be written to '%s'", o->path[i]);
-                return lsqt_prog_error(j->prog, 2, j->err);
-            }
-    return 0;
+    lsqt_input_file *in = calloc((size_t)g->n_in + 1, sizeof *in);
+    if (!in) return lsqt_prog_error(j->prog, 1, "out of memory");
+    int n_in = 0;
+    for (int i = 0; i < g->n_in; i++) /* the sum may replace an input, no other output */
+        if (!lsqt_same_file(g->in[i], out_lss)) in[n_in++] = (lsqt_input_file){g->in[i], "the input"};
+    int rc = lsqt_outputs_plan(&o->f, in, n_in, "", j->err, sizeof j->err);
+    free(in);
+    return rc ? lsqt_prog_error(j->prog, rc, j->err) : 0;
 }
 
-/* Writes every output; RAW files hold one side each, as lsqt-cl writes them. */
+/* Writes every output (lsqt_outputs_write), after "merged N files: P paths per slice". */
 static int write_outputs(merge_job *j, const merge_outs *o)
-{
-    const lsqt_state *sum = &j->sum;
-    const int two = o->two, hemi = j->g.hemi;
-    int rc = 0;
-    lsqt_state sides[2];
-    memset(sides, 0, sizeof sides);
-    lsqt_slice_est *est = lsqt_estimates(sum), *side_est[2] = {NULL, NULL};
-    if (!est) rc = lsqt_prog_error(j->prog, 1, "out of memory");
-    if (!rc && two &&
-        (lsqt_state_split_sides(sum, &sides[0], &sides[1]) || !(side_est[0] = lsqt_estimates(&sides[0])) ||
-         !(side_est[1] = lsqt_estimates(&sides[1]))))
-        rc = lsqt_prog_error(j->prog, 1, "out of memory");
-    int skipped = 0;
-    lsqt_run_info ri = {"(merged: no device)", 0.0, 0.0, 0ULL, NULL, lsqt_work_totals(sum), 0.0, 0.0, 0ULL, 0};
-    for (int i = 0; i < O_N && !rc; i++) {
-        const char *p = o->path[i];
-        if (!p) continue;
-        const int b = i == O_RAW_B || i == O_RAW_BT;
-        const lsqt_state *rs = two ? &sides[b] : sum;
-        const lsqt_slice_est *re = two ? side_est[b] : est;
-        const int mode = !hemi ? LSQT_RAW_ALL : (i == O_RAW || i == O_RAW_B) ? LSQT_RAW_REFLECT : LSQT_RAW_TRANSMIT;
-        int w = i == O_LSS    ? lsqt_lss_write(p, sum, j->err, sizeof j->err)
-                : i == O_JSON ? lsqt_report_json(p, sum, est, &ri, NULL, j->err, sizeof j->err)
-                              : lsqt_raw_write_bands(p, rs, re, mode, &skipped, j->err, sizeof j->err);
-        if (w) rc = lsqt_prog_error(j->prog, 1, j->err);
-    }
-    lsqt_estimates_free(est, sum->n_slices);
-    for (int b = 0; b < 2; b++) {
-        lsqt_estimates_free(side_est[b], sides[b].n_slices);
-        lsqt_state_free(&sides[b]);
-    }
-    return rc;
-}
-
-/* "merged N files: P paths per slice; wrote ...", on stderr when an output is stdout. */
-static void say_merged(const merge_job *j, const merge_outs *o)
 {
     const merge_args *g = &j->g;
     const lsqt_state *sum = &j->sum;
-    const int n_in = g->n_in;
+    lsqt_slice_est *est = lsqt_estimates(sum);
+    if (!est) return lsqt_prog_error(j->prog, 1, "out of memory");
+    lsqt_run_info ri = {"(merged: no device)", 0.0, 0.0, 0ULL, NULL, lsqt_work_totals(sum), 0.0, 0.0, 0ULL, 0};
     FILE *info = (g->raw && strcmp(g->raw, "-") == 0) || (g->json && strcmp(g->json, "-") == 0) ? stderr : stdout;
     const uint64_t h = lsqt_state_contiguous(sum);
-    char owed[96] = "";
+    char said[256], owed[96] = "";
     if (h == UINT64_MAX) snprintf(owed, sizeof owed, " (partial: with gaps)");
     else if (h < sum->span_end)
         snprintf(owed, sizeof owed, " (the run owes %llu more)", (unsigned long long)(sum->span_end - h));
-    fprintf(info, "merged %d file%s: %llu paths per slice%s; wrote %s", n_in, n_in > 1 ? "s" : "",
-            (unsigned long long)sum->paths, owed, g->out_lss);
-    for (int i = 1; i < O_N; i++) {
-        if (!o->path[i] || strcmp(o->path[i], "-") == 0) continue;
-        char shown[LSQT_PATH_CAP + 160];
-        if (i == O_JSON) snprintf(shown, sizeof shown, "%s", o->path[i]);
-        else lsqt_band_path_shown(o->path[i], sum->n_bands, sum->wavelengths, shown, sizeof shown); /* one a band */
-        fprintf(info, ", %s", shown);
-    }
-    fprintf(info, "\n");
+    snprintf(said, sizeof said, "merged %d file%s: %llu paths per slice%s; ", g->n_in, g->n_in > 1 ? "s" : "",
+             (unsigned long long)sum->paths, owed);
+    int rc = lsqt_outputs_write(&o->f, sum, sum, est, &ri, j->prog, said, g->quiet, info);
+    lsqt_estimates_free(est, sum->n_slices);
+    return rc;
 }
 
 int lsqt_merge_main(const char *prog, int argc, char **argv)
@@ -430,8 +395,9 @@ int lsqt_merge_main(const char *prog, int argc, char **argv)
     merge_outs o;
     memset(&o, 0, sizeof o);
     if (!rc) rc = name_outputs(&j, &o);
+    if (!rc) rc = lsqt_outputs_check(&o.f, prog, "nothing written");
     if (!rc) rc = write_outputs(&j, &o);
-    if (!rc && !j.g.quiet) say_merged(&j, &o);
+    lsqt_outputs_free(&o.f);
     lsqt_state_free(&j.sum);
     for (int i = 0; i < j.n_locks; i++) lsqt_lock_release(&j.locks[i]);
     free(j.locks);

@@ -11,6 +11,7 @@
 #include "lsqt/assembly.h"
 #include "lsqt/cli.h"
 #include "lsqt/memory.h"
+#include "lsqt/outputs.h"
 #include "lsqt/state.h"
 #include "lsqt/tally.h"
 #include "lsqt/report.h"
@@ -44,24 +45,12 @@ extern lsqt_memory_shape g_run_shape;
 /* plan.c: --plan (two calibration runs through run_command, then the prediction). */
 int plan_command(const lsqt_cli *c);
 
-/* run_outputs.c */
-/* The files a run writes. RAW is one file, or with -H two (R and T; no T when nothing is
- * transmitted); a two-sided state adds the same for the side from below (below.h); with
- * bands each RAW is one file per band (NAME.550nm.raw). */
-enum { OUT_RAW, OUT_RAW_T, OUT_RAW_B, OUT_RAW_BT, OUT_LSS, OUT_JSON, OUT_COUNT };
-typedef struct out_file {
-    char *path;
-    int kind, band; /* OUT_*, and the band of a RAW (0 without bands) */
-} out_file;
+/* run_outputs.c: the names of the files a run writes (lsqt/outputs.h does the rest). */
 typedef struct outputs {
-    const char *path[OUT_COUNT]; /* NULL: not written; a RAW kind's name before the band labels */
-    const char *base;            /* the LSS continued (a shard writes its own, path[OUT_LSS]) */
+    lsqt_outputs f;              /* every file; f.path[LSQT_OUT_*] the names before band labels */
+    const char *base;            /* the LSS continued (a shard writes its own, f.path[LSQT_OUT_LSS]) */
     char raw[LSQT_PATH_CAP + 16], raw_t[LSQT_PATH_CAP + 16], lss[LSQT_PATH_CAP + 16], shard[LSQT_PATH_CAP + 40];
     char raw_b[LSQT_PATH_CAP + 32], raw_bt[LSQT_PATH_CAP + 32];
-    int n_bands;                 /* the run's bands, and their wavelengths (the assembly's; */
-    const double *wl;            /* NULL: unnamed) */
-    int n_files;                 /* every file, in the order written: LSS, RAW kinds band by */
-    out_file *files;             /* band, JSON (run_outputs_free) */
 } outputs;
 
 /* Decides every output name (every band's) and checks them against each other and every
@@ -70,9 +59,6 @@ typedef struct outputs {
 int run_plan_outputs(const lsqt_cli *c, int from_stdin, const lsqt_assembly *a, int transmits, int below,
                      outputs *o, char *err, size_t errcap);
 void run_outputs_free(outputs *o);
-/* Can every output be written (lsqt_out_check)? Each one that cannot is printed (the
- * first 10, then a count). Returns 0 or 1. */
-int run_check_outputs(const outputs *o);
 /* Locks the LSS the run writes (exclusive) and, for a shard, the state it reads (shared),
  * before that is read. Returns 0, or 1 (printed) when another run holds one. */
 int run_lock_states(const outputs *o, int quiet);
@@ -81,11 +67,8 @@ int run_lock_states(const outputs *o, int quiet);
  * freed). */
 int run_plan_sides(const lsqt_cli *c, int from_stdin, const lsqt_assembly *a, lsqt_state *st, int continued,
                    outputs *out, char *err, size_t errcap);
-/* Writes every output; a failed one does not stop the others. The LSS is lss_st (an
- * interrupted RRSS pilot's own state), written first; the rest from st, written to
- * temporaries and then published together. Every file not written is named, and the
- * previous file at its path removed when the LSS moved on (it would pass for this run's).
- * Returns 0 or 1. */
+/* Writes every output (lsqt_outputs_write): the LSS is lss_st (an interrupted RRSS
+ * pilot's own state), the rest from st. Returns 0 or 1. */
 int run_write_outputs(const outputs *o, const lsqt_cli *c, const lsqt_state *st, const lsqt_state *lss_st,
                       const lsqt_slice_est *est, const lsqt_run_info *ri, FILE *info);
 

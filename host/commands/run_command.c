@@ -181,7 +181,7 @@ static int report_pilot_shard(const lsqt_cli *c, const outputs *out, const lsqt_
     char err[LSQT_PATH_CAP + 1024];
     int rc = 0;
     const lsqt_sim_stats stats = sg->stats;
-    const char *ls = out->path[OUT_LSS];
+    const char *ls = out->f.path[LSQT_OUT_LSS];
     if (lsqt_lss_write(ls, st, err, sizeof err)) rc = fail(1, "%s%s", err, "");
     else if (!c->quiet)
         fprintf(info, "shard %d/%d of the RRSS pilot: paths [%llu, %llu) of [0, %llu) in %.3g s; wrote %s\n"
@@ -229,13 +229,13 @@ static int report_run(const lsqt_cli *c, const outputs *out, const lsqt_state *s
     if (!est) rc = fail(1, "out of memory%s%s", "", "");
     else rc = run_write_outputs(out, c, st, sg->have_ps ? &sg->ps : st, est, &ri, info);
     if (est && !c->quiet) lsqt_report_summary(info, st, est, &ri);
-    if (sg->have_ps && !c->quiet && out->path[OUT_LSS] && fflush(info) == 0)
+    if (sg->have_ps && !c->quiet && out->f.path[LSQT_OUT_LSS] && fflush(info) == 0)
         fprintf(stderr,
                 "note: the run stopped in its RRSS pilot: '%s' holds %llu of the pilot's %llu paths per slice, "
                 "and the RAW's directions are a provisional choice from them. Continuing without -p finishes "
                 "the pilot and then this run (%llu paths per slice in all); continuing with -p N chooses the "
                 "directions from the pilot as it is and adds N paths per slice.\n",
-                out->path[OUT_LSS], (unsigned long long)sg->ps.paths, (unsigned long long)sg->ps.pilot_paths,
+                out->f.path[LSQT_OUT_LSS], (unsigned long long)sg->ps.paths, (unsigned long long)sg->ps.pilot_paths,
                 (unsigned long long)sg->ps.span_end);
     if (!c->quiet && c->shard_n)
         fprintf(info, "shard %d/%d: paths [%llu, %llu) of this run's [%llu, %llu)%s\n", c->shard_k, c->shard_n,
@@ -250,7 +250,7 @@ static int report_run(const lsqt_cli *c, const outputs *out, const lsqt_state *s
 static int open_device(const lsqt_cli *c, const lsqt_state *st, const outputs *out, lsqt_context *cx)
 {
     char err[LSQT_PATH_CAP + 1024];
-    int rc = run_check_outputs(out);
+    int rc = lsqt_outputs_check(&out->f, "lsqt-cl", "nothing simulated");
     memset(cx, 0, sizeof *cx);
     if (!rc) {
         rc = lsqt_context_create(cx, c->device, err, sizeof err);
@@ -314,9 +314,9 @@ static int simulate(const lsqt_cli *c, const lsqt_assembly *a, lsqt_state *st, c
     if (rc) return rc;
     /* With an output on stdout, everything else we print goes to stderr. */
     int to_stdout = 0;
-    for (int i = 0; i < OUT_COUNT; i++) to_stdout |= out->path[i] && strcmp(out->path[i], "-") == 0;
+    for (int i = 0; i < LSQT_OUT_KINDS; i++) to_stdout |= out->f.path[i] && strcmp(out->f.path[i], "-") == 0;
     FILE *info = to_stdout ? stderr : stdout;
-    checkpoint_ctx ck = {out->path[OUT_LSS], c->quiet}; /* a shard checkpoints its own file */
+    checkpoint_ctx ck = {out->f.path[LSQT_OUT_LSS], c->quiet}; /* a shard checkpoints its own file */
     const int can_checkpoint = ck.lss && strcmp(ck.lss, "-") != 0 && c->checkpoint > 0;
     lsqt_sim_opts so = {isatty(STDERR_FILENO) && !c->quiet, c->time_limit, 0, &g_stop, NULL, c->verbose,
                         c->target_error, can_checkpoint ? c->checkpoint : 0.0,
@@ -324,7 +324,7 @@ static int simulate(const lsqt_cli *c, const lsqt_assembly *a, lsqt_state *st, c
     const lsqt_run_plan plan = run_plan(c, st, out->base);
     lsqt_stages sg;
     char err[LSQT_PATH_CAP + 1024];
-    rc = lsqt_run_stages(&cx, a, st, &plan, out->base, out->path[OUT_LSS], &so, &sg, err, sizeof err);
+    rc = lsqt_run_stages(&cx, a, st, &plan, out->base, out->f.path[LSQT_OUT_LSS], &so, &sg, err, sizeof err);
     if (rc) fail(rc, "%s%s", err, "");
     else if (sg.pilot_shard) rc = report_pilot_shard(c, out, st, &sg, info);
     else rc = report_run(c, out, st, &sg, &cx, info);
@@ -351,7 +351,7 @@ int run_command(const lsqt_cli *c)
     if (!rc) rc = run_lock_states(&out, c->quiet) ? 1 : 0;
     lsqt_state st;
     int continued = 0;
-    /* out.base: the state continued (a shard writes its own, out.path[OUT_LSS]) */
+    /* out.base: the state continued (a shard writes its own, out.f.path[LSQT_OUT_LSS]) */
     if (!rc) rc = run_open_state(&st, c, &a, out.base, wi_dirs, n_wi_dirs, n_mirrored, &continued);
     free(wi_dirs);
     if (!rc) rc = run_plan_sides(c, from_stdin, &a, &st, continued, &out, err, sizeof err);

@@ -1,6 +1,4 @@
 #include "lsqt/raw.h"
-#include "lsqt/bands.h"
-#include "lsqt/colour.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -45,32 +43,4 @@ void lsqt_raw_hemi_name(const char *out, const char *part, char *dst, size_t cap
     size_t n = strlen(out);
     if (n >= 4 && strcmp(out + n - 4, ".raw") == 0) n -= 4;
     snprintf(dst, cap, "%.*s.%s.raw", (int)n, out, part);
-}
-
-int lsqt_raw_write_bands(const char *path, const lsqt_state *st, const lsqt_slice_est *est, int mode, int *skipped,
-                  char *err, size_t errcap)
-{
-    if (st->n_bands <= 1) return lsqt_raw_write(path, st, est, mode, skipped, NULL, err, errcap);
-    if (strcmp(path, "-") == 0) {
-        snprintf(err, errcap, "a run with bands writes one RAW per band, named from the RAW name, and stdout is "
-                              "one stream: give -o a file name");
-        return -1;
-    }
-    /* every band's file, then all renamed: a failure leaves the previous files whole */
-    lsqt_out_set set = {0, 0, NULL, NULL};
-    lsqt_band_names names;
-    lsqt_band_names_init(&names, st->n_bands, st->wavelengths, NULL);
-    for (int b = 0; b < st->n_bands; b++) {
-        char label[48], name[LSQT_PATH_CAP + 96];
-        lsqt_band_path(path, lsqt_band_label(&names, b, label, sizeof label), name,
-                       sizeof name);
-        const lsqt_state view = lsqt_state_band(st, b);
-        if (lsqt_raw_write(name, &view, est + (size_t)b * (size_t)st->n_slices, mode, skipped, &set, err, errcap)) {
-            lsqt_out_set_abort(&set);
-            return -1;
-        }
-    }
-    if (lsqt_out_set_publish(&set) == 0) return 0;
-    snprintf(err, errcap, "the RAW files named from '%s' were not all published (see above)", path);
-    return -1;
 }

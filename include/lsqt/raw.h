@@ -23,13 +23,6 @@ enum lsqt_raw_mode {
 int lsqt_raw_write(const char *path, const lsqt_state *st, const lsqt_slice_est *est, int mode,
                    int *skipped, lsqt_out_set *hold, char *err, size_t errcap);
 
-/* lsqt_raw_write, or with bands one RAW per band, named PATH with the band's label before
- * .raw (lsqt_band_path: panel.lsqt.550nm.raw), each band's values in the one-band format
- * (est: lsqt_estimates of st, every band), all published together (a failure leaves the
- * previous files). stdout ("-") is refused then. Returns 0 or -1. */
-int lsqt_raw_write_bands(const char *path, const lsqt_state *st, const lsqt_slice_est *est, int mode,
-                         int *skipped, char *err, size_t errcap);
-
 /* -H names: OUT with its final ".raw" replaced by ".R.raw" / ".T.raw" (part "R", "T";
  * appended when OUT does not end in ".raw"). */
 void lsqt_raw_hemi_name(const char *out, const char *part, char *dst, size_t cap);
