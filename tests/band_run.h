@@ -99,11 +99,7 @@ static inline int band_sections_main(const char *name, int argc, char **argv, vo
     }
     if (argc == 3) seed_offset = strtoull(argv[2], NULL, 10);
     setenv("LSQT_BAND_BLOCK", "16", 1);
-    run[sec](1);
-    ZD = z_family(n_dir, 5e-4), ZA = z_family(n_agg, 5e-4);
-    printf("%s: %d checks of single directions, |z| <= %.2f; %d aggregates, |z| <= %.2f (Student t, 31 dof, "
-           "family 1e-3)\n",
-           names[sec], n_dir, ZD, n_agg, ZA);
+    family_plan(names[sec], run[sec]);
     fixture_open();
     if (band_blocks_absent()) {
         lsqt_context_release(&fixture_cx);

@@ -56,6 +56,17 @@ static double ZD, ZA;
 static int n_dir, n_agg;
 static uint64_t seed_offset; /* argv[2]: other seeds, to check that the tolerances hold */
 
+/* The dry pass of SECTION (its argument 1: count the checks, run nothing), then ZD and ZA
+ * from the counts, printed under NAME. */
+static inline void family_plan(const char *name, void (*section)(int))
+{
+    section(1);
+    ZD = z_family(n_dir, 5e-4), ZA = z_family(n_agg, 5e-4);
+    printf("%s: %d checks of single directions, |z| <= %.2f; %d aggregates, |z| <= %.2f (Student t, 31 dof, "
+           "family 1e-3)\n",
+           name, n_dir, ZD, n_agg, ZA);
+}
+
 /* ---------------------------------------------------------------- helpers */
 
 /* The direction the device uses: the state's float one, normalised again in double for a

@@ -111,6 +111,19 @@ expect 2 "--no-raw writes no RAW file, and -H names one" -- "$BIN" "${W[@]}" "${
 expect 2 "--no-raw: this run would write nothing" -- "$BIN" "${W[@]}" "${R[@]}" - --no-raw <x.lsqt
 nothing_new "refused --no-raw runs"
 
+# A rename that fails when the files are published (the 550 nm RAW is a bind mount:
+# EBUSY): that file is named, the others are published.
+rm -f x.lsqt.*.raw
+touch x.lsqt.550nm.raw && echo old >bm.src
+if mount --bind bm.src x.lsqt.550nm.raw 2>/dev/null; then
+  cli_mounts+=("$(pwd -P)/x.lsqt.550nm.raw")
+  expect 1 "1 output could not be written: x.lsqt.550nm.raw" -- "$BIN" "${W[@]}" "${R[@]}" x.lsqt
+  [ -s x.lsqt.450nm.raw ] && [ -s x.lsqt.650nm.raw ] && ok || bad "the RAW files beside the failed rename were not published"
+  [ -z "$(find . -name '*.tmp.*')" ] && ok || bad "temporaries left after a failed rename: $(find . -name '*.tmp.*')"
+else
+  echo "skip: cannot bind-mount here (not root?): the failed rename is not checked"
+fi
+
 # Merge plans its files as a run does: every band's RAW checked before anything is
 # written (a directory in one band's place: nothing written), no output on another or on
 # an input shard (OUT.lss may be one: the sum replaces it), no per-band names beside stdout.

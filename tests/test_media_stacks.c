@@ -406,11 +406,7 @@ int main(int argc, char **argv)
         section_reference();
         return check_finish("test_media_stacks reference");
     }
-    run[sec](1);
-    ZD = z_family(n_dir, 5e-4), ZA = z_family(n_agg, 5e-4);
-    printf("%s: %d checks of single directions, |z| <= %.2f; %d aggregates, |z| <= %.2f (Student t, 31 dof, "
-           "family 1e-3)\n",
-           names[sec], n_dir, ZD, n_agg, ZA);
+    family_plan(names[sec], run[sec]);
     fixture_open();
     if (sec == 3 && !fixture_cx.dev.has_fp64) {
         printf("no fp64 on this device: skipped\n");

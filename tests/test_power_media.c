@@ -366,12 +366,7 @@ int main(int argc, char **argv)
     }
     if (argc == 3) seed_offset = strtoull(argv[2], NULL, 10);
     const int dbl = !strcmp(argv[1], "double");
-    if (dbl) section_double(1);
-    else section_grazing(1);
-    ZD = z_family(n_dir, 5e-4), ZA = z_family(n_agg, 5e-4);
-    printf("%s: %d checks of single directions, |z| <= %.2f; %d aggregates, |z| <= %.2f (Student t, 31 dof, "
-           "family 1e-3)\n",
-           argv[1], n_dir, ZD, n_agg, ZA);
+    family_plan(argv[1], dbl ? section_double : section_grazing);
     fixture_open();
     if (dbl && !fixture_cx.dev.has_fp64) {
         printf("no fp64 on this device: skipped\n");

@@ -83,9 +83,8 @@ static void nc_check(ncw *w, int status, const char *what)
  * system of PATH with no room left. */
 static const char *nc_why(const ncw *w, const char *path, char *buf, size_t cap)
 {
-    const char *slash = strrchr(path, '/');
     char dir[LSQT_PATH_CAP];
-    snprintf(dir, sizeof dir, "%.*s", slash ? (int)(slash - path) + 1 : 1, slash ? path : ".");
+    lsqt_path_folder(path, dir, sizeof dir);
     struct statvfs fs;
     const int full = statvfs(dir, &fs) == 0 && (unsigned long long)fs.f_bavail * fs.f_frsize < 65536ULL;
     if (w->sys_errno == ENOSPC || w->sys_errno == EDQUOT || (full && w->status != NC_NOERR))
@@ -328,9 +327,8 @@ static int check_room(const char *path, const lsqt_state *st, const grid *g, cha
 {
     const double values = (double)g->nb * g->ni * g->nphi * g->no * (st->transmits ? 2 : 1) * (g->below ? 2 : 1) * 2;
     const double need = values * 8.0 + 16384.0 + 64.0 * (g->ni + g->nphi + g->no + g->nb); /* headers: 16 KiB */
-    const char *slash = strrchr(path, '/');
     char dir[LSQT_PATH_CAP];
-    snprintf(dir, sizeof dir, "%.*s", slash ? (int)(slash - path) + 1 : 1, slash ? path : ".");
+    lsqt_path_folder(path, dir, sizeof dir);
     struct statvfs fs;
     if (statvfs(dir, &fs) != 0 || (double)fs.f_bavail * (double)fs.f_frsize >= need) return 0;
     snprintf(err, errcap, "cannot write '%s': %s (it needs about %.0f bytes, the file system has %.0f free)", path,

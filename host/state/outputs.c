@@ -181,6 +181,22 @@ static int write_held(const lsqt_out_file *f, const lsqt_outputs *o, const lsqt_
     return lsqt_raw_write(f->path, &view, re, mode, &skipped, set, err, errcap);
 }
 
+/* A held file whose rename failed (lsqt_out_set_publish): marked failed in DONE. */
+typedef struct publish_ctx {
+    const lsqt_outputs *o;
+    char *done;
+} publish_ctx;
+
+static void publish_failed(void *ctx, const char *path)
+{
+    publish_ctx *p = ctx;
+    for (int i = 0; i < p->o->n_files; i++)
+        if (p->done[i] == 1 && strcmp(p->o->files[i].path, path) == 0) {
+            p->done[i] = 2;
+            return;
+        }
+}
+
 static void free_sides(lsqt_state sides[2], lsqt_slice_est *side_est[2])
 {
     for (int b = 0; b < 2; b++) {
@@ -210,7 +226,7 @@ int lsqt_outputs_write(const lsqt_outputs *o, const lsqt_state *st, const lsqt_s
     /* The LSS first and on its own: it is what a later run continues, so a RAW that
      * cannot be written (a FIFO nobody reads, a full disk) or a kill during the RAW files
      * loses no paths. The others are written to temporaries and published together. */
-    lsqt_out_set set = {0, 0, NULL, NULL};
+    lsqt_out_set set = {0, 0, NULL, NULL, NULL};
     int failed = 0, lss_failed = 0;
     for (int i = 0; i < o->n_files; i++) {
         const lsqt_out_file *f = &o->files[i];
@@ -220,7 +236,8 @@ int lsqt_outputs_write(const lsqt_outputs *o, const lsqt_state *st, const lsqt_s
         if (rc && ++failed <= 10) fprintf(stderr, "%s: error: %s\n", prog, err);
         if (rc && f->kind == LSQT_OUT_LSS) lss_failed = 1;
     }
-    failed += lsqt_out_set_publish(&set);
+    publish_ctx pc = {o, done};
+    failed += lsqt_out_set_publish(&set, prog, publish_failed, &pc);
     /* What was written, in the usual order (RAW files, LSS, JSON); what was not. */
     name_list wrote = {NULL, 0, 0, 0}, missing = {NULL, 0, 0, 0}, removed = {NULL, 0, 0, 0};
     for (int k = 0; k < LSQT_OUT_KINDS; k++) {
@@ -245,7 +262,7 @@ int lsqt_outputs_write(const lsqt_outputs *o, const lsqt_state *st, const lsqt_s
         fflush(info);
         if (failed > 10) fprintf(stderr, "%s: error: %d more outputs could not be written\n", prog, failed - 10);
         fprintf(stderr, "%s: %d output%s could not be written: %s\n", prog, failed, failed > 1 ? "s" : "",
-                missing.s ? missing.s : "(a rename, see above)");
+                missing.s ? missing.s : "(see above)");
         if (removed.count)
             fprintf(stderr, "%s: removed the previous %s: %s older than the LSS written now\n", prog, removed.s,
                     removed.count > 1 ? "they were" : "it was");

@@ -109,16 +109,19 @@ int lsqt_out_hold(lsqt_out *o, lsqt_out_set *set, char *err, size_t errcap)
         char **t = realloc(set->tmp, (size_t)nc * sizeof *t);
         if (t) set->tmp = t;
         char **g = t ? realloc(set->target, (size_t)nc * sizeof *g) : NULL;
-        if (g) set->target = g, set->cap = nc;
+        if (g) set->target = g;
+        char **p = g ? realloc(set->path, (size_t)nc * sizeof *p) : NULL;
+        if (p) set->path = p, set->cap = nc;
     }
     char *tmp = set->n < set->cap ? dup_string(o->tmp) : NULL, *target = tmp ? dup_string(o->target) : NULL;
-    if (!target) {
-        free(tmp);
+    char *path = target ? dup_string(o->path) : NULL;
+    if (!path) {
+        free(tmp), free(target);
         unlink(o->tmp);
         lsqt_out_error(o, "out of memory", err, errcap);
         return -1;
     }
-    set->tmp[set->n] = tmp, set->target[set->n] = target, set->n++;
+    set->tmp[set->n] = tmp, set->target[set->n] = target, set->path[set->n] = path, set->n++;
     return 0;
 }
 
@@ -128,42 +131,38 @@ static void set_clear(lsqt_out_set *set, int unlink_temps)
         if (unlink_temps && set->tmp[i]) unlink(set->tmp[i]);
         free(set->tmp[i]);
         free(set->target[i]);
+        free(set->path[i]);
     }
     free(set->tmp);
     free(set->target);
+    free(set->path);
     memset(set, 0, sizeof *set);
 }
 
-int lsqt_out_set_publish(lsqt_out_set *set)
+int lsqt_out_set_publish(lsqt_out_set *set, const char *prog, void (*failed)(void *ctx, const char *path), void *ctx)
 {
-    int failed = 0;
+    int n_failed = 0;
     for (int i = 0; i < set->n; i++) {
         if (rename(set->tmp[i], set->target[i]) == 0) {
             free(set->tmp[i]);
             set->tmp[i] = NULL;
             continue;
         }
-        fprintf(stderr, "lsqt-cl: error: cannot write '%s': cannot rename the temporary over it: %s\n",
+        fprintf(stderr, "%s: error: cannot write '%s': cannot rename the temporary over it: %s\n", prog,
                 set->target[i], strerror(errno));
-        failed++;
+        if (failed) failed(ctx, set->path[i]);
+        n_failed++;
     }
     /* each folder once: a run's RAW files are usually all in one */
     char last[LSQT_PATH_CAP] = "";
     for (int i = 0; i < set->n; i++) {
         char dir[LSQT_PATH_CAP];
-        const char *slash = strrchr(set->target[i], '/');
-        snprintf(dir, sizeof dir, "%.*s", slash ? (int)(slash - set->target[i]) + 1 : 1,
-                 slash ? set->target[i] : ".");
-        if (strcmp(dir, last) == 0) continue;
+        if (strcmp(lsqt_path_folder(set->target[i], dir, sizeof dir), last) == 0) continue;
         snprintf(last, sizeof last, "%s", dir);
-        int dfd = open(dir, O_RDONLY | O_CLOEXEC);
-        if (dfd >= 0) {
-            (void)fsync(dfd);
-            close(dfd);
-        }
+        lsqt_sync_folder(set->target[i]);
     }
     set_clear(set, 1);
-    return failed;
+    return n_failed;
 }
 
 void lsqt_out_set_abort(lsqt_out_set *set) { set_clear(set, 1); }

@@ -27,7 +27,7 @@ static void remove_stale_temps(const char *target, const char *host)
 {
     const char *slash = strrchr(target, '/');
     char dir[LSQT_PATH_CAP], prefix[LSQT_PATH_CAP + 200];
-    snprintf(dir, sizeof dir, "%.*s", slash ? (int)(slash - target) + 1 : 1, slash ? target : ".");
+    lsqt_path_folder(target, dir, sizeof dir);
     int n = snprintf(prefix, sizeof prefix, "%s.tmp.%s.", slash ? slash + 1 : target, host);
     if (n <= 0 || (size_t)n >= sizeof prefix) return;
     DIR *d = opendir(dir);
@@ -90,14 +90,16 @@ int lsqt_out_replace_target(lsqt_out *o, char *err, size_t errcap)
         return -1;
     }
     o->tmp[0] = '\0';
-    /* Make the rename itself durable (best effort: not every file system allows it). */
+    lsqt_sync_folder(o->target);
+    return 0;
+}
+
+void lsqt_sync_folder(const char *path)
+{
     char dir[LSQT_PATH_CAP];
-    const char *slash = strrchr(o->target, '/');
-    snprintf(dir, sizeof dir, "%.*s", slash ? (int)(slash - o->target) + 1 : 1, slash ? o->target : ".");
-    int dfd = open(dir, O_RDONLY | O_CLOEXEC);
+    int dfd = open(lsqt_path_folder(path, dir, sizeof dir), O_RDONLY | O_CLOEXEC);
     if (dfd >= 0) {
         (void)fsync(dfd);
         close(dfd);
     }
-    return 0;
 }

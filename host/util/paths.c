@@ -63,13 +63,19 @@ int lsqt_path_type(const char *path, const char **what)
     return S_ISREG(sb.st_mode) ? LSQT_PATH_REGULAR : S_ISDIR(sb.st_mode) ? LSQT_PATH_DIRECTORY : LSQT_PATH_SPECIAL;
 }
 
+char *lsqt_path_folder(const char *path, char *dir, size_t cap)
+{
+    const char *slash = strrchr(path, '/');
+    snprintf(dir, cap, "%.*s", slash ? (int)(slash - path) + 1 : 1, slash ? path : ".");
+    return dir;
+}
+
 /* The folder of PATH made absolute (realpath) with PATH's last name after it. */
 static int absolute_name(const char *path, char *out, size_t cap)
 {
     char dir[LSQT_PATH_CAP], *real;
     const char *slash = strrchr(path, '/');
-    snprintf(dir, sizeof dir, "%.*s", slash ? (int)(slash - path) + 1 : 1, slash ? path : ".");
-    if (!(real = realpath(dir, NULL))) return -1;
+    if (!(real = realpath(lsqt_path_folder(path, dir, sizeof dir), NULL))) return -1;
     int w = snprintf(out, cap, "%s/%s", real, slash ? slash + 1 : path);
     free(real);
     return w > 0 && (size_t)w < cap ? 0 : -1;

@@ -25,6 +25,9 @@ int lsqt_out_plan(lsqt_out *o, const char *path, struct stat *old, int *exists, 
 int lsqt_out_make_temp(lsqt_out *o, const struct stat *old, int exists, const char *suffix, char *err, size_t errcap);
 /* out_temp.c: renames the finished temporary over the target, durably. */
 int lsqt_out_replace_target(lsqt_out *o, char *err, size_t errcap);
+/* out_temp.c: makes a rename in PATH's folder durable (best effort: not every file system
+ * allows the folder's fsync). */
+void lsqt_sync_folder(const char *path);
 
 /* out_stream.c: descriptors of outputs written in place, and the stream over one. */
 int lsqt_out_open_socket(lsqt_out *o, char *err, size_t errcap);

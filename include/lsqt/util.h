@@ -76,14 +76,15 @@ void lsqt_out_abort(lsqt_out *o);
  * output written in place (a device, a FIFO, stdout) is finished by lsqt_out_hold. */
 typedef struct lsqt_out_set {
     int n, cap;
-    char **tmp, **target; /* heap strings, n of each */
+    char **tmp, **target, **path; /* heap strings, n of each (path: as given) */
 } lsqt_out_set;
 /* Returns 0, or -1 with err filled (the temporary removed, as lsqt_out_commit). */
 int lsqt_out_hold(lsqt_out *o, lsqt_out_set *set, char *err, size_t errcap);
 /* Renames every held temporary over its target and makes the renames durable (each
- * folder synced once). Returns the number that failed (each printed to stderr as
- * "lsqt-cl: error: cannot write ..."); the set is empty afterwards. */
-int lsqt_out_set_publish(lsqt_out_set *set);
+ * folder synced once). Returns the number that failed: each is printed to stderr as
+ * "PROG: error: cannot write ...", and FAILED (unless NULL) is called with its path as
+ * given. The set is empty afterwards. */
+int lsqt_out_set_publish(lsqt_out_set *set, const char *prog, void (*failed)(void *ctx, const char *path), void *ctx);
 /* Removes every held temporary (nothing is published); the set is empty afterwards. */
 void lsqt_out_set_abort(lsqt_out_set *set);
 /* Removes the regular file that writing PATH would replace (symlinks followed; a device,
@@ -102,6 +103,9 @@ double lsqt_now(void); /* monotonic seconds */
 /* What is at PATH, symlinks followed: LSQT_PATH_*; *what names it ("FIFO", ...). */
 enum { LSQT_PATH_MISSING, LSQT_PATH_REGULAR, LSQT_PATH_DIRECTORY, LSQT_PATH_SPECIAL };
 int lsqt_path_type(const char *path, const char **what);
+/* The folder PATH is in, into dir: its part up to the last '/' (kept), or "." when it has
+ * none. Returns dir. */
+char *lsqt_path_folder(const char *path, char *dir, size_t cap);
 
 /* Would writes to A and B land on the same regular file (or both on stdout, "-")? Devices
  * and FIFOs may be shared (two outputs to /dev/null are fine). */
