@@ -172,6 +172,14 @@ expect 2 "'missing.lss'" -- "$BIN" export missing.lss -o x.nc
 [ ! -e x.nc ] && [ ! -e R.txt ] && ok || bad "a refused export wrote a file"
 ls ./*.tmp.* >/dev/null 2>&1 && bad "temporary files left behind" || ok
 
+# A write that fails inside netCDF, past the free-space check (a file-size limit: EFBIG):
+# exit 1 naming the file and the cause, no crash (the failed file is abandoned, not
+# closed: HDF5 crashed closing it or at exit), no temporary, the previous file whole.
+cp R.nc big.nc && cp R.nc keep_big.nc
+expect 1 "cannot write 'big.nc' (enddef): File too large" -- bash -c "trap '' XFSZ; ulimit -f 8; exec \"\$0\" export R.lsqt.lss -o big.nc" "$BIN"
+cmp -s big.nc keep_big.nc && ok || bad "a failed netCDF write changed the previous file"
+ls ./*.tmp.* >/dev/null 2>&1 && bad "temporary files left by the failed netCDF write" || ok
+
 # A full file system (a small tmpfs, as root): exit 1 naming the cause, no temporary, the
 # previous file whole, and no crash (HDF5 met a full disk badly).
 if cli_tmpfs small 1m; then

@@ -87,8 +87,10 @@ static const char *nc_why(const ncw *w, const char *path, char *buf, size_t cap)
     lsqt_path_folder(path, dir, sizeof dir);
     struct statvfs fs;
     const int full = statvfs(dir, &fs) == 0 && (unsigned long long)fs.f_bavail * fs.f_frsize < 65536ULL;
-    if (w->sys_errno == ENOSPC || w->sys_errno == EDQUOT || (full && w->status != NC_NOERR))
-        snprintf(buf, cap, "%s (%s)", strerror(w->sys_errno == EDQUOT ? EDQUOT : ENOSPC), nc_strerror(w->status));
+    const int e = w->sys_errno;
+    if (e == EDQUOT || e == EFBIG || e == EIO || e == EROFS || e == ENOSPC || (full && w->status != NC_NOERR))
+        snprintf(buf, cap, "%s (%s)", strerror(e == EDQUOT || e == EFBIG || e == EIO || e == EROFS ? e : ENOSPC),
+                 nc_strerror(w->status));
     else
         snprintf(buf, cap, "%s", nc_strerror(w->status));
     return buf;
@@ -336,14 +338,14 @@ static int check_room(const char *path, const lsqt_state *st, const grid *g, cha
     return -1;
 }
 
-static int write_nc(const char *tmp, const char *input, const lsqt_state *st, const lsqt_slice_est *est,
+static int write_nc(const char *tmp, const char *shown, const char *input, const lsqt_state *st, const lsqt_slice_est *est,
                     const grid *g, char *err, size_t errcap)
 {
     ncw w = {-1, NC_NOERR, NULL, 0};
     char why[256];
     nc_check(&w, nc_create(tmp, NC_CLOBBER | NC_NETCDF4, &w.id), "create");
     if (w.status != NC_NOERR) {
-        snprintf(err, errcap, "cannot create '%s': %s", tmp, nc_why(&w, tmp, why, sizeof why));
+        snprintf(err, errcap, "cannot create '%s': %s", shown, nc_why(&w, tmp, why, sizeof why));
         return -1;
     }
     nc_vars v;
@@ -360,7 +362,7 @@ static int write_nc(const char *tmp, const char *input, const lsqt_state *st, co
     if (w.status == NC_NOERR) nc_check(&w, nc_close(w.id), "close");
     else g_nc_abandoned = 1;
     if (w.status != NC_NOERR) {
-        snprintf(err, errcap, "cannot write '%s' (%s): %s", tmp, w.what, nc_why(&w, tmp, why, sizeof why));
+        snprintf(err, errcap, "cannot write '%s' (%s): %s", shown, w.what, nc_why(&w, tmp, why, sizeof why));
         return -1;
     }
     return read_back(tmp, g, err, errcap);
@@ -527,7 +529,7 @@ static int export_nc(const char *prog, const char *input, const char *out, const
     if (!est) rc = lsqt_prog_error(prog, 1, "out of memory");
     else if (check_room(out, st, &g, msg, sizeof msg)) rc = lsqt_prog_error(prog, 1, msg);
     else if (lsqt_out_open_named(&o, out, msg, sizeof msg)) rc = lsqt_prog_error(prog, 1, msg);
-    else if (write_nc(lsqt_out_name(&o), input, st, est, &g, msg, sizeof msg)) {
+    else if (write_nc(lsqt_out_name(&o), out, input, st, est, &g, msg, sizeof msg)) {
         lsqt_out_abort(&o);
         rc = lsqt_prog_error(prog, 1, msg);
     } else if (lsqt_out_commit_named(&o, msg, sizeof msg)) {
