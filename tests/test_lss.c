@@ -191,6 +191,45 @@ static int packed_streams(const char *path)
     return 0;
 }
 
+/* Packed histograms (host/state/hist.c), for the checks below: P's batch t of band b,
+ * slice sp, is K times D's of slice sd (a sum of K copies). */
+static int hist_batch_is(const lsqt_state *p, int sp, const lsqt_state *d, int sd, int b, int t, int k)
+{
+    lsqt_u128 got[LSQT_HIST_BINS], want[LSQT_HIST_BINS];
+    memset(got, 0, sizeof got), memset(want, 0, sizeof want);
+    lsqt_state_hist_read(p, b, sp, t, got, 1);
+    lsqt_state_hist_read(d, b, sd, t, want, 1);
+    for (int i = 0; i < LSQT_HIST_BINS; i++) {
+        lsqt_u128 w = {0, 0};
+        for (int j = 0; j < k; j++) w = lsqt_u128_add(w, want[i]);
+        if (w.lo != got[i].lo || w.hi != got[i].hi) return 0;
+    }
+    return 1;
+}
+
+/* A 3-band state of 2 slices whose histograms are sparse, with tallies of every length
+ * (1 to 16 bytes, the high word too) and runs of zeros, written to PATH. */
+static void sparse_bands(lsqt_state *d, const char *path)
+{
+    const double wl[3] = {450, 550, 650};
+    lsqt_state_init_bands(d, "Medium eta=1\nLayer z=0 LambertianBsdf fR=0.6,0.5,0.4 fT=0\nMedium eta=1\n", 9, 3, 2, 4,
+                          1, 3, wl);
+    const uint64_t r[] = {0, 5000};
+    lsqt_state_set_ranges(d, r, 1);
+    d->span_end = 5000;
+    for (size_t i = 0; i < (size_t)2 * 4; i++) d->wi[4 * i + 2] = 1.0f;
+    uint64_t x = 88172645463325252ULL;
+    for (size_t i = 0; i < lsqt_state_hist_count(d); i++) {
+        x ^= x << 13, x ^= x >> 7, x ^= x << 17;
+        if (x % 5) continue;
+        d->hist[i].lo = x >> (x % 61);
+        d->hist[i].hi = i % 7 == 0 ? x >> (x % 64) : 0;
+    }
+    for (size_t i = 0; i < lsqt_state_nee_count(d); i++) d->nee[i].lo = i * 3;
+    char err[256];
+    CHECK(lsqt_lss_write(path, d, err, sizeof err) == 0, "%s", err);
+}
+
 int main(void)
 {
     lsqt_state a, b;
@@ -426,6 +465,51 @@ int main(void)
     CHECK(lsqt_lss_parse(f5, n5 - 16, &b, err, sizeof err) != 0 && strstr(err, "truncated at byte"),
           "short version 5: %s", err);
     free(f5);
+
+    /* Packed histograms: an LSS read packed (LSQT_PACK_HIST=1, as a run of many bands
+     * reads it) holds every batch as the dense state does and writes the same bytes; a
+     * dense state packed too; sums (packed with packed, dense with packed), copies and
+     * drops of slices agree with the u128 sums of the dense batches. */
+    {
+        lsqt_state d, p, q, e;
+        sparse_bands(&d, path);
+        size_t na = 0, nb2 = 0, nc = 0;
+        char *fa = lsqt_read_file(path, &na, err, sizeof err);
+        setenv("LSQT_PACK_HIST", "1", 1);
+        CHECK(lsqt_lss_read(path, &p, err, sizeof err) == 0 && p.hist_pk && !p.hist, "read packed: %s", err);
+        setenv("LSQT_PACK_HIST", "0", 1);
+        CHECK(lsqt_lss_read(path, &q, err, sizeof err) == 0 && !q.hist_pk, "read dense: %s", err);
+        CHECK(lsqt_lss_read(path, &e, err, sizeof err) == 0, "read dense: %s", err);
+        unsetenv("LSQT_PACK_HIST");
+        int same = 1;
+        for (int bd = 0; bd < 3; bd++)
+            for (int sl = 0; sl < 2; sl++)
+                for (int t = 0; t < LSQT_BATCHES; t++) same &= hist_batch_is(&p, sl, &d, sl, bd, t, 1);
+        CHECK(same, "a packed histogram batch differs from the dense one");
+        CHECK(lsqt_lss_write(path, &p, err, sizeof err) == 0, "%s", err);
+        char *fb = lsqt_read_file(path, &nb2, err, sizeof err);
+        CHECK(fa && fb && na == nb2 && memcmp(fa, fb, na) == 0, "the packed state's LSS differs (%zu, %zu bytes)", na, nb2);
+        CHECK(lsqt_state_pack_hist(&q, 1) == 0 && q.hist_pk && lsqt_lss_write(path, &q, err, sizeof err) == 0, "%s", err);
+        char *fc = lsqt_read_file(path, &nc, err, sizeof err);
+        CHECK(fc && na == nc && memcmp(fa, fc, na) == 0, "the dense state packed writes another LSS");
+        CHECK(lsqt_state_add_hist(&p, &q) == 0 && lsqt_state_add_hist(&e, &q) == 0, "adding histograms");
+        same = 1;
+        for (int bd = 0; bd < 3; bd++)
+            for (int sl = 0; sl < 2; sl++)
+                for (int t = 0; t < LSQT_BATCHES; t++)
+                    same &= hist_batch_is(&p, sl, &d, sl, bd, t, 2) && hist_batch_is(&e, sl, &d, sl, bd, t, 2);
+        CHECK(same, "a sum of histograms differs from the sum of the dense batches");
+        CHECK(lsqt_state_copy_hist(&q, 0, &p, 1) == 0, "copy");
+        lsqt_state_drop_hist(&p, 0, 1);
+        same = 1;
+        for (int bd = 0; bd < 3; bd++)
+            for (int t = 0; t < LSQT_BATCHES; t++)
+                same &= hist_batch_is(&q, 0, &d, 1, bd, t, 2) && hist_batch_is(&q, 1, &d, 1, bd, t, 1) &&
+                        hist_batch_is(&p, 0, &d, 0, bd, t, 0) && hist_batch_is(&p, 1, &d, 1, bd, t, 2);
+        CHECK(same, "a copied or dropped slice's histograms are wrong");
+        free(fa), free(fb), free(fc);
+        lsqt_state_free(&d), lsqt_state_free(&p), lsqt_state_free(&q), lsqt_state_free(&e);
+    }
 
     /* Writing streams through a small buffer: no allocation near the state's size (a large
      * LSS after a long run cannot fail for memory). 4 slices of 1024 directions, dense:

@@ -8,8 +8,9 @@ docs/performance.md, "Memory").
 Every run is a Lambertian base (fR 0.6) with --wavelengths over 400 nm onwards in 10 nm
 steps (or none for one band), -p PATHS (default 1000: the tallies' size does not depend on
 the paths), seed 0, a fresh LSS. Cases: 1, 32 and 200 bands on the default grid (-wo 12
--wi 80, RRSS), 1051 bands at -wo 5, the grid -wo 90 -wi 1024 with 1 and 200 bands, and 32
-bands at 100000 paths (every one of the 32 batches reached: the tallies' full size).
+-wi 80, RRSS), 1051 bands at -wo 5, the grid -wo 90 -wi 1024 with 1 and 200 bands, 32
+bands at 100000 paths and 200 at 10000 (every one of the 32 batches reached: the tallies'
+full size).
 --max-memory (default 6G) is passed on, so a case whose estimate exceeds it is refused by
 lsqt-cl itself (exit 2, reported as such) instead of taking the machine's memory. Peak RSS
 is the lsqt-cl process's ru_maxrss (os.wait4), after a run of the case at -p 1 has built its
@@ -33,6 +34,7 @@ CASES = [
     ("-wo 90 -wi 1024", 1, ["-wo", "90", "-wi", "1024"], None),
     ("-wo 90 -wi 1024", 200, ["-wo", "90", "-wi", "1024"], None),
     ("default grid, -p 100000", 32, [], 100000),
+    ("default grid, -p 10000", 200, [], 10000),
 ]
 UNITS = {"MB": 2**20, "GB": 2**30}
 

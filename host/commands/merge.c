@@ -220,7 +220,8 @@ static int add_inputs(merge_job *j, uint64_t *all)
     const lsqt_state *f = &st[0];
     lsqt_state *sum = &j->sum;
     if (lsqt_state_init_bands(sum, f->canonical, f->hash, f->seed, f->n_slices, f->n_wi, f->transmits, f->n_bands,
-                              f->wavelengths))
+                              f->wavelengths) ||
+        lsqt_state_pack_hist(sum, 0)) /* many bands: packed, as the inputs were read */
         return 1;
     sum->use_double = f->use_double, sum->dir_method = f->dir_method, sum->rx = f->rx;
     sum->pilot_paths = f->pilot_paths, sum->stage = f->stage;
@@ -232,7 +233,7 @@ static int add_inputs(merge_job *j, uint64_t *all)
     for (int i = 0; i < j->n_read; i++) {
         add_all(sum->nee, st[i].nee, lsqt_state_nee_count(sum));
         add_all(sum->scalars, st[i].scalars, lsqt_state_scalar_count(sum));
-        add_all(sum->hist, st[i].hist, lsqt_state_hist_count(sum));
+        if (lsqt_state_add_hist(sum, &st[i])) return 1;
         sum->flags |= st[i].flags;
         if (st[i].span_end > sum->span_end) sum->span_end = st[i].span_end;
         memcpy(all + 2 * k, st[i].ranges, (size_t)st[i].n_ranges * 2 * sizeof *all);

@@ -356,7 +356,10 @@ int run_command(const lsqt_cli *c)
     free(wi_dirs);
     if (!rc) rc = run_plan_sides(c, from_stdin, &a, &st, continued, &out, err, sizeof err);
     if (!rc && (rc = check_memory(c, &a, &st))) lsqt_state_free(&st);
-    else if (!rc) {
+    else if (!rc && lsqt_state_pack_hist(&st, 0)) { /* many bands: histograms packed (state.h) */
+        rc = fail(1, "out of memory packing the histograms%s%s", "", "");
+        lsqt_state_free(&st);
+    } else if (!rc) {
         rc = simulate(c, &a, &st, &out);
         lsqt_state_free(&st);
     }

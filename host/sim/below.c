@@ -113,6 +113,10 @@ static int init_like(lsqt_state *out, const lsqt_state *st, int n)
     if (lsqt_state_init_bands(out, st->canonical, st->hash, st->seed, n, st->n_wi, st->transmits, st->n_bands,
                               st->wavelengths))
         return -1;
+    if (st->hist_pk && lsqt_state_pack_hist(out, 1)) { /* as ST holds them */
+        lsqt_state_free(out);
+        return -1;
+    }
     out->use_double = st->use_double;
     out->span_end = st->span_end;
     out->stage = st->stage;
@@ -128,14 +132,15 @@ static int init_like(lsqt_state *out, const lsqt_state *st, int n)
     return 0;
 }
 
-/* Slice ss of SRC (direction, flags, tallies) as slice ds of DST (same n_wi). */
-static void copy_slice(lsqt_state *dst, int ds, const lsqt_state *src, int ss)
+/* Slice ss of SRC (direction, flags, tallies) as slice ds of DST (same n_wi). Returns 0
+ * or -1 (out of memory). */
+static int copy_slice(lsqt_state *dst, int ds, const lsqt_state *src, int ss)
 {
     const size_t nw = (size_t)src->n_wi;
     dst->theta_o[ds] = src->theta_o[ss];
     dst->slice_flags[ds] = src->slice_flags[ss];
     memcpy(dst->wi + (size_t)ds * nw * 4, src->wi + (size_t)ss * nw * 4, nw * 4 * sizeof *src->wi);
-    lsqt_state_copy_slice_tallies(dst, ds, src, ss);
+    return lsqt_state_copy_slice_tallies(dst, ds, src, ss);
 }
 
 int lsqt_state_split_sides(const lsqt_state *st, lsqt_state *above, lsqt_state *below)
@@ -146,12 +151,16 @@ int lsqt_state_split_sides(const lsqt_state *st, lsqt_state *above, lsqt_state *
         lsqt_state_free(above);
         return -1;
     }
-    int ia = 0, ib = 0;
-    for (int s = 0; s < st->n_slices; s++) {
-        if (st->slice_flags[s] & LSQT_SLICE_BELOW) copy_slice(below, ib++, st, s);
-        else copy_slice(above, ia++, st, s);
+    int ia = 0, ib = 0, rc = 0;
+    for (int s = 0; s < st->n_slices && !rc; s++) {
+        if (st->slice_flags[s] & LSQT_SLICE_BELOW) rc = copy_slice(below, ib++, st, s);
+        else rc = copy_slice(above, ia++, st, s);
     }
-    return 0;
+    if (rc) {
+        lsqt_state_free(above);
+        lsqt_state_free(below);
+    }
+    return rc;
 }
 
 int lsqt_state_join_sides(const lsqt_state *above, const lsqt_state *below, lsqt_state *out, char *err,
@@ -180,9 +189,14 @@ int lsqt_state_join_sides(const lsqt_state *above, const lsqt_state *below, lsqt
         return -1;
     }
     out->flags |= below->flags;
-    for (int s = 0; s < above->n_slices; s++) copy_slice(out, s, above, s);
-    for (int s = 0; s < below->n_slices; s++) copy_slice(out, above->n_slices + s, below, s);
-    return 0;
+    int rc = 0;
+    for (int s = 0; s < above->n_slices && !rc; s++) rc = copy_slice(out, s, above, s);
+    for (int s = 0; s < below->n_slices && !rc; s++) rc = copy_slice(out, above->n_slices + s, below, s);
+    if (rc) {
+        lsqt_state_free(out);
+        snprintf(err, errcap, "out of memory");
+    }
+    return rc;
 }
 
 int lsqt_state_add_below(lsqt_state *st)
@@ -191,7 +205,10 @@ int lsqt_state_add_below(lsqt_state *st)
     char err[128];
     if (init_like(&dn, st, st->n_slices)) return -1;
     for (int s = 0; s < st->n_slices; s++) {
-        copy_slice(&dn, s, st, s);
+        if (copy_slice(&dn, s, st, s)) {
+            lsqt_state_free(&dn);
+            return -1;
+        }
         dn.slice_flags[s] |= LSQT_SLICE_BELOW;
     }
     int rc = lsqt_state_join_sides(st, &dn, &both, err, sizeof err);

@@ -3,7 +3,9 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "lsqt/band_blocks.h"
 #include "lsqt/device_layout.h"
+#include "lsqt/state.h"
 #include "lsqt/tally.h"
 
 #define MB ((uint64_t)1 << 20)
@@ -34,6 +36,38 @@ uint64_t lsqt_memory_tallies(int n_bands, int n_slices, int n_wi, int hist_slice
                  rows_bytes((uint64_t)hist_slices, LSQT_HIST_BINS, k));
 }
 
+/* Packed histograms (state.h: lsqt_state_hist_packs, for the shapes that pack) of
+ * n_bands bands with hist_slices histograms each at PATHS per slice (0: unbounded): a
+ * path exits once, so a histogram has at most PATHS nonzero bins over its batches, each
+ * at most 12 bytes packed, and every batch's block costs about 48 bytes of allocation. */
+static int hist_packs(uint64_t nb, uint64_t hist_slices)
+{
+    return nb > 1 && nb * hist_slices * LSQT_BATCHES * LSQT_HIST_BINS * sizeof(lsqt_u128) > LSQT_PACK_HIST_BYTES;
+}
+
+static uint64_t packed_hist(uint64_t nb, uint64_t hist_slices, uint64_t paths)
+{
+    const uint64_t bins = (uint64_t)LSQT_BATCHES * LSQT_HIST_BINS, nz = paths && paths < bins ? paths : bins;
+    return nb * hist_slices * (nz * 12 + LSQT_BATCHES * 48);
+}
+
+/* The tallies of a state (its histograms packed where it packs them) and of the device
+ * for it (on a CPU device a packed state's histograms are there one band block at a time,
+ * session.h). */
+static void state_and_device(const lsqt_memory_shape *m, int n_slices, int hist_slices, uint64_t *state,
+                             uint64_t *device)
+{
+    const uint64_t nb = m->n_bands > 1 ? (uint64_t)m->n_bands : 1;
+    if (!hist_packs(nb, (uint64_t)hist_slices)) {
+        *state = *device = lsqt_memory_tallies(m->n_bands, n_slices, m->n_wi, hist_slices, m->paths);
+        return;
+    }
+    const uint64_t rest = lsqt_memory_tallies(m->n_bands, n_slices, m->n_wi, 0, m->paths);
+    const int block = m->n_bands < LSQT_BAND_BLOCK_MAX ? m->n_bands : LSQT_BAND_BLOCK_MAX;
+    *state = rest + packed_hist(nb, (uint64_t)hist_slices, m->paths);
+    *device = rest + lsqt_memory_tallies(block, 0, m->n_wi, hist_slices, m->paths);
+}
+
 /* The device's direction tables and directions of one band block, each band counted as
  * a block of its own (the most there can be; session.c's upload). */
 static uint64_t device_tables(const lsqt_memory_shape *m, int n_slices)
@@ -48,8 +82,10 @@ lsqt_memory lsqt_memory_estimate(const lsqt_memory_shape *m)
     lsqt_memory r;
     memset(&r, 0, sizeof r);
     const uint64_t nb = m->n_bands > 1 ? (uint64_t)m->n_bands : 1, ns = (uint64_t)m->n_slices;
-    r.state = lsqt_memory_tallies(m->n_bands, m->n_slices, m->n_wi, m->n_slices, m->paths) + ns * (uint64_t)m->n_wi * 16;
-    r.device = lsqt_memory_tallies(m->n_bands, m->n_slices, m->n_wi, m->n_slices, m->paths) + device_tables(m, m->n_slices);
+    uint64_t st_tallies, dev_tallies;
+    state_and_device(m, m->n_slices, m->n_slices, &st_tallies, &dev_tallies);
+    r.state = st_tallies + ns * (uint64_t)m->n_wi * 16;
+    r.device = dev_tallies + device_tables(m, m->n_slices);
     /* the sides of a state from below are copies of its slices (below.h); the estimates
      * of every band for the outputs */
     r.extra = (m->sides > 1 ? r.state : 0) + nb * ns * (sizeof(lsqt_slice_est) + (uint64_t)m->n_wi * sizeof(lsqt_est));
@@ -57,8 +93,10 @@ lsqt_memory lsqt_memory_estimate(const lsqt_memory_shape *m)
     uint64_t top = r.state + r.device + r.extra;
     if (m->pilot_rx > 0) { /* a slice's rx candidate blocks share one histogram (rrss.c) */
         const int ps = m->n_slices * m->pilot_rx;
-        r.pilot = lsqt_memory_tallies(m->n_bands, ps, m->n_wi, m->n_slices, m->paths) + (uint64_t)ps * (uint64_t)m->n_wi * 16;
-        const uint64_t pilot_run = 2 * r.pilot + device_tables(m, ps), choose = r.pilot + r.state;
+        uint64_t p_tallies, p_device;
+        state_and_device(m, ps, m->n_slices, &p_tallies, &p_device);
+        r.pilot = p_tallies + (uint64_t)ps * (uint64_t)m->n_wi * 16;
+        const uint64_t pilot_run = r.pilot + p_device + device_tables(m, ps), choose = r.pilot + r.state;
         if (pilot_run > top) top = pilot_run;
         if (choose > top) top = choose;
     }

@@ -376,7 +376,7 @@ int lsqt_rrss_pilot(lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *
         return 1;
     }
     /* the blocks of a slice are the same paths: one histogram (a 32-band pilot's were 0.8 GB) */
-    if (lsqt_state_group_hist(ps, rx)) {
+    if (lsqt_state_group_hist(ps, rx) || lsqt_state_pack_hist(ps, 0)) {
         lsqt_state_free(ps);
         snprintf(err, errcap, "out of memory");
         return 1;
@@ -442,6 +442,11 @@ static int choose(const lsqt_state *ps, lsqt_state *used, lsqt_state *st, lsqt_r
         snprintf(err, errcap, "out of memory");
         return 1;
     }
+    if (lsqt_state_pack_hist(st, 0)) {
+        lsqt_state_free(st);
+        snprintf(err, errcap, "out of memory");
+        return 1;
+    }
     st->use_double = ps->use_double;
     st->dir_method = LSQT_DIRS_RRSS;
     st->rx = ps->rx;
@@ -497,16 +502,18 @@ static int choose(const lsqt_state *ps, lsqt_state *used, lsqt_state *st, lsqt_r
             const lsqt_state to = lsqt_state_band(st, band), from = lsqt_state_band(ps, band);
             lsqt_tallies_copy(to.scalars + (size_t)sl * B * LSQT_T_COUNT, from.scalars + (size_t)sl * rx * B * LSQT_T_COUNT,
                               B * LSQT_T_COUNT);
-            lsqt_tallies_copy(lsqt_state_hist_of(&to, sl), lsqt_state_hist_of(&from, sl * rx), B * LSQT_HIST_BINS);
+        }
+        if (lsqt_state_copy_hist(st, sl, ps, sl * rx)) {
+            snprintf(err, errcap, "out of memory");
+            goto done;
         }
         for (int band = 0; used && band < nbands; band++) {
             const lsqt_state from = lsqt_state_band(used, band);
             const size_t v0 = (size_t)sl * rx, nv = (size_t)rx;
             lsqt_tallies_drop(from.nee + v0 * B * n, nv * B * n);
             lsqt_tallies_drop(from.scalars + v0 * B * LSQT_T_COUNT, nv * B * LSQT_T_COUNT);
-            lsqt_u128 *h0 = lsqt_state_hist_of(&from, (int)v0), *h1 = lsqt_state_hist_of(&from, (int)(v0 + nv));
-            lsqt_tallies_drop(h0, (size_t)(h1 - h0));
         }
+        if (used) lsqt_state_drop_hist(used, sl * rx, (sl + 1) * rx);
     }
     info->select_seconds = lsqt_now() - t_sel;
     rc = 0;

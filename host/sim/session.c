@@ -140,54 +140,64 @@ static cl_int set_kernel_args(lsqt_session *s)
     return e;
 }
 
+/* The histogram buffer's part for the session's histogram k (its slices k * g to k * g +
+ * g - 1) and batch t: LSQT_HIST_BINS rows of the block's nb slots (device_layout.h). */
+static lsqt_u128 *hist_part(const lsqt_session *s, lsqt_u128 *all, size_t k, int t)
+{
+    return all + (k * LSQT_BATCHES + (size_t)t) * LSQT_HIST_BINS * (size_t)s->nb;
+}
+
+/* Part (k, t) of the histogram buffer ALL between ST's bands and the buffer: from ST
+ * (ALL holds zeros there), or with back into ST (every slice of the group, unless ST's
+ * groups are these). Returns 0, or -1 out of memory (ST's packed histograms). */
+static int hist_batch(const lsqt_session *s, lsqt_state *st, lsqt_u128 *all, size_t k, int t, int back)
+{
+    const size_t nb = (size_t)s->nb, g = (size_t)s->slice_group, sg = st->hist_group > 1 ? st->hist_group : 1;
+    lsqt_u128 *part = hist_part(s, all, k, t);
+    for (size_t j = 0; j < nb; j++) {
+        if (s->band_of[j] < 0) continue;
+        for (size_t m = 0; m < (back ? g : 1); m++) {
+            const size_t sl = k * g + m;
+            if (m && sl / sg == k * g / sg) break; /* ST's groups are these: written once */
+            if (!back) lsqt_state_hist_read(st, s->band_of[j], (int)sl, t, part + j, nb);
+            else if (lsqt_state_hist_write(st, s->band_of[j], (int)sl, t, part + j, nb)) return -1;
+        }
+    }
+    return 0;
+}
+
 /* A block's tallies between ST and ALL, laid out as its buffers hold them: the path sums
  * and scalars slot after slot, the histogram with the slots innermost (device_layout.h)
  * and one per slice group (its blocks' exits are the same paths'). With back, from ALL
- * into ST (every slice of a group, unless ST shares them too); else from ST into ALL,
- * a padding slot's part left as it is. */
-static void block_tallies(const lsqt_session *s, const lsqt_state *st, int which, lsqt_u128 *all, int back)
+ * into ST; else from ST into ALL (which holds zeros: a padding slot's part stays so).
+ * Returns 0, or -1 out of memory. */
+static int block_tallies(const lsqt_session *s, lsqt_state *st, int which, lsqt_u128 *all, int back)
 {
     const size_t n = which == 0 ? s->n_nee : which == 1 ? s->n_scalars : s->n_hist, nb = (size_t)s->nb;
-    lsqt_state v[LSQT_BAND_BLOCK_MAX];
-    for (size_t j = 0; j < nb; j++)
-        if (s->band_of[j] >= 0) v[j] = lsqt_state_band(st, s->band_of[j]);
     if (which != 2) {
         for (size_t j = 0; j < nb; j++) {
             if (s->band_of[j] < 0) continue;
-            lsqt_u128 *band = which == 0 ? v[j].nee : v[j].scalars;
+            const lsqt_state v = lsqt_state_band(st, s->band_of[j]);
+            lsqt_u128 *band = which == 0 ? v.nee : v.scalars;
             if (back) lsqt_tallies_copy(band, all + j * n, n);
             else lsqt_tallies_copy(all + j * n, band, n);
         }
-        return;
+        return 0;
     }
-    /* bin by bin, every slot's at once: ALL is read or written in order (slot by slot it
-     * was a fifth of a 32-band run, each line fetched once per slot) */
-    const size_t per = (size_t)LSQT_BATCHES * LSQT_HIST_BINS, g = (size_t)s->slice_group;
-    lsqt_u128 *h[LSQT_BAND_BLOCK_MAX];
-    for (size_t k = 0; k < n / per; k++)
-        for (size_t m = 0; m < (back ? g : 1); m++) {
-            int shared = 0;
-            for (size_t j = 0; j < nb; j++) {
-                h[j] = s->band_of[j] >= 0 ? lsqt_state_hist_of(&v[j], (int)(k * g + m)) : NULL;
-                shared |= m && h[j] && h[j] == lsqt_state_hist_of(&v[j], (int)(k * g));
-            }
-            if (shared) break; /* ST's groups are these: written once */
-            for (size_t i = 0; i < per; i++) {
-                lsqt_u128 *row = all + (k * per + i) * nb;
-                for (size_t j = 0; j < nb; j++)
-                    if (!h[j]) continue;
-                    else if (back) lsqt_tallies_copy(&h[j][i], &row[j], 1);
-                    else lsqt_tallies_copy(&row[j], &h[j][i], 1);
-            }
-        }
+    /* part by part (a part of 16 slots is 256 KB: every slot's bins stay in cache) */
+    for (size_t k = 0; k < n / ((size_t)LSQT_BATCHES * LSQT_HIST_BINS); k++)
+        for (int t = 0; t < LSQT_BATCHES; t++)
+            if (hist_batch(s, st, all, k, t, back)) return -1;
+    return 0;
 }
 
 /* Buffer BUF (BYTES) gets ST's tallies WHICH: for a state without paths (a fresh run, a
  * pilot) zeros, filled on the device (no staging copy of what may be a GB of zeros) or
  * already there (a CPU device's mapped zero pages, s->host); else written in place
  * through a map, only the nonzero words into a CPU device's zero pages. */
-static cl_int put_tallies(const lsqt_session *s, const lsqt_state *st, int which, cl_mem buf, size_t bytes)
+static cl_int put_tallies(const lsqt_session *s, lsqt_state *st, int which, cl_mem buf, size_t bytes)
 {
+    if (which == 2 && s->hist_home) return CL_SUCCESS; /* lent launch by launch (stream_hist) */
     cl_command_queue q = s->cx->queue;
     const cl_ulong zero = 0;
     const int zeros = s->host[which] != NULL;
@@ -197,14 +207,14 @@ static cl_int put_tallies(const lsqt_session *s, const lsqt_state *st, int which
                                       NULL, NULL, &e);
     if (e != CL_SUCCESS) return e;
     if (!zeros) memset(p, 0, bytes); /* a padding slot's part */
-    block_tallies(s, st, which, p, 0);
+    (void)block_tallies(s, st, which, p, 0); /* reads ST only: cannot fail */
     return clEnqueueUnmapMemObject(q, buf, p, 0, NULL, NULL);
 }
 
 /* The tables, the directions and the tallies go up; the direction tables (T, Lambda,
  * lgamma(1 + Lambda) per slice, layer and direction) are made on the device, once. A
  * block of bands has its own tables (band_blocks.h). */
-static int upload(lsqt_session *s, const lsqt_assembly *full, const lsqt_band_block *blk, const lsqt_state *st,
+static int upload(lsqt_session *s, const lsqt_assembly *full, const lsqt_band_block *blk, lsqt_state *st,
                   lsqt_state *take, char *err, size_t errcap)
 {
     lsqt_context *cx = s->cx;
@@ -277,6 +287,8 @@ static int upload(lsqt_session *s, const lsqt_assembly *full, const lsqt_band_bl
         snprintf(err, errcap, "cannot allocate device buffers: %s (%d)", lsqt_cl_error_name(e), (int)e);
         goto done;
     }
+    /* packed histograms on a CPU device: its buffer holds a batch only while a launch adds to it */
+    s->hist_home = st->hist_pk && s->host[2] ? st : NULL;
     for (int i = 0; i < 3 && e == CL_SUCCESS; i++) e = put_tallies(s, st, i, *tally_buf[i], tally_bytes[i]);
     if (e != CL_SUCCESS) {
         snprintf(err, errcap, "cannot put the tallies on the device: %s (%d)", lsqt_cl_error_name(e), (int)e);
@@ -287,7 +299,7 @@ static int upload(lsqt_session *s, const lsqt_assembly *full, const lsqt_band_bl
         lsqt_state v = lsqt_state_band(take, s->band_of[j]);
         lsqt_tallies_drop(v.nee, lsqt_state_nee_count(&v));
         lsqt_tallies_drop(v.scalars, lsqt_state_scalar_count(&v));
-        lsqt_tallies_drop(v.hist, lsqt_state_hist_count(&v));
+        if (v.hist) lsqt_tallies_drop(v.hist, lsqt_state_hist_count(&v)); /* packed ones stay (put_tallies) */
     }
     e = set_kernel_args(s);
     if (e == CL_SUCCESS) {
@@ -343,7 +355,7 @@ static int check_kernel_memory(lsqt_session *s, int verbose, char *err, size_t e
     return 0;
 }
 
-int lsqt_session_open(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st,
+int lsqt_session_open(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st,
                       const char *extra_options, size_t local_size, int verbose, char *err, size_t errcap)
 {
     return lsqt_session_open_grouped(s, cx, a, st, 1, extra_options, local_size, verbose, err, errcap);
@@ -401,7 +413,7 @@ static int make_kernels(lsqt_session *s, const lsqt_state *st, int gpu, char *er
 /* One block's session (band_blocks.h; a one-band run's is one block of one band): the
  * program built (or PROG, another block's of the same width, shared), its kernels, tables
  * and tallies. A and ST are the run's (every band). */
-static int open_block(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st,
+static int open_block(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st,
                       const lsqt_band_block *blk, int slice_group, const char *extra_options, size_t local_size,
                       int verbose, cl_program prog, lsqt_state *take, char *err, size_t errcap)
 {
@@ -487,11 +499,11 @@ static int block_width(lsqt_context *cx, const lsqt_state *st, int slice_group, 
     return width;
 }
 
-static int open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st,
+static int open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st,
                         int slice_group, const char *extra_options, size_t local_size, int verbose, lsqt_state *take,
                         char *err, size_t errcap);
 
-int lsqt_session_open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st,
+int lsqt_session_open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st,
                               int slice_group, const char *extra_options, size_t local_size, int verbose,
                               char *err, size_t errcap)
 {
@@ -504,7 +516,7 @@ int lsqt_session_open_taking(lsqt_session *s, lsqt_context *cx, const lsqt_assem
     return open_grouped(s, cx, a, st, 1, extra_options, local_size, verbose, st, err, errcap);
 }
 
-static int open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st,
+static int open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st,
                         int slice_group, const char *extra_options, size_t local_size, int verbose, lsqt_state *take,
                         char *err, size_t errcap)
 {
@@ -672,6 +684,37 @@ static void swap_records(lsqt_session *a, lsqt_session *b)
     b->rec = rec, b->rec_off = off, b->rec_cap = rc, b->off_cap = oc;
 }
 
+/* A launch of paths [begin, end) on a session that borrows its packed histograms
+ * (hist_home): before it (in 0), the batches its chunks fall in are unpacked into the
+ * buffer's zero pages; after it, packed back into the state and the pages given back. So
+ * the buffer holds at most the batches of one launch (a 200-band run's histograms were
+ * 1.3 GB in the buffers). Returns 0, or 1 with err filled. */
+static int stream_hist(lsqt_session *s, uint64_t begin, uint64_t end, int in, char *err, size_t errcap)
+{
+    const uint64_t c0 = begin / LSQT_CHUNK, c1 = (end - 1) / LSQT_CHUNK + 1;
+    const size_t parts = s->n_hist / ((size_t)LSQT_BATCHES * LSQT_HIST_BINS), nb = (size_t)s->nb;
+    const size_t bytes = nb * s->n_hist * sizeof(lsqt_u128);
+    cl_int e = CL_SUCCESS;
+    lsqt_u128 *all = clEnqueueMapBuffer(s->cx->queue, s->hist, CL_TRUE, CL_MAP_READ | CL_MAP_WRITE, 0, bytes, 0, NULL,
+                                        NULL, &e);
+    if (e != CL_SUCCESS) {
+        snprintf(err, errcap, "cannot map the histograms: %s (%d)", lsqt_cl_error_name(e), (int)e);
+        return 1;
+    }
+    int rc = 0;
+    for (uint64_t c = c0; c < c1 && c < c0 + LSQT_BATCHES && !rc; c++) {
+        const int t = (int)(c % LSQT_BATCHES);
+        for (size_t k = 0; k < parts && !rc; k++) {
+            rc = hist_batch(s, s->hist_home, all, k, t, !in);
+            if (!in) lsqt_tallies_drop(hist_part(s, all, k, t), (size_t)LSQT_HIST_BINS * nb);
+        }
+    }
+    e = clEnqueueUnmapMemObject(s->cx->queue, s->hist, all, 0, NULL, NULL);
+    if (rc) snprintf(err, errcap, "out of memory for the packed histograms");
+    else if (e != CL_SUCCESS) snprintf(err, errcap, "cannot unmap the histograms: %s (%d)", lsqt_cl_error_name(e), (int)e);
+    return rc || e != CL_SUCCESS;
+}
+
 int lsqt_session_launch(lsqt_session *s, uint64_t begin, uint64_t end, char *err, size_t errcap)
 {
     for (int b = 1; b < s->n_blocks; b++) {
@@ -685,6 +728,7 @@ int lsqt_session_launch(lsqt_session *s, uint64_t begin, uint64_t end, char *err
         snprintf(err, errcap, "the session's tallies were released by its last read");
         return 1;
     }
+    if (s->hist_home && stream_hist(s, begin, end, 1, err, errcap)) return 1;
     int no_memory = 0;
     cl_int e = s->records ? launch_records(s, begin, end, &no_memory) : run_chunks(s, s->walk, 6, begin, end, s->local_size);
     if (e != CL_SUCCESS) {
@@ -692,7 +736,7 @@ int lsqt_session_launch(lsqt_session *s, uint64_t begin, uint64_t end, char *err
         else snprintf(err, errcap, "kernel launch failed: %s (%d)", lsqt_cl_error_name(e), (int)e);
         return 1;
     }
-    return 0;
+    return s->hist_home && stream_hist(s, begin, end, 0, err, errcap);
 }
 
 static int read_block(lsqt_session *s, lsqt_state *st, int release, char *err, size_t errcap);
@@ -734,8 +778,14 @@ static int read_block(lsqt_session *s, lsqt_state *st, int release, char *err, s
         lsqt_u128 *t = clEnqueueMapBuffer(q, bufs[i], CL_TRUE, CL_MAP_READ, 0, nb * counts[i] * sizeof *t, 0, NULL,
                                           NULL, &e);
         if (e != CL_SUCCESS) break;
-        block_tallies(s, st, i, t, 1);
+        /* a borrowed histogram is the state's already (stream_hist) */
+        const int bad = i == 2 && s->hist_home ? s->hist_home != st : block_tallies(s, st, i, t, 1);
         e = clEnqueueUnmapMemObject(q, bufs[i], t, 0, NULL, NULL);
+        if (bad) {
+            snprintf(err, errcap, s->hist_home && s->hist_home != st ? "the session's histograms are another state's"
+                                                                       : "out of memory for the packed histograms");
+            return 1;
+        }
         if (e == CL_SUCCESS && release) release_tally(s, i);
     }
     if (e == CL_SUCCESS) e = clEnqueueReadBuffer(q, s->flags, CL_TRUE, 0, sizeof fl, &fl, 0, NULL, NULL);

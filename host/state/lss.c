@@ -67,11 +67,20 @@ typedef struct tally_run {
     size_t n[3];
 } tally_run;
 
-static tally_run slice_tallies(const lsqt_state *st, size_t s)
+/* Slice s of ST (a band's view); packed histograms are unpacked into SCRATCH
+ * (LSQT_BATCHES x LSQT_HIST_BINS). */
+static tally_run slice_tallies(const lsqt_state *st, size_t s, lsqt_u128 *scratch)
 {
     const size_t nw = (size_t)st->n_wi;
-    tally_run t = {{st->nee + s * LSQT_BATCHES * nw, st->scalars + s * LSQT_BATCHES * LSQT_T_COUNT,
-                    lsqt_state_hist_of(st, (int)s)},
+    lsqt_u128 *hist = scratch;
+    if (st->hist_pk) {
+        memset(scratch, 0, (size_t)LSQT_BATCHES * LSQT_HIST_BINS * sizeof *scratch);
+        for (int t = 0; t < LSQT_BATCHES; t++)
+            lsqt_state_hist_read(st, 0, (int)s, t, scratch + (size_t)t * LSQT_HIST_BINS, 1);
+    } else {
+        hist = lsqt_state_hist_of(st, (int)s);
+    }
+    tally_run t = {{st->nee + s * LSQT_BATCHES * nw, st->scalars + s * LSQT_BATCHES * LSQT_T_COUNT, hist},
                    {LSQT_BATCHES * nw, LSQT_BATCHES * LSQT_T_COUNT, LSQT_BATCHES * LSQT_HIST_BINS}};
     return t;
 }
@@ -136,8 +145,9 @@ static int counts_ok(uint64_t n_slices, uint64_t n_wi, uint64_t tl, uint64_t n_r
            (!bands || ((nb >= 2 || (nb == 1 && named == 1)) && nb <= LSQT_MAX_BANDS && named <= 1));
 }
 
-/* Everything but the CRC; file_bytes is the whole file's size, announced in the header. */
-static void put_state(wbuf *w, const lsqt_state *st, uint64_t file_bytes)
+/* Everything but the CRC; file_bytes is the whole file's size, announced in the header.
+ * SCRATCH: a slice's histogram, for packed ones. */
+static void put_state(wbuf *w, const lsqt_state *st, uint64_t file_bytes, lsqt_u128 *scratch)
 {
     const size_t nw = (size_t)st->n_wi;
     /* one band without a wavelength: version 6, as before bands */
@@ -180,7 +190,7 @@ static void put_state(wbuf *w, const lsqt_state *st, uint64_t file_bytes)
             for (int c = 0; c < 3; c++) put_f32(w, st->wi[((size_t)s * nw + k) * 4 + (size_t)c]);
         for (int b = 0; b < (bands ? st->n_bands : 1); b++) {
             const lsqt_state band = lsqt_state_band(st, b);
-            const tally_run t = slice_tallies(&band, (size_t)s);
+            const tally_run t = slice_tallies(&band, (size_t)s, scratch);
             put_tallies(w, &t);
         }
     }
@@ -200,26 +210,32 @@ int lsqt_lss_write(const char *path, const lsqt_state *st, char *err, size_t err
                  LSQT_MAX_BANDS, 4096 * 8, 1u << 20, 1u << 24);
         return -1;
     }
+    lsqt_u128 *scratch = st->hist_pk ? malloc((size_t)LSQT_BATCHES * LSQT_HIST_BINS * sizeof *scratch) : NULL;
+    if (st->hist_pk && !scratch) {
+        snprintf(err, errcap, "out of memory writing '%s'", path);
+        return -1;
+    }
     wbuf w = {NULL, 0, 0, NULL, 0};
-    put_state(&w, st, 0);
+    put_state(&w, st, 0, scratch);
     const uint64_t file_bytes = w.total + 4;
     w.p = malloc(LSS_WBUF);
     if (!w.p) {
+        free(scratch);
         snprintf(err, errcap, "out of memory writing '%s'", path);
         return -1;
     }
     lsqt_out af;
     if (lsqt_out_open(&af, path, err, errcap)) {
-        free(w.p);
+        free(w.p), free(scratch);
         return -1;
     }
     w.f = af.f;
     w.total = 0;
-    put_state(&w, st, file_bytes);
+    put_state(&w, st, file_bytes, scratch);
     flush_w(&w);
     put_u32(&w, w.crc);
     flush_w(&w);
-    free(w.p);
+    free(w.p), free(scratch);
     return lsqt_out_commit(&af, err, errcap);
 }
 
@@ -587,11 +603,19 @@ static int read_ranges(rbuf *r, const lss_header *h, lsqt_state *st, char *err, 
     return 0;
 }
 
-/* Every slice's record: theta_o, flags, path count, directions, tallies. */
+/* Every slice's record: theta_o, flags, path count, directions, tallies; histograms
+ * packed as they are read where the state holds them so (lsqt_state_hist_packs: a
+ * 200-band state continued held them all dense first). */
 static int read_slices(rbuf *r, const lss_header *h, lsqt_state *st, char *err, size_t errcap)
 {
-    const size_t nw = h->n_wi;
-    for (size_t s = 0; s < h->n_slices; s++) {
+    const size_t nw = h->n_wi, nh = (size_t)LSQT_BATCHES * LSQT_HIST_BINS;
+    lsqt_u128 *scratch = NULL;
+    if (lsqt_state_hist_packs(st) && (!(scratch = calloc(nh, sizeof *scratch)) || lsqt_state_pack_hist(st, 1))) {
+        free(scratch);
+        snprintf(err, errcap, "out of memory");
+        return -1;
+    }
+    for (size_t s = 0; s < h->n_slices && !r->bad; s++) {
         st->theta_o[s] = get_f64(r);
         st->slice_flags[s] = get_u32(r);
         if (st->slice_flags[s] & ~(uint32_t)LSQT_SLICE_BELOW) r->bad = 1;
@@ -599,14 +623,21 @@ static int read_slices(rbuf *r, const lss_header *h, lsqt_state *st, char *err, 
         for (size_t k = 0; k < nw; k++)
             for (size_t c = 0; c < 3; c++) st->wi[(s * nw + k) * 4 + c] = get_f32(r);
         for (int b = 0; b < st->n_bands; b++) {
-            const lsqt_state band = lsqt_state_band(st, b);
-            const tally_run t = slice_tallies(&band, s);
+            lsqt_state band = lsqt_state_band(st, b);
+            const tally_run t = slice_tallies(&band, s, scratch); /* packed: scratch, zero */
             if (h->packed) get_tallies(r, &t);
             else
                 for (int p = 0; p < 3; p++)
                     for (size_t i = 0; i < t.n[p]; i++) t.part[p][i] = get_u128(r);
+            for (int k = 0; scratch && k < LSQT_BATCHES && !r->bad; k++)
+                if (lsqt_state_hist_write(&band, 0, (int)s, k, scratch + (size_t)k * LSQT_HIST_BINS, 1)) {
+                    free(scratch);
+                    snprintf(err, errcap, "out of memory");
+                    return -1;
+                }
         }
     }
+    free(scratch);
     if (r->at != r->n) r->bad = 1; /* packed tallies shorter than the size announced */
     if (r->bad) {
         snprintf(err, errcap, "corrupt LSS file (inconsistent slice records)");

@@ -32,7 +32,8 @@ lsqt_state lsqt_state_band(const lsqt_state *st, int b)
     v.wavelengths = st->wavelengths ? st->wavelengths + b : NULL; /* its own, for its RAW's header */
     v.nee = st->nee + (size_t)b * nee_per_band(st);
     v.scalars = st->scalars + (size_t)b * scalars_per_band(st);
-    v.hist = st->hist + (size_t)b * hist_per_band(st);
+    v.hist = st->hist ? st->hist + (size_t)b * hist_per_band(st) : NULL;
+    v.hist_pk = st->hist_pk ? st->hist_pk + (size_t)b * (hist_per_band(st) / LSQT_HIST_BINS) : NULL;
     return v;
 }
 
@@ -43,7 +44,7 @@ lsqt_u128 *lsqt_state_hist_of(const lsqt_state *st, int s)
 
 int lsqt_state_group_hist(lsqt_state *st, int g)
 {
-    if (g < 1 || st->n_slices % g || hist_group(st) != 1) return -1;
+    if (g < 1 || st->n_slices % g || hist_group(st) != 1 || st->hist_pk) return -1;
     /* calloc's untouched pages cost nothing: the full-size one is dropped before it is used */
     st->hist_group = (uint32_t)g;
     lsqt_u128 *h = calloc(lsqt_state_hist_count(st), sizeof *h);
@@ -62,7 +63,7 @@ void lsqt_tallies_copy(lsqt_u128 *dst, const lsqt_u128 *src, size_t n)
         if (dst[i].lo != src[i].lo || dst[i].hi != src[i].hi) dst[i] = src[i];
 }
 
-void lsqt_state_copy_slice_tallies(lsqt_state *dst, int ds, const lsqt_state *src, int ss)
+int lsqt_state_copy_slice_tallies(lsqt_state *dst, int ds, const lsqt_state *src, int ss)
 {
     const size_t B = LSQT_BATCHES, nw = (size_t)src->n_wi;
     for (size_t b = 0; b < bands_of(src); b++) {
@@ -70,8 +71,8 @@ void lsqt_state_copy_slice_tallies(lsqt_state *dst, int ds, const lsqt_state *sr
         lsqt_tallies_copy(d.nee + (size_t)ds * B * nw, s.nee + (size_t)ss * B * nw, B * nw);
         lsqt_tallies_copy(d.scalars + (size_t)ds * B * LSQT_T_COUNT, s.scalars + (size_t)ss * B * LSQT_T_COUNT,
                           B * LSQT_T_COUNT);
-        lsqt_tallies_copy(lsqt_state_hist_of(&d, ds), lsqt_state_hist_of(&s, ss), B * LSQT_HIST_BINS);
     }
+    return lsqt_state_copy_hist(dst, ds, src, ss);
 }
 
 int lsqt_state_init(lsqt_state *st, const char *canonical, uint64_t hash, uint64_t seed,
@@ -118,6 +119,10 @@ void lsqt_state_free(lsqt_state *st)
     free(st->nee);
     free(st->scalars);
     free(st->hist);
+    if (st->hist_pk) {
+        lsqt_state_drop_hist(st, 0, st->n_slices);
+        free(st->hist_pk);
+    }
     free(st->ranges);
     free(st->slice_flags);
     free(st->wavelengths);
@@ -202,7 +207,8 @@ void lsqt_state_clear_tallies(lsqt_state *st)
 {
     memset(st->nee, 0, lsqt_state_nee_count(st) * sizeof *st->nee);
     memset(st->scalars, 0, lsqt_state_scalar_count(st) * sizeof *st->scalars);
-    memset(st->hist, 0, lsqt_state_hist_count(st) * sizeof *st->hist);
+    if (st->hist) memset(st->hist, 0, lsqt_state_hist_count(st) * sizeof *st->hist);
+    else lsqt_state_drop_hist(st, 0, st->n_slices);
     free(st->ranges);
     st->ranges = NULL;
     st->n_ranges = 0;
@@ -239,7 +245,7 @@ void lsqt_state_drop_tallies(lsqt_state *st)
 {
     lsqt_tallies_drop(st->nee, lsqt_state_nee_count(st));
     lsqt_tallies_drop(st->scalars, lsqt_state_scalar_count(st));
-    lsqt_tallies_drop(st->hist, lsqt_state_hist_count(st));
+    if (st->hist) lsqt_tallies_drop(st->hist, lsqt_state_hist_count(st)); /* packed ones are not the device's */
 }
 
 void lsqt_shard_part(uint64_t begin, uint64_t end, int k, int n, uint64_t *lo, uint64_t *hi)

@@ -44,6 +44,11 @@ typedef struct lsqt_session {
      * on a GPU, whose buffers are filled on the device. */
     void *host[3];
     size_t host_bytes[3];
+    /* ST's histograms packed (lsqt_state_pack_hist) on a CPU device: the session borrows
+     * them launch by launch (session.c's stream_hist), so its histogram buffer holds only
+     * the batches of the launch running; its reads then read them from this state, which
+     * must be the one read into and outlive the session. NULL: the buffer holds them. */
+    struct lsqt_state *hist_home;
     /* 1: the caller runs one range on this session (lsqt_simulate_range, the RRSS pilot),
      * so lsqt_run_range's last read releases each block's tallies as it reads them */
     int last_read_releases;
@@ -69,14 +74,14 @@ int lsqt_kernel_options(const lsqt_assembly *a, int n_wi, int group, int vw, int
  * uploads the tables, directions and ST's tallies, and fills the direction tables.
  * extra_options: appended to the build options (tests, tuning); local_size 0 = automatic.
  * Returns 0, or 1 with err filled (a build log, if any, already printed to stderr). */
-int lsqt_session_open(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st,
+int lsqt_session_open(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st,
                       const char *extra_options, size_t local_size, int verbose, char *err, size_t errcap);
 
 /* The same, where every slice_group consecutive slices of ST are one simulated slice
  * whose walks serve all their direction sets at once (the RRSS pilot: the kernels are
  * built for slice_group x PAD(n_wi, vw) directions; each slice gets the walks' R, T, work
  * and histogram). */
-int lsqt_session_open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st,
+int lsqt_session_open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st,
                               int slice_group, const char *extra_options, size_t local_size, int verbose,
                               char *err, size_t errcap);
 

@@ -45,7 +45,16 @@ typedef struct lsqt_state {
     int n_bands;            /* wavelength bands (1: one; lsqt_assembly's bands); the tallies
                              * are band after band, each block laid out as a one-band state's */
     double *wavelengths;    /* n_bands nm, or NULL (one band, or unnamed bands) */
+    struct lsqt_hist_pack *hist_pk; /* NULL: the histograms are hist; else they are held packed
+                                     * (hist NULL): [band][histogram][batch] (lsqt_state_pack_hist) */
 } lsqt_state;
+
+/* One batch of one histogram, packed: the LSS's form of its LSQT_HIST_BINS tallies
+ * (lss.h: runs of zeros, nonzero tallies in their significant bytes); p NULL: all zero. */
+typedef struct lsqt_hist_pack {
+    unsigned char *p;
+    uint32_t n;
+} lsqt_hist_pack;
 
 enum { LSQT_DIRS_SPREAD = 0, LSQT_DIRS_RRSS = 1, LSQT_DIRS_FILE = 2, LSQT_DIRS_GRID = 3, LSQT_DIRS_RGL = 4 };
 /* LSQT_STAGE_PILOT: the RRSS pilot of a sharded run (slices are candidate blocks: slice
@@ -66,15 +75,42 @@ lsqt_state lsqt_state_band(const lsqt_state *st, int b);
 /* Slices of ST share their histograms in groups of G (hist_group), tallies kept if G
  * divides n_slices and the histograms are zero (a fresh pilot state). Returns 0 or -1. */
 int lsqt_state_group_hist(lsqt_state *st, int g);
-/* Slice s's histogram in ST (or in a band view of it): [LSQT_BATCHES][LSQT_HIST_BINS]. */
+/* Slice s's histogram in ST (or in a band view of it): [LSQT_BATCHES][LSQT_HIST_BINS]; a
+ * state whose histograms are dense only (hist_pk NULL). */
 lsqt_u128 *lsqt_state_hist_of(const lsqt_state *st, int s);
+
+/* Exit histograms dense or packed (host/state/hist.c). A band's histograms at the default
+ * grid are 6 MB dense, and a run of 10^4 paths touches every page of them while its LSS
+ * packs them to an eighth: a run of many bands holds them packed, batch by batch, and a
+ * CPU device's buffers hold a batch only while a launch adds to it (session.h). */
+/* Whether ST's histograms should be held packed: LSQT_PACK_HIST=1 or 0 says; else when
+ * there are bands and the dense histograms would take more than LSQT_PACK_HIST_BYTES. */
+#define LSQT_PACK_HIST_BYTES ((size_t)256 << 20)
+int lsqt_state_hist_packs(const lsqt_state *st);
+/* Packs ST's histograms (their dense memory freed), if lsqt_state_hist_packs says so or
+ * FORCE. Returns 0, or -1 out of memory (ST unchanged). */
+int lsqt_state_pack_hist(lsqt_state *st, int force);
+/* Batch t of slice s's histogram of band b (s / hist_group is the histogram) into OUT[i *
+ * stride] for its LSQT_HIST_BINS bins: only the nonzero ones are written, so OUT must hold
+ * zeros (a page of zeros stays unmapped). */
+void lsqt_state_hist_read(const lsqt_state *st, int b, int s, int t, lsqt_u128 *out, size_t stride);
+/* The same batch set from IN[i * stride]. Returns 0, or -1 out of memory (unchanged). */
+int lsqt_state_hist_write(lsqt_state *st, int b, int s, int t, const lsqt_u128 *in, size_t stride);
+/* Every band's histogram of slice ss of SRC into slice ds of DST (dense or packed, either). */
+int lsqt_state_copy_hist(lsqt_state *dst, int ds, const lsqt_state *src, int ss);
+/* SRC's histograms added to DST's (the same shape; dense or packed, either). Returns 0, or
+ * -1 out of memory. */
+int lsqt_state_add_hist(lsqt_state *dst, const lsqt_state *src);
+/* The histograms of slices [s0, s1) of every band zeroed, their memory given back. */
+void lsqt_state_drop_hist(lsqt_state *st, int s0, int s1);
 /* DST gets SRC's n tallies, a word written only where it differs: the zero words of a
  * fresh (calloc'd) DST are never written, so their pages stay unmapped and a state costs
  * the memory of the pages its nonzero tallies are on (the exit histograms of a short run
  * are mostly zero: its batches not yet reached, bins never hit). */
 void lsqt_tallies_copy(lsqt_u128 *dst, const lsqt_u128 *src, size_t n);
-/* Slice ss's tallies of SRC, in every band, into slice ds of DST (same bands, n_wi). */
-void lsqt_state_copy_slice_tallies(lsqt_state *dst, int ds, const lsqt_state *src, int ss);
+/* Slice ss's tallies of SRC, in every band, into slice ds of DST (same bands, n_wi).
+ * Returns 0, or -1 out of memory (DST's packed histograms). */
+int lsqt_state_copy_slice_tallies(lsqt_state *dst, int ds, const lsqt_state *src, int ss);
 void lsqt_state_free(lsqt_state *st);
 
 /* Tally counts (each one lsqt_u128), all bands together. */
@@ -107,7 +143,8 @@ void lsqt_state_clear_tallies(lsqt_state *st);
 /* Zero tallies, nothing else changed, their whole pages given back to the system (on
  * Linux: madvise MADV_DONTNEED, which leaves zero pages; elsewhere a memset). For a state
  * whose tallies a session's device buffers hold until its next read, which restores every
- * word (lsqt_run_range): the host's copy then costs nothing in between. */
+ * word (lsqt_run_range): the host's copy then costs nothing in between. Packed
+ * histograms are kept (a CPU device borrows them launch by launch: session.h). */
 void lsqt_state_drop_tallies(lsqt_state *st);
 /* The same for N tallies at T (a part of a state's). */
 void lsqt_tallies_drop(lsqt_u128 *t, size_t n);
