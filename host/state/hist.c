@@ -49,13 +49,10 @@ static size_t encode(const lsqt_u128 *in, size_t stride, unsigned char *o)
         }
         if (zeros) n += put_varint(o + n, 2 * zeros);
         zeros = 0, nonzero++;
-        unsigned char b[16];
-        for (int j = 0; j < 8; j++) b[j] = (unsigned char)(v.lo >> (8 * j)), b[8 + j] = (unsigned char)(v.hi >> (8 * j));
-        size_t len = 16;
-        while (!b[len - 1]) len--;
-        n += put_varint(o + n, 2 * len + 1);
-        memcpy(o + n, b, len);
-        n += len;
+        size_t len = v.hi ? 8 : 0; /* bytes up to the last nonzero one */
+        for (uint64_t w = v.hi ? v.hi : v.lo; w; w >>= 8) len++;
+        o[n++] = (unsigned char)(2 * len + 1); /* < 128: one byte */
+        for (size_t j = 0; j < len; j++) o[n++] = (unsigned char)(j < 8 ? v.lo >> (8 * j) : v.hi >> (8 * (j - 8)));
     }
     return nonzero ? n : 0;
 }
