@@ -146,9 +146,20 @@ int main(int argc, char **argv)
     m.pilot_rx = 0, m.sides = 2;
     lsqt_memory s = lsqt_memory_estimate(&m);
     CHECK(s.extra >= e.extra + e.state, "sides' copies %llu", (unsigned long long)s.extra);
-    /* bands scale it: 4096 bands of the default grid are 27 GB of tallies at least */
+    /* 4096 bands of the default grid: 24 GB of histograms dense, so they are packed
+     * (state.h): the state holds its sums and scalars dense and at most 12 bytes a bin
+     * (32768 a histogram: unbounded paths) and 48 a batch of them; the device the sums and
+     * scalars, one block's (16 bands') histograms and every band's direction tables */
     m.sides = 1, m.n_bands = 4096;
-    CHECK(lsqt_memory_estimate(&m).peak > 2 * 128 * t, "4096 bands");
+    const lsqt_memory b4 = lsqt_memory_estimate(&m);
+    const uint64_t rest = lsqt_memory_tallies(4096, 12, 80, 0, 0), pk = 4096ull * 12 * (32768 * 12 + 32 * 48);
+    CHECK(rest == 4096ull * 12 * 32 * (80 + 7) * 16, "sums and scalars %llu", (unsigned long long)rest);
+    CHECK(b4.state >= rest + pk && b4.state < rest + pk + rest / 50, "4096 bands: state %llu",
+          (unsigned long long)b4.state);
+    CHECK(b4.device >= rest + lsqt_memory_tallies(16, 0, 80, 12, 0) &&
+              b4.device < rest + lsqt_memory_tallies(16, 0, 80, 12, 0) + 4096ull * 12 * 8 * 96 * 4 + rest / 50,
+          "4096 bands: device %llu", (unsigned long long)b4.device);
+    CHECK(b4.peak == b4.runtime + b4.state + b4.device + b4.extra, "4096 bands: peak");
     char b[32];
     CHECK(strcmp(lsqt_memory_format((uint64_t)3 << 29, b, 32), "1.5 GB") == 0, "format %s", b);
     CHECK(strcmp(lsqt_memory_format((uint64_t)500 << 20, b, 32), "500 MB") == 0, "format %s", b);
