@@ -3,8 +3,8 @@
 # many bands holds its exit histograms packed, and a CPU device's buffer holds a batch of
 # them only while a launch adds to it. The bytes must be those of the dense histograms
 # (LSQT_PACK_HIST=0) on every way through the engine: an RRSS pilot and its run, spread
-# directions, several launches, both sides, a continued LSS, a target error, shards and
-# their merge.
+# directions, several launches, both sides, double, the GPU code path, a continued LSS, a
+# target error, shards and their merge.
 # usage: test_hist_packed.sh LSQT_CL rss|no-rss (no-rss: the sanitizer build, whose
 # shadow memory and quarantine are not the program's)
 # shellcheck source=cli_lib.sh
@@ -33,6 +33,10 @@ both "${W[@]}" -p 10240 --wi-spread x.lsqt
 same "spread directions, every batch reached"
 both "${W[@]}" -p 2000 --from-below x.lsqt
 same "both sides"
+both "${W[@]}" -p 2000 --double x.lsqt
+same "double"
+LSQT_GPU_PATH=1 both "${W[@]}" -p 2000 x.lsqt
+same "the GPU code path"
 # a continued LSS: dense and packed continue their own first part
 both "${W[@]}" -p 2000 x.lsqt
 LSQT_PACK_HIST=0 "$BIN" "${W[@]}" -p 3000 x.lsqt -o d.raw --lss d.lss || bad "dense continued"

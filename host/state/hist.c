@@ -24,7 +24,7 @@ static lsqt_u128 *dense_at(const lsqt_state *st, int b, int s, int t)
     return st->hist + (((size_t)b * hists_of(st) + (size_t)s / group_of(st)) * LSQT_BATCHES + (size_t)t) * LSQT_HIST_BINS;
 }
 
-static size_t put_varint(unsigned char *o, uint64_t v)
+size_t lsqt_tally_varint(unsigned char *o, uint64_t v)
 {
     size_t n = 0;
     do {
@@ -47,7 +47,7 @@ static size_t encode(const lsqt_u128 *in, size_t stride, unsigned char *o)
             zeros++;
             continue;
         }
-        if (zeros) n += put_varint(o + n, 2 * zeros);
+        if (zeros) n += lsqt_tally_varint(o + n, 2 * zeros);
         zeros = 0, nonzero++;
         size_t len = v.hi ? 8 : 0; /* bytes up to the last nonzero one */
         for (uint64_t w = v.hi ? v.hi : v.lo; w; w >>= 8) len++;

@@ -88,14 +88,7 @@ static tally_run slice_tallies(const lsqt_state *st, size_t s, lsqt_u128 *scratc
 static void put_varint(wbuf *w, uint64_t v)
 {
     unsigned char b[10];
-    size_t n = 0;
-    do {
-        b[n] = (unsigned char)(v & 0x7f);
-        v >>= 7;
-        if (v) b[n] |= 0x80;
-        n++;
-    } while (v);
-    put(w, b, n);
+    put(w, b, lsqt_tally_varint(b, v));
 }
 
 static void put_tallies(wbuf *w, const tally_run *t)

@@ -87,6 +87,9 @@ lsqt_u128 *lsqt_state_hist_of(const lsqt_state *st, int s);
  * there are bands and the dense histograms would take more than LSQT_PACK_HIST_BYTES. */
 #define LSQT_PACK_HIST_BYTES ((size_t)256 << 20)
 int lsqt_state_hist_packs(const lsqt_state *st);
+/* The packed form's token V as an unsigned LEB128 varint into O (at most 10 bytes);
+ * returns its length. The LSS writer and the packed histograms share it. */
+size_t lsqt_tally_varint(unsigned char *o, uint64_t v);
 /* Packs ST's histograms (their dense memory freed), if lsqt_state_hist_packs says so or
  * FORCE. Returns 0, or -1 out of memory (ST unchanged). */
 int lsqt_state_pack_hist(lsqt_state *st, int force);
