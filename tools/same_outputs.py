@@ -3,7 +3,7 @@
 
 Runs one lsqt-cl binary on every LSQT file under examples/ in several ways (RRSS, an even
 spread, double precision, the side from below, a regular grid and its NetCDF export, -H,
-a continued LSS) with fixed seeds, and writes a manifest: the SHA-256 of every RAW, LSS,
+a continued LSS, three bands, the GPU code path) with fixed seeds, and writes a manifest: the SHA-256 of every RAW, LSS,
 NetCDF and JSON file it made (JSON without its clock and device fields, which change from
 run to run), and each command's exit status. Two manifests, one from the binary before a
 change and one from after, must be equal for a change that claims not to alter behaviour.
@@ -32,7 +32,11 @@ RUNS = [
     ("grid", ["-p", "500", "--grid", "3,3,4", "-s", "15"]),
     ("hemi", ["-p", "800", "-wo", "4", "-wi", "16", "-H", "-s", "16"]),
     ("continued+", ["-p", "700", "-wo", "4", "-wi", "16", "-s", "17"]),
+    ("bands", ["-p", "600", "-wo", "3", "-wi", "16", "--wavelengths", "450:650:100", "-s", "18"]),
+    ("gpu", ["-p", "600", "-wo", "3", "-wi", "16", "-s", "19"]),
 ]
+# Runs made through another code path: the GPU's (next-event records), on this device.
+ENV = {"gpu": {"LSQT_GPU_PATH": "1"}}
 
 
 def clean_json(path):
@@ -68,7 +72,7 @@ def run_all(exe, manifest, keep):
                     g.write(f.read())
                 for rep in range(2 if name.endswith("+") else 1):
                     cmd = [exe, "-q", "--json", "run%d.json" % rep] + flags + ["in.lsqt"]
-                    r = subprocess.run(cmd, cwd=d, capture_output=True)
+                    r = subprocess.run(cmd, cwd=d, capture_output=True, env=dict(os.environ, **ENV.get(name, {})))
                     lines.append("%s %s run%d exit %d" % (ex, name, rep, r.returncode))
                 if os.path.exists(os.path.join(d, "in.lsqt.lss")):
                     subprocess.run([exe, "info", "in.lsqt.lss", "--json", "info.json"], cwd=d, capture_output=True)
