@@ -16,6 +16,7 @@ The runs are small (seconds each): byte equality needs no statistics.
 import hashlib
 import json
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -32,8 +33,8 @@ RUNS = [
     ("grid", ["-p", "500", "--grid", "3,3,4", "-s", "15"]),
     ("hemi", ["-p", "800", "-wo", "4", "-wi", "16", "-H", "-s", "16"]),
     ("continued+", ["-p", "700", "-wo", "4", "-wi", "16", "-s", "17"]),
-    ("bands", ["-p", "600", "-wo", "3", "-wi", "16", "--wavelengths", "450:650:100", "-s", "18"]),
-    ("gpu", ["-p", "600", "-wo", "3", "-wi", "16", "-s", "19"]),
+    ("bands", ["-p", "600", "-wo", "4", "-wi", "16", "--wavelengths", "450:650:100", "-s", "18"]),
+    ("gpu", ["-p", "600", "-wo", "4", "-wi", "16", "-s", "19"]),
 ]
 # Runs made through another code path: the GPU's (next-event records), on this device.
 ENV = {"gpu": {"LSQT_GPU_PATH": "1"}}
@@ -70,8 +71,15 @@ def run_all(exe, manifest, keep):
                 src = os.path.join(d, "in.lsqt")
                 with open(os.path.join(ROOT, ex), "rb") as f, open(src, "wb") as g:
                     g.write(f.read())
+                # the tables an example names (@tables/...) beside it
+                tables = os.path.join(ROOT, os.path.dirname(ex), "tables")
+                if os.path.isdir(tables) and not os.path.exists(os.path.join(d, "tables")):
+                    shutil.copytree(tables, os.path.join(d, "tables"))
+                # an example with spectral tables (KEY=@FILE) is read at wavelengths
+                spectral = "=@" in open(src).read() and "--wavelengths" not in flags
+                extra = ["--wavelengths", "450:650:100"] if spectral else []
                 for rep in range(2 if name.endswith("+") else 1):
-                    cmd = [exe, "-q", "--json", "run%d.json" % rep] + flags + ["in.lsqt"]
+                    cmd = [exe, "-q", "--json", "run%d.json" % rep] + flags + extra + ["in.lsqt"]
                     r = subprocess.run(cmd, cwd=d, capture_output=True, env=dict(os.environ, **ENV.get(name, {})))
                     lines.append("%s %s run%d exit %d" % (ex, name, rep, r.returncode))
                 if os.path.exists(os.path.join(d, "in.lsqt.lss")):
@@ -80,7 +88,7 @@ def run_all(exe, manifest, keep):
                         r = subprocess.run([exe, "export", "in.lsqt.lss", "-o", "out.nc"], cwd=d, capture_output=True)
                         lines.append("%s %s export exit %d" % (ex, name, r.returncode))
                 for f in sorted(os.listdir(d)):
-                    if f != "in.lsqt" and not f.endswith(".lock"):
+                    if f not in ("in.lsqt", "tables") and not f.endswith(".lock"):
                         lines.append("%s %s %s %s" % (ex, name, f, digest(os.path.join(d, f))))
                 print("%-40s %-11s done" % (ex, name), file=sys.stderr)
     with open(manifest, "w") as f:
