@@ -1,6 +1,7 @@
-/* Band blocks: LSQT_NB bands on one path (docs/design.md, 3.7). Compiled only into a
- * program built with -DLSQT_NB > 1 (the host's band blocks, host/sim/band_blocks.c); a
- * one-band program has none of it.
+/* Band blocks: LSQT_NB bands on one path (docs/design.md, 3.7; the host's side is
+ * host/sim/band_blocks.c). One band is a block of width 1: every function here is then
+ * the one-band walk's step (its weight, its roulette, its flight), and the block's code
+ * is dead. Uses nee.cl; walk.cl uses it.
  *
  * The bands of a block differ only where a factor per band says how: a closed layer's
  * reflection and transmission factors (fs, fo: its model is fs or fo times a unit model
@@ -22,20 +23,57 @@
  * A block's paths are its own (the hero and the per-band roulette draw numbers a one-band
  * walk does not), so a band of a block agrees with its one-band run within the error
  * bars, not bit for bit. */
-#if LSQT_NB > 1
-
-#ifdef LSQT_NEE_RECORDS
+#if defined(LSQT_NEE_RECORDS) && LSQT_NB > 1
 #error "band blocks run on the CPU code path only"
 #endif
 
 LSQT_INLINE real band_tab(const walk_ctx *c, int at) { return c->bw[at]; }
 
+/* Whether layer l's bands differ by factors of a unit model, or by the index of its
+ * facets (the model list's BANDS column). */
+#define BAND_FACTORS_(ID, num, name, alias, p, sampler, mirror, transmits, bands, b0, b1, alpha) \
+    LSQT_IF_FACTORS_##bands(if (LSQT_ON(BSDF_##ID) && l->kind == LSQT_BSDF_##ID) return 1;)
+#define BAND_INDEX_(ID, num, name, alias, p, sampler, mirror, transmits, bands, b0, b1, alpha) \
+    LSQT_IF_INDEX_##bands(if (LSQT_ON(BSDF_##ID) && l->kind == LSQT_BSDF_##ID) return 1;)
+LSQT_INLINE int layer_bands_factored(__global const lsqt_dev_layer *l)
+{
+    LSQT_BSDFS(BAND_FACTORS_)
+    (void)l;
+    return 0;
+}
+
+LSQT_INLINE int layer_bands_index(__global const lsqt_dev_layer *l)
+{
+    LSQT_BSDFS(BAND_INDEX_)
+    (void)l;
+    return 0;
+}
+
+/* Medium mi's extinction in the band whose flights the path draws (the hero), and its
+ * largest over the block (0: clear in every band). */
+LSQT_INLINE real band_hero_mut(const walk_ctx *c, int mi)
+{
+    if (LSQT_NB == 1) return c->media[mi].mut;
+    return band_tab(c, LSQT_BAND_MUT(c->scene->n_layers, LSQT_NBP, c->hero, mi));
+}
+
+LSQT_INLINE real band_most_mut(const walk_ctx *c, int mi)
+{
+    return LSQT_NB == 1 ? c->media[mi].mut : band_tab(c, mi);
+}
+
 /* Russian roulette per band, as each band's own walk would play it: a band whose weight
  * is below LSQT_RR_WEIGHT goes on with that weight or stops (0), so a band that absorbs
  * costs no more than on its own paths (band_spread and nee_flush skip it). Returns
  * whether any band goes on. */
-LSQT_INLINE int roulette_bands(real *wb, rng_t *rng)
+LSQT_INLINE int roulette(real *wb, rng_t *rng)
 {
+    if (LSQT_NB == 1) {
+        if (wb[0] >= LSQT_RR_WEIGHT) return 1;
+        if (rng_uniform(rng) * LSQT_RR_WEIGHT >= wb[0]) return 0;
+        wb[0] = LSQT_RR_WEIGHT;
+        return 1;
+    }
     int live = 0;
     for (int b = 0; b < LSQT_NB; b++) {
         if (wb[b] > R(0.0) && wb[b] < LSQT_RR_WEIGHT)
@@ -45,9 +83,14 @@ LSQT_INLINE int roulette_bands(real *wb, rng_t *rng)
     return live;
 }
 
-/* wb *= f; whether any band still carries weight. */
+/* wb *= f; whether any band still carries weight. (One band's in the one-band walk's
+ * words: a loop over one band, even unrolled, costs it 7 VGPRs on gfx90a.) */
 LSQT_INLINE int band_scale(real *wb, real f)
 {
+    if (LSQT_NB == 1) {
+        wb[0] *= f;
+        return wb[0] > R(0.0);
+    }
     int live = 0;
     for (int b = 0; b < LSQT_NB; b++) wb[b] *= f, live |= wb[b] > R(0.0);
     return live;
@@ -56,10 +99,12 @@ LSQT_INLINE int band_scale(real *wb, real f)
 /* Spreads the scratch sums of one vertex (c->sum, weight 1, the unit model at the least
  * depths) into each band's sums: lanes on wo's side (z * woz > 0) times cs[b], the others
  * co[b], and each times 2^-(dtu[b] a_up + dtd[b] a_down), the band's transmittance beyond
- * the least depths (skipped where no band has any). Clears the scratch sums. */
+ * the least depths (skipped where no band has any). Clears the scratch sums. One band's
+ * terms are its path's sums already. */
 LSQT_INLINE void band_spread(const walk_ctx *c, real woz, const real *cs, const real *co, const real *dtu,
                              const real *dtd)
 {
+    if (LSQT_NB == 1) return;
     int deeper = 0;
     for (int b = 0; b < LSQT_NB; b++) deeper |= dtu[b] != R(0.0) || dtd[b] != R(0.0);
     __global const real *zs = c->wi + 2 * LSQT_NWI_PAD, *a_up = c->tab, *a_down = c->tab + LSQT_NWI_PAD;
@@ -113,98 +158,13 @@ LSQT_INLINE real side_probability(const walk_ctx *c, int b, int li)
     return fs + fo > R(0.0) ? fs / (fs + fo) : R(0.5);
 }
 
-/* wb *= each band's Fresnel factor at a facet whose cosine with the ray is vm (the
- * conductor li's n and k per band: bw's rows), LSQT_VW bands at a time; bands without
- * weight (and the padding lanes, n = k = 0) stay 0. */
-LSQT_INLINE void fresnel_bands(const walk_ctx *c, int li, real vm, real *wb)
+/* A factored layer's sample for a block (the list's BANDS FACTORS): the hero's side, then
+ * the unit model's cosine sample there, weighed by spectral MIS as flights are
+ * (flight_weights); cs, co: each band's weight times its factors. Returns whether any band
+ * still carries weight. */
+LSQT_INLINE int band_side_sample(const walk_ctx *c, __global const lsqt_dev_layer *l, int li, real3 d, const real *cs,
+                                 const real *co, real *wb, real *rb, rng_t *rng, real3 *wi)
 {
-    const int n = c->scene->n_layers;
-    __global const real *etas = c->bw + LSQT_BAND_ETA(n, LSQT_NBP, 0, li), *ks = c->bw + LSQT_BAND_KAPPA(n, LSQT_NBP, 0, li);
-    for (int j = 0; j < LSQT_NBP; j += LSQT_VW) {
-        const realv w = vloadv(0, wb + j);
-        const realv f = fresnel_conductor_lanes(vloadv(0, etas + j), vloadv(0, ks + j), (realv)(vm));
-        vstorev(select((realv)(R(0.0)), w * f, w > R(0.0)), 0, wb + j);
-    }
-}
-
-/* A hidden conductor's vertex (one under another layer that is not null: light leaves
- * it only through that layer, so it has no next-event terms, and the bands' n and k may
- * differ; host/sim/band_blocks.c). The sample of microsurface.cl on the block's unit
- * layer (conductor_sample for single scattering, else ms_walk's walk of reflections),
- * each reflection weighed by each band's Fresnel factor instead of the unit layer's. The
- * walk does not depend on the band, so no band's density of the path changes (rb stays),
- * and it plays no roulette of its own (the factors only shrink; roulette_bands follows
- * the vertex). Returns whether any band still carries weight. */
-LSQT_INLINE int conductor_vertex_bands(const walk_ctx *c, __global const lsqt_dev_layer *l, int li, real3 d,
-                                       real *wb, rng_t *rng, real3 *wi)
-{
-    const real alpha = l->p[0];
-    if (!(d.z < R(0.0))) return band_scale(wb, R(0.0)); /* light reaches it from above only */
-    if (!l->multiple_scattering) {
-        const real3 wo = -d;
-        (void)rng_uniform(rng); /* conductor_sample's u0, unused */
-        const real u1 = rng_uniform(rng), u2 = rng_uniform(rng);
-        ms_vtx x = ms_vertex(alpha, wo, R(1.0), R(1.0), u1, u2);
-        real vm;
-        const real3 r = conductor_reflect(&x, &vm);
-        const real lam_v = ggx_lambda(alpha, wo.z);
-        if (!(vm > R(0.0)) || !(r.z > R(0.0))) return band_scale(wb, R(0.0));
-        fresnel_bands(c, li, vm, wb);
-        *wi = r;
-        return band_scale(wb, (R(1.0) + lam_v) / (R(1.0) + lam_v + ggx_lambda(alpha, r.z)));
-    }
-    real3 r = d; /* from above: the ray's side's frame is the world's */
-    real h = R(1.0);
-    for (int order = 1;; order++) {
-        if (!ms_next_height(alpha, r, &h, R(1.0) - rng_uniform(rng))) break;
-        if (order > LSQT_MS_MAX_ORDER) return band_scale(wb, R(0.0));
-        const real u1 = rng_uniform(rng), u2 = rng_uniform(rng);
-        ms_vtx x = ms_vertex(alpha, -r, h, R(1.0), u1, u2);
-        real vm;
-        r = conductor_reflect(&x, &vm);
-        if (!(vm > R(0.0))) return band_scale(wb, R(0.0));
-        fresnel_bands(c, li, vm, wb); /* every reflection's, in every band */
-    }
-    *wi = r;
-    return band_scale(wb, R(1.0));
-}
-
-/* layer_vertex for a block: the next-event terms of layer li for every band, then the
- * hero's sample, weighed by spectral MIS as flights are (flight_bands). Returns whether
- * any band still carries weight. */
-LSQT_INLINE int layer_vertex_bands(const walk_ctx *c, int li, real3 d, real *wb, real *rb, rng_t *rng, real3 *wi)
-{
-    const int n = c->scene->n_layers;
-    const int up = li == c->scene->top_nonnull, down = li == c->scene->bottom_nonnull;
-    __global const lsqt_dev_layer *l = &c->layers[li];
-    if (LSQT_ON(BSDF_MS_CONDUCTIVE) && l->kind == LSQT_BSDF_MS_CONDUCTIVE && !up) {
-        c->work[WORK_LAYER]++;
-        return conductor_vertex_bands(c, l, li, d, wb, rng, wi); /* no factors, no terms */
-    }
-    __global const lsqt_dev_medium *above = &c->media[li], *below = &c->media[li + 1];
-    const real tau_up = above->tau_above + above->mut * above->thickness;
-    const real tau_down = below->tau_below + below->mut * below->thickness;
-    const int visible = c->nee_on && nee_visible(tau_up, tau_down, up, down);
-    __global const real *tab = c->tab + LSQT_LAYER_TAB(li);
-    real cs[LSQT_NB], co[LSQT_NB], dtu[LSQT_NB], dtd[LSQT_NB];
-    for (int b = 0; b < LSQT_NB; b++) {
-        cs[b] = wb[b] * band_tab(c, LSQT_BAND_FS(n, LSQT_NBP, b, li));
-        co[b] = wb[b] * band_tab(c, LSQT_BAND_FO(n, LSQT_NBP, b, li));
-        band_depths(c, b, -1, R(0.0), li, tau_up, tau_down, &dtu[b], &dtd[b]);
-    }
-    c->work[WORK_LAYER]++;
-    if (layer_is_micro(l)) { /* the same in every band (fs = fo = 1) */
-        ms_sink k;
-        nee_ms_sink(c, tab, li, &k);
-        const real f = ms_vertex_walks(l, d, rng, R(1.0), visible, &k, wi);
-        if (visible) band_spread(c, -d.z, cs, co, dtu, dtd);
-        return band_scale(wb, f);
-    }
-    if (visible) {
-        c->work[WORK_NEE]++;
-        nee_layer_terms(c, l, li, -d, R(1.0), tab);
-        band_spread(c, -d.z, cs, co, dtu, dtd);
-    }
     /* The hero's side, wo's with probability fs / (fs + fo) (1/2 where its band has
      * neither); every band's weight by its own factor over the bands' mixture. */
     const real u0 = rng_uniform(rng), u1 = rng_uniform(rng), u2 = rng_uniform(rng);
@@ -236,8 +196,13 @@ LSQT_INLINE int layer_vertex_bands(const walk_ctx *c, int li, real3 d, real *wb,
  * over the mixture's, mean 1). A band's density of this flight is mut e^-(mut t) for a
  * collision and e^-(mut t) for a boundary; its weight keeps its ratio to rb (its weight
  * on its own paths), times its albedo at a collision. LSQT_VW bands at a time. */
-LSQT_INLINE int flight_bands(const walk_ctx *c, int mi, real t, int collided, real *wb, real *rb)
+LSQT_INLINE int flight_weights(const walk_ctx *c, int mi, real t, int collided, real *wb, real *rb)
 {
+    if (LSQT_NB == 1) { /* the band's own density: its albedo at a collision */
+        if (!collided) return 1;
+        wb[0] *= (real)c->media[mi].mus / (real)c->media[mi].mut;
+        return wb[0] > R(0.0);
+    }
     const int n = c->scene->n_layers;
     __global const real *mts = c->bw + LSQT_BAND_MUT(n, LSQT_NBP, 0, mi), *muss = c->bw + LSQT_BAND_MUS(n, LSQT_NBP, 0, mi);
     const real mt_h = mts[c->hero];
@@ -255,9 +220,9 @@ LSQT_INLINE int flight_bands(const walk_ctx *c, int mi, real t, int collided, re
     /* The densities relative to the least extinct band's e^-(mut t): each factor at most
      * 1, so no overflow; the padding lanes (mut 0, rb 0) stay 0. */
     const real et = -t * LSQT_LOG2E;
-    real lv[LSQT_NBP];
+    real lv[LSQT_NBW];
     realv acc = (realv)(R(0.0));
-    for (int j = 0; j < LSQT_NBP; j += LSQT_VW) {
+    for (int j = 0; j < LSQT_NBV; j += LSQT_VW) {
         const realv mt = vloadv(0, mts + j), r = vloadv(0, rb + j);
         realv p = r * exp2_negv(fmin((mt - mt_min) * et, R(0.0)));
         if (collided) p *= mt;
@@ -271,7 +236,7 @@ LSQT_INLINE int flight_bands(const walk_ctx *c, int mi, real t, int collided, re
      * the same as at 1e4). */
     if (!(sum > R(1e-30))) {
         real top = -INFINITY;
-        for (int j = 0; j < LSQT_NBP; j += LSQT_VW) {
+        for (int j = 0; j < LSQT_NBV; j += LSQT_VW) {
             const realv mt = vloadv(0, mts + j), dm = mt - mt_h;
             realv v = select(clamp(dm * et, R(-1e4), R(1e4)), (realv)(R(0.0)), dm == R(0.0));
             v += log2(vloadv(0, rb + j));
@@ -280,11 +245,11 @@ LSQT_INLINE int flight_bands(const walk_ctx *c, int mi, real t, int collided, re
         }
         for (int j = 0; j < LSQT_NB; j++) top = fmax(top, lv[j]);
         if (!(top > -INFINITY)) return 0;
-        for (int j = 0; j < LSQT_NBP; j += LSQT_VW) vstorev(exp2(vloadv(0, lv + j) - top), 0, lv + j);
+        for (int j = 0; j < LSQT_NBV; j += LSQT_VW) vstorev(exp2(vloadv(0, lv + j) - top), 0, lv + j);
         sum = R(0.0);
         for (int j = 0; j < LSQT_NB; j++) sum += lv[j];
     }
-    for (int j = 0; j < LSQT_NBP; j += LSQT_VW) {
+    for (int j = 0; j < LSQT_NBV; j += LSQT_VW) {
         const realv p = vloadv(0, lv + j), r = vloadv(0, rb + j), mt = vloadv(0, mts + j);
         realv own = select((realv)(R(0.0)), vloadv(0, wb + j) / r, r > R(0.0));
         if (collided) own *= select((realv)(R(0.0)), vloadv(0, muss + j) / mt, mt > R(0.0));
@@ -293,7 +258,7 @@ LSQT_INLINE int flight_bands(const walk_ctx *c, int mi, real t, int collided, re
     }
     const real inv = (real)LSQT_NB / sum;
     maskv live = (maskv)(0);
-    for (int j = 0; j < LSQT_NBP; j += LSQT_VW) {
+    for (int j = 0; j < LSQT_NBV; j += LSQT_VW) {
         const realv w = vloadv(0, wb + j) * inv;
         vstorev(vloadv(0, rb + j) * inv, 0, rb + j);
         vstorev(w, 0, wb + j);
@@ -301,24 +266,3 @@ LSQT_INLINE int flight_bands(const walk_ctx *c, int mi, real t, int collided, re
     }
     return anyv(live);
 }
-
-/* nee_medium for a block: the terms once, spread to every band. */
-LSQT_NOINLINE_CPU void nee_medium_bands(const walk_ctx *c, int mi, real h, real3 d, const real *wb,
-                                        const phase_vtx *pv)
-{
-    __global const lsqt_dev_medium *m = &c->media[mi];
-    const int top = c->scene->top_nonnull, bottom = c->scene->bottom_nonnull;
-    const int up = top < 0 || mi <= top, down = bottom < 0 || mi > bottom;
-    const real tau_up = m->tau_above + m->mut * (m->thickness - h);
-    const real tau_down = m->tau_below + m->mut * h;
-    if (!c->nee_on || !nee_visible(tau_up, tau_down, up, down)) return;
-    c->work[WORK_NEE]++;
-    const real tu = up && tau_up < LSQT_NEE_TAU_MAX ? tau_up : R(1e30);
-    const real td = down && tau_down < LSQT_NEE_TAU_MAX ? tau_down : R(1e30);
-    nee_medium_terms(c, m, mi, -d, R(1.0), pv, tu, td);
-    real dtu[LSQT_NB], dtd[LSQT_NB];
-    for (int b = 0; b < LSQT_NB; b++) band_depths(c, b, mi, h, -1, tau_up, tau_down, &dtu[b], &dtd[b]);
-    band_spread(c, -d.z, wb, wb, dtu, dtd);
-}
-
-#endif

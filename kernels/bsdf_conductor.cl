@@ -44,12 +44,27 @@ LSQT_INLINE realv conductor_phasev(__global const lsqt_dev_layer *l, const ms_vt
     return select((realv)(R(0.0)), f, (vm > R(0.0)) & (u.z > R(0.0)));
 }
 
-/* The ray's reflection about the vertex's visible normal; *vm, the cosine between them
- * (band blocks weigh it per band: bands.cl). */
+/* The ray's reflection about the vertex's visible normal; *vm, the cosine between them. */
 LSQT_INLINE real3 conductor_reflect(const ms_vtx *x, real *vm)
 {
     *vm = dot(x->v, x->m);
     return normalize(R(2.0) * *vm * x->m - x->v);
+}
+
+/* A band block's albedos (the list's BANDS INDEX, microsurface.cl ms_bands): each band's
+ * Fresnel factor at the vertex's facet, from its n and k (rows n, k of the block's table),
+ * weighs its weight wb, LSQT_VW bands at a time; bands without weight (and the padding,
+ * n = k = 0) stay 0. Returns 0 where the ray meets the facet from behind (lost). */
+LSQT_INLINE int conductor_albedo_bands(const ms_vtx *x, __global const real *n, __global const real *k, real *wb)
+{
+    const real vm = dot(x->v, x->m);
+    if (!(vm > R(0.0))) return 0;
+    for (int j = 0; j < LSQT_NBV; j += LSQT_VW) {
+        const realv w = vloadv(0, wb + j);
+        const realv f = fresnel_conductor_lanes(vloadv(0, n + j), vloadv(0, k + j), (realv)(vm));
+        vstorev(select((realv)(R(0.0)), w * f, w > R(0.0)), 0, wb + j);
+    }
+    return 1;
 }
 
 /* Reflects about the vertex's visible normal; returns the facet albedo F. */

@@ -191,6 +191,18 @@ LSQT_INLINE realv safe_sqrtv(realv x) { return sqrt(fmax(x, (realv)(R(0.0)))); }
 #endif
 #define LSQT_GROUP_PAD LSQT_PAD(LSQT_GROUP_NWI, LSQT_VW)
 
+/* The bands on one path (kernels/bands.cl): a block of LSQT_NB (the host passes -DLSQT_NB
+ * when it is not 1; one band is a block of width 1). LSQT_NBP: the width padded to the
+ * vector width (the rows of a block's table, taken LSQT_VW bands at a time); LSQT_NBW: a
+ * path's per-band arrays (1 for one band, whose code takes no vectors of bands);
+ * LSQT_NBV: the bound of the loops that take them a vector at a time (none for one band). */
+#ifndef LSQT_NB
+#define LSQT_NB 1
+#endif
+#define LSQT_NBP LSQT_PAD(LSQT_NB, LSQT_VW)
+#define LSQT_NBW (LSQT_NB > 1 ? LSQT_NBP : 1)
+#define LSQT_NBV (LSQT_NB > 1 ? LSQT_NBP : 0)
+
 /* lgamma(x) for x >= 1 without the library's general lgamma (scalar on PoCL, some 40
  * VGPRs on gfx90a): the Stirling series to 1/x^7 for x >= 8, error below 3e-11, after
  * lgamma(x) = lgamma(x + 6) - log(x (x+1) ... (x+5)) for smaller x. One text for the

@@ -128,7 +128,7 @@ harness_ms_eval(__global const lsqt_dev_layer *layers, float wox, float woy, flo
     ms_sink sink = {sum, wi, tab + LSQT_LAYER_TAB(0)};
     for (int r = 0; r < reps; r++) {
         real3 o;
-        ms_vertex_walks(layers, -wo, &rng, R(1.0) / (real)reps, 1, &sink, &o);
+        ms_vertex_walks(layers, -wo, &rng, R(1.0) / (real)reps, 1, &sink, 0, &o);
     }
     for (int k = 0; k < LSQT_NWI_PAD; k++) out[(size_t)i * LSQT_NWI_PAD + k] = (float)sum[k];
 }

@@ -68,7 +68,7 @@ LSQT_INLINE dirv load_dirv(__global const real *wi, int k)
 #define MS_FIRST_TERMS(p) (p##_firstv(l, x, u, lam, lg))
 
 /* STMT(p) for the walk model of layer l (the others' branches are dead code). */
-#define MS_DISPATCH_(ID, num, name, alias, p, sampler, mirror, transmits) \
+#define MS_DISPATCH_(ID, num, name, alias, p, sampler, mirror, transmits, bands, b0, b1, alpha) \
     LSQT_IF_WALK_##sampler(if (LSQT_ON(BSDF_##ID) && l->kind == LSQT_BSDF_##ID) MS_STMT(p))
 
 #ifdef LSQT_NEE_RECORDS
@@ -145,14 +145,50 @@ LSQT_INLINE real ms_scatter(__global const lsqt_dev_layer *l, const ms_vtx *x, r
     return R(0.0);
 }
 
+/* Whether layer l is a microsurface walk, and its facets' GGX roughness: p[0], as the
+ * model list's ALPHA column says of every walk (host/sim/tables.c checks it; a lookup by
+ * kind cost the walk kernels 3 VGPRs on gfx90a). */
+#define MS_IS_(ID, num, name, alias, p, sampler, mirror, transmits, bands, b0, b1, alpha) \
+    LSQT_IF_WALK_##sampler(if (LSQT_ON(BSDF_##ID) && l->kind == LSQT_BSDF_##ID) return 1;)
+LSQT_INLINE int ms_layer(__global const lsqt_dev_layer *l)
+{
+    LSQT_BSDFS(MS_IS_)
+    (void)l;
+    return 0;
+}
+
+LSQT_INLINE real ms_alpha(__global const lsqt_dev_layer *l) { return l->p[0]; }
+
+/* A band block's walk at a layer whose facets' albedo differs by band (the list's BANDS
+ * INDEX; kernels/bands.cl): the walk runs with albedo 1 and each of its reflections weighs
+ * every band's weight wb by that band's albedo (p_albedo_bands, from the rows n and k of
+ * the block's table). Null in every other walk. */
+typedef struct {
+    __global const real *n, *k;
+    real *wb;
+} ms_bands;
+
+#define MS_INDEX_(ID, num, name, alias, p, sampler, mirror, transmits, bands, b0, b1, alpha) \
+    LSQT_IF_INDEX_##bands(if (LSQT_ON(BSDF_##ID) && l->kind == LSQT_BSDF_##ID) return p##_albedo_bands(x, mb->n, mb->k, mb->wb);)
+
+/* Weighs the bands by their albedos at vertex x; 0 where the step is lost. */
+LSQT_INLINE int ms_albedo_bands(__global const lsqt_dev_layer *l, const ms_vtx *x, const ms_bands *mb)
+{
+    LSQT_BSDFS(MS_INDEX_)
+    (void)l, (void)x, (void)mb;
+    return 0;
+}
+
 /* One walk from direction d (world frame). Vertices of order >= nee_from add their terms,
  * weighted w, to the sink. With max_order 1 (single scattering only) the walk stops after
  * its first vertex and the weight takes the chance of escaping from there. Returns the
- * exit weight (product of the albedos) and sets *out to the exit direction (world). */
+ * exit weight (product of the albedos) and sets *out to the exit direction (world). With
+ * mb, the albedos are the bands' (ms_bands) and the walk's weight stays 1, so it plays no
+ * roulette. */
 LSQT_INLINE real ms_walk(__global const lsqt_dev_layer *l, real3 d, rng_t *rng, int max_order, int nee_from, real w,
-                    const ms_sink *k, real3 *out)
+                    const ms_sink *k, const ms_bands *mb, real3 *out)
 {
-    const real alpha = l->p[0];
+    const real alpha = ms_alpha(l);
     real s = d.z < R(0.0) ? R(1.0) : R(-1.0); /* the side the ray is on */
     real3 r = make_real3(d.x, d.y, s * d.z);  /* its direction, in that side's frame */
     real c = R(1.0), weight = R(1.0);
@@ -170,6 +206,7 @@ LSQT_INLINE real ms_walk(__global const lsqt_dev_layer *l, real3 d, rng_t *rng, 
         }
         int cross;
         weight *= ms_scatter(l, &x, rng, &r, &cross);
+        if (mb) weight = ms_albedo_bands(l, &x, mb) ? R(1.0) : R(0.0);
         if (!(weight > R(0.0))) return R(0.0);
         if (cross) s = -s, r.z = -r.z, c = R(1.0) - c;
         if (max_order == 1) {
@@ -189,7 +226,7 @@ LSQT_INLINE real ms_walk(__global const lsqt_dev_layer *l, real3 d, rng_t *rng, 
 
 /* The models with closed-form single scattering: whether layer l is one, and its sampler
  * (use_multiple_scattering=false). */
-#define MS_SINGLE_(ID, num, name, alias, p, sampler, mirror, transmits) \
+#define MS_SINGLE_(ID, num, name, alias, p, sampler, mirror, transmits, bands, b0, b1, alpha) \
     LSQT_IF_SINGLE_##sampler(if (LSQT_ON(BSDF_##ID) && l->kind == LSQT_BSDF_##ID) MS_STMT(p))
 
 LSQT_INLINE int ms_analytic(__global const lsqt_dev_layer *l)
@@ -210,28 +247,48 @@ LSQT_INLINE real ms_single_sample(__global const lsqt_dev_layer *l, real3 wo, rn
     return R(0.0);
 }
 
+/* Single scattering with the bands' albedos (mb): the model's own sample, drawn as it
+ * draws (u0 unused by a reflecting model), with each band's albedo at the facet, times
+ * the chance that the reflection escapes, (1 + Lambda(wo)) / (1 + Lambda(wo) + Lambda(wi)). */
+LSQT_INLINE real ms_single_bands(__global const lsqt_dev_layer *l, real3 wo, rng_t *rng, const ms_bands *mb,
+                                 real3 *wi)
+{
+    const real alpha = ms_alpha(l);
+    (void)rng_uniform(rng);
+    const real u1 = rng_uniform(rng), u2 = rng_uniform(rng);
+    ms_vtx x = ms_vertex(alpha, wo, R(1.0), ms_index(l, R(1.0)), u1, u2);
+    real3 r;
+    int cross;
+    (void)ms_scatter(l, &x, rng, &r, &cross);
+    if (!(r.z > R(0.0)) || !ms_albedo_bands(l, &x, mb)) return R(0.0);
+    const real lam_v = ggx_lambda(alpha, wo.z);
+    *wi = r;
+    return (R(1.0) + lam_v) / (R(1.0) + lam_v + ggx_lambda(alpha, r.z));
+}
+
 /* A microsurface vertex reached along d with weight w: iter_count walks each add their
  * terms (weighted w / iter_count) to every direction of the sink, after the analytic
  * single scattering where there is one; walk 0's exit continues the path. Returns the
- * factor for the path's weight and sets *out. With nee 0 only the sample is made. */
+ * factor for the path's weight and sets *out. With nee 0 only the sample is made; with
+ * mb (a band block's, no next-event terms) the bands' albedos weigh it. */
 LSQT_INLINE real ms_vertex_walks(__global const lsqt_dev_layer *l, real3 d, rng_t *rng, real w, int nee,
-                            const ms_sink *k, real3 *out)
+                            const ms_sink *k, const ms_bands *mb, real3 *out)
 {
     const int ms = l->multiple_scattering, analytic = ms_analytic(l);
     const int n = nee ? l->iter_count : 1, max_order = ms ? LSQT_MS_MAX_ORDER : 1;
     if (analytic) {
         const real side = d.z < R(0.0) ? R(1.0) : R(-1.0);
         if (nee) {
-            ms_vtx x = ms_vertex_single(l->p[0], make_real3(-d.x, -d.y, side * -d.z), ms_index(l, side));
+            ms_vtx x = ms_vertex_single(ms_alpha(l), make_real3(-d.x, -d.y, side * -d.z), ms_index(l, side));
             ms_nee_first(l, &x, side, w, k);
         }
-        if (!ms) return ms_single_sample(l, -d, rng, out);
+        if (!ms) return mb ? ms_single_bands(l, -d, rng, mb, out) : ms_single_sample(l, -d, rng, out);
     }
     const int nee_from = nee ? (analytic ? 2 : 1) : LSQT_MS_MAX_ORDER + 1;
     real weight = R(0.0), wn = w / (real)n;
     for (int it = 0; it < n; it++) {
         real3 o = make_real3(R(0.0), R(0.0), R(1.0));
-        real wt = ms_walk(l, d, rng, max_order, nee_from, wn, k, &o);
+        real wt = ms_walk(l, d, rng, max_order, nee_from, wn, k, mb, &o);
         if (it == 0) weight = wt, *out = o;
     }
     return weight;
@@ -241,5 +298,5 @@ LSQT_INLINE real ms_vertex_walks(__global const lsqt_dev_layer *l, real3 d, rng_
 LSQT_INLINE real ms_sample(__global const lsqt_dev_layer *l, real3 wo, rng_t *rng, real3 *wi)
 {
     ms_sink none = {0, 0, 0};
-    return ms_vertex_walks(l, -wo, rng, R(0.0), 0, &none, wi);
+    return ms_vertex_walks(l, -wo, rng, R(0.0), 0, &none, 0, wi);
 }

@@ -12,7 +12,7 @@
  * loop runs itself. */
 LSQT_INLINE realv bsdf_evalv(__global const lsqt_dev_layer *l, real3 wo, dirv wi)
 {
-#define X(ID, num, name, alias, p, sampler, mirror, transmits) \
+#define X(ID, num, name, alias, p, sampler, mirror, transmits, bands, b0, b1, alpha) \
     if (LSQT_ON(BSDF_##ID) && l->kind == LSQT_BSDF_##ID) return p##_evalv(l, wo, wi);
     LSQT_BSDFS(X)
 #undef X
@@ -24,7 +24,7 @@ LSQT_INLINE realv bsdf_evalv(__global const lsqt_dev_layer *l, real3 wo, dirv wi
  * branches' registers would count). */
 LSQT_INLINE realv bsdf_evalv_closed(__global const lsqt_dev_layer *l, real3 wo, dirv wi)
 {
-#define X(ID, num, name, alias, p, sampler, mirror, transmits) \
+#define X(ID, num, name, alias, p, sampler, mirror, transmits, bands, b0, b1, alpha) \
     LSQT_IF_CLOSED_##sampler(if (LSQT_ON(BSDF_##ID) && l->kind == LSQT_BSDF_##ID) return p##_evalv(l, wo, wi);)
     LSQT_BSDFS(X)
 #undef X
@@ -40,12 +40,12 @@ LSQT_INLINE real bsdf_eval(__global const lsqt_dev_layer *l, real3 wo, real3 wi)
  * microsurfaces sample by their walk; the others take three draws (u0 picks a lobe). */
 LSQT_INLINE real bsdf_sample(__global const lsqt_dev_layer *l, real3 wo, rng_t *rng, real3 *wi)
 {
-#define X(ID, num, name, alias, p, sampler, mirror, transmits) \
+#define X(ID, num, name, alias, p, sampler, mirror, transmits, bands, b0, b1, alpha) \
     LSQT_IF_WALK_##sampler(if (LSQT_ON(BSDF_##ID) && l->kind == LSQT_BSDF_##ID) return ms_sample(l, wo, rng, wi);)
     LSQT_BSDFS(X)
 #undef X
     real u0 = rng_uniform(rng), u1 = rng_uniform(rng), u2 = rng_uniform(rng);
-#define X(ID, num, name, alias, p, sampler, mirror, transmits)                                     \
+#define X(ID, num, name, alias, p, sampler, mirror, transmits, bands, b0, b1, alpha)                                     \
     LSQT_IF_CLOSED_##sampler(if (LSQT_ON(BSDF_##ID) && l->kind == LSQT_BSDF_##ID) \
                                  return p##_sample(l, wo, u0, u1, u2, wi);)
     LSQT_BSDFS(X)
@@ -55,7 +55,7 @@ LSQT_INLINE real bsdf_sample(__global const lsqt_dev_layer *l, real3 wo, rng_t *
 
 LSQT_INLINE real bsdf_pdf(__global const lsqt_dev_layer *l, real3 wo, real3 wi)
 {
-#define X(ID, num, name, alias, p, sampler, mirror, transmits) \
+#define X(ID, num, name, alias, p, sampler, mirror, transmits, bands, b0, b1, alpha) \
     if (LSQT_ON(BSDF_##ID) && l->kind == LSQT_BSDF_##ID) return p##_pdf(l, wo, wi);
     LSQT_BSDFS(X)
 #undef X

@@ -5,124 +5,6 @@
  * left the stack (reflection), one that enters medium n going down has too (transmission).
  * Inside an interior medium the position is the height h above its bottom boundary, so a
  * thin medium far from z = 0 is as exact as one near it. */
-/* Work-group accumulators of the tallies (tally.cl's acc_word, 128-bit sums): the
- * LSQT_T_COUNT scalars for the whole chunk, and on the CPU path the directions' sums in
- * tiles of LSQT_ACC_TILE at the chunk's end (16 (LSQT_ACC_TILE + LSQT_T_COUNT) bytes:
- * 4.2 KB). A path's point estimates are summed per direction in floating point (`sum`,
- * in the path's own fixed order) and converted to fixed point once per path; the
- * work-item keeps those in integers of its own (no atomics on the hot path: on the CPU
- * path in the group's local memory, LSQT_ITEMS; on the GPU path in registers,
- * lsqt_estimate), and adds them once into the work-group's or the batch's. Integer sums
- * keep the result independent of order. */
-#define LSQT_ACC_TILE (LSQT_NWI < 256 ? LSQT_NWI : 256)
-
-/* The CPU path's work-group size (the host passes -DLSQT_ITEMS when it is not 1). A CPU
- * runs a group's work-items one after another on one thread, so a group of one is the
- * fastest: its work-item keeps the path's sums and the chunk's low words of every
- * direction in the group's local memory, LSQT_ITEMS x LSQT_NWI_PAD x (sizeof(real) + 8)
- * bytes (12 KB at 1024 directions, 96 KB at the pilot's 8192; the host checks the
- * device's limit). The GPU path keeps none (lsqt_estimate). */
-#ifndef LSQT_ITEMS
-#define LSQT_ITEMS 1
-#endif
-
-/* Bands on one path (bands.cl): 1 in a one-band program, which compiles no band code. A
- * block's work-item keeps per band its path's sums and its low words, and one more row
- * of sums for a vertex's terms before they are spread (LSQT_SUM_ROWS). */
-#ifndef LSQT_NB
-#define LSQT_NB 1
-#endif
-#define LSQT_SUM_ROWS (LSQT_NB > 1 ? LSQT_NB + 1 : 1)
-/* The band count padded to the vector width: a block's per-band arrays and its table's
- * rows are this long, so that bands.cl can take them LSQT_VW at a time. */
-#define LSQT_NBP LSQT_PAD(LSQT_NB, LSQT_VW)
-
-/* A work-item's work counters, in the order of the LSQT_T_LAYER_EVENTS... tallies. */
-#define WORK_LAYER (LSQT_T_LAYER_EVENTS - LSQT_T_LAYER_EVENTS)
-#define WORK_MEDIUM (LSQT_T_MEDIUM_EVENTS - LSQT_T_LAYER_EVENTS)
-#define WORK_NEE (LSQT_T_NEE_VERTICES - LSQT_T_LAYER_EVENTS)
-#define WORK_N (LSQT_T_COUNT - LSQT_T_LAYER_EVENTS)
-
-typedef struct {
-    __constant lsqt_dev_scene *scene;
-    __global const lsqt_dev_medium *media;
-    __global const lsqt_dev_layer *layers;
-    __global const real *wi;           /* this slice's directions: x[pad], y[pad], z[pad] */
-    __global const real *tab;          /* this slice's direction tables (lsqt_prepare) */
-    __local real *sum;                 /* the current path's point estimates (CPU path; a band
-                                          block's: the current vertex's, bands.cl) */
-    __local real *bsum;                /* a band block's: each band's path sums, LSQT_NWI_PAD apart */
-    __global const real *bw;           /* a band block's table (LSQT_BAND_AT), else unused */
-    __local ulong *nee;                /* this work-item's point-estimate sums, low words (CPU path;
-                                          a band block's: each band's, LSQT_NWI_PAD apart) */
-    work_t *work;                      /* the work counters (LSQT_T_LAYER_EVENTS ...; work_t) */
-    volatile __local acc_word *acc;    /* the work-group's scalar tallies, LSQT_ACC_WORDS each */
-    __global ulong *nee_g;             /* the tallies of the chunk's batch (nee_word) */
-    uint v;                            /* the first state slice of this walk */
-    int batch;
-    volatile __global uint *flags;
-    int nee_on;                        /* 0: no point estimates (the RRSS candidate walks) */
-    int hero;                          /* a band block's: the band whose flights the path draws */
-    uint *touched;                     /* a band block's: the bands the path has added to (bits) */
-    __global real *exit_dir;           /* non-0: the path only writes its exit direction here */
-    nee_out *out;                      /* the path's next-event records (GPU path) */
-    int count_only;                    /* 1: count the records, tally nothing (GPU path) */
-} walk_ctx;
-
-/* Direction k's tally of the walk's batch (state slice v + k / LSQT_GROUP_PAD), or 0 for
- * the padding between a grouped session's blocks. */
-LSQT_INLINE __global ulong *nee_word(__global ulong *nee, uint v, int batch, int k)
-{
-    const uint b = (uint)k / LSQT_GROUP_PAD, j = (uint)k % LSQT_GROUP_PAD;
-    if (j >= LSQT_GROUP_NWI) return 0;
-    return nee + 2 * (((ulong)(v + b) * LSQT_BATCHES + (ulong)batch) * LSQT_GROUP_NWI + j);
-}
-
-/* Adds v to scalar tally k (LSQT_T_R ...) of band b of a block (0 in a one-band program). */
-LSQT_INLINE void acc_add_band(const walk_ctx *c, int b, int k, real v)
-{
-    if (v != R(0.0)) {
-        fix1 q = to_fixed(v, c->flags);
-        local_add128(c->acc + LSQT_ACC_WORDS * (b * LSQT_T_COUNT + k), q.lo, q.hi, c->flags);
-    }
-}
-
-LSQT_INLINE void acc_add(const walk_ctx *c, int k, real v) { acc_add_band(c, 0, k, v); }
-
-/* A slice's direction tables: for the media's transmittance, up[pad] = log2(e) / z where
- * z > 0, 0 where z < 0, and down[pad] = log2(e) / -z where z < 0, 0 where z > 0 (so a
- * vertex's transmittance towards direction k is 2^-(tau_up up[k] + tau_down down[k]), with
- * no select or division in the loop), both 1e30 where z = 0 (padding: transmittance 0,
- * as light cannot leave horizontally); then each layer's: T[pad] (transmittance of the media
- * light crosses leaving that way, 0 where it may not leave), Lambda[pad] and
- * lgamma(1 + Lambda)[pad] of the layer's microfacets. */
-#define LSQT_TAB_STRIDE (LSQT_LAYER_TAB_ROWS * LSQT_NWI_PAD)
-#define LSQT_LAYER_TAB(li) (LSQT_MEDIA_TAB_ROWS * LSQT_NWI_PAD + (li) * LSQT_TAB_STRIDE)
-#define LSQT_SLICE_TAB(n_layers) LSQT_LAYER_TAB(n_layers)
-#define LSQT_LOG2E R(1.44269504088896340736)
-
-/* A contribution below 2^-41 rounds to 0 in fixed point. Weights are at most 1 and
- * values at most 2^44 (a larger one fails the run), so light that must cross more than
- * this optical thickness (exp(-60) < 2^-86) cannot change a tally: skipping it is exact,
- * and saves the work at the deep vertices of optically thick media. */
-#define LSQT_NEE_TAU_MAX R(60.0)
-
-LSQT_INLINE int nee_visible(real tau_up, real tau_down, int up, int down)
-{
-    return (up && tau_up < LSQT_NEE_TAU_MAX) || (down && tau_down < LSQT_NEE_TAU_MAX);
-}
-
-/* Transmittance towards directions z (inv_az = 1 / |z|, from the slice's table), 0 where
- * leaving that way is not allowed. */
-LSQT_INLINE realv nee_transmittancev(realv z, realv inv_az, real tau_up, real tau_down, int up, int down)
-{
-    realv t = (realv)(R(1.0));
-    if (tau_up > R(0.0) || tau_down > R(0.0))
-        t = exp(-select((realv)(tau_down), (realv)(tau_up), z > R(0.0)) * inv_az);
-    maskv ok = ((z > R(0.0)) & (maskv)(up && tau_up < LSQT_NEE_TAU_MAX ? -1 : 0)) |
-               ((z < R(0.0)) & (maskv)(down && tau_down < LSQT_NEE_TAU_MAX ? -1 : 0));
-    return select((realv)(R(0.0)), t, ok);
-}
 
 /* Per launch, per slice and layer: the direction table (the work that does not depend on
  * the vertex). Global size (LSQT_NWI_PAD, n_slices). */
@@ -141,9 +23,7 @@ __kernel void lsqt_prepare(__constant lsqt_dev_scene *scene, __global const lsqt
         const int up = li == scene->top_nonnull, down = li == scene->bottom_nonnull;
         real tau_up = above->tau_above + above->mut * above->thickness;
         real tau_down = below->tau_below + below->mut * below->thickness;
-        int micro = l->kind == LSQT_BSDF_MS_LAMBERTIAN || l->kind == LSQT_BSDF_MS_DIELECTRIC ||
-                    l->kind == LSQT_BSDF_MS_CONDUCTIVE;
-        real lam = micro ? ggx_lambda(l->p[0], z) : R(0.0);
+        real lam = ms_layer(l) ? ggx_lambda(ms_alpha(l), z) : R(0.0);
         __global real *t = st + LSQT_LAYER_TAB(li);
         t[k] = nee_transmittancev((realv)(z), (realv)(inv_az), tau_up, tau_down, up, down).s0;
         t[LSQT_NWI_PAD + k] = lam;
@@ -151,212 +31,79 @@ __kernel void lsqt_prepare(__constant lsqt_dev_scene *scene, __global const lsqt
     }
 }
 
-/* The next-event terms of one vertex for the block of LSQT_VW directions at b, the same
- * text for both code paths (the CPU's sums per path, the GPU's records). Lanes with
- * t = 0 add nothing, even where the model is not finite (the zero vectors that pad the
- * directions). A layer's closed-form BSDF (tab: its table, T first; microsurfaces take
- * ms_vertex_walks): */
-LSQT_INLINE realv nee_layer_block(__global const lsqt_dev_layer *l, real3 wo, real w, __global const real *dirs,
-                                    __global const real *tab, int b)
+/* A vertex on layer li reached along d with each band's weight wb: next-event estimates
+ * towards upward directions if it is the topmost non-null layer, downward if the
+ * bottommost, then the sample that continues the path (rb: bands.cl). One band's terms
+ * carry its weight; a block's are evaluated at weight 1 and spread to each band with its
+ * factors (band_spread). Returns the factor of every band's weight (1 where the sample
+ * weighed each band itself, 0 where the path ends) and sets *wi. */
+LSQT_INLINE real layer_vertex(const walk_ctx *c, int li, real3 d, real *wb, real *rb, rng_t *rng, real3 *wi)
 {
-    const realv t = vloadv(0, tab + b);
-    return select((realv)(R(0.0)), (w * bsdf_evalv_closed(l, wo, load_dirv(dirs, b))) * t, t > R(0.0));
-}
-
-/* A medium's phase function at optical depths tu above and td below the vertex (a_up,
- * a_down: the slice's media rows). */
-LSQT_INLINE realv nee_medium_block(__global const lsqt_dev_medium *m, const phase_vtx *pv, real3 wo, real w, real tu,
-                                     real td, __global const real *dirs, __global const real *a_up,
-                                     __global const real *a_down, int b)
-{
-    const realv t = exp2_negv(-(tu * vloadv(0, a_up + b) + td * vloadv(0, a_down + b)));
-    return select((realv)(R(0.0)), (w * phase_evalv(m, pv, wo, load_dirv(dirs, b))) * t, t > R(0.0));
-}
-
-/* Converts one path's sums of the block at k to fixed point, adds them to lo, the low
- * 64-bit words of the block's tallies, and returns the new low words. A high word (a sum
- * above 2^63 units, 8e6, or a carry out of the low word) is rare and goes straight to the
- * batch's 128-bit sum in global memory (nee_word of nee, state slice vs, batch), where it counts the same.
- * The common case by one test per block: every lane in [0, 2^15) is below 2^55 units,
- * and at most LSQT_CHUNK (2^8) paths' sums go to the low words before they go to the
- * batch's, so no carry can leave them; the general conversion of such lanes is the same
- * (to_fixedv). A block of zeros takes it too: testing for one cost as much as converting
- * it. */
-#define LSQT_FLUSH_FAST_MAX R(32768.0)
-#if LSQT_CHUNK > 256
-#error "nee_flush_block's carry-free case assumes at most 256 paths per chunk"
-#endif
-LSQT_INLINE ulongv nee_flush_block(realv v, ulongv lo, __global ulong *nee, uint vs, int batch, int k,
-                                     volatile __global uint *flags)
-{
-    if (allv((v >= R(0.0)) & (v < LSQT_FLUSH_FAST_MAX)))
-        return lo + as_ulongv(convert_longv(v * (real)LSQT_FIX_SCALE + R(0.5)));
-    fixv q = to_fixedv(v, flags);
-    ulongv old = lo, sum = old + q.lo;
-    if (anyv((q.hi != 0) | (sum < old))) {
-        ulongv h = q.hi + select((ulongv)(0), (ulongv)(1), sum < old);
-        ulong hs[LSQT_VW];
-        vstorev(h, 0, hs);
-        for (int i = 0; i < LSQT_VW; i++) {
-            __global ulong *p = hs[i] ? nee_word(nee, vs, batch, k + i) : 0;
-            if (p) global_add128(p, 0, hs[i], flags);
-        }
-    }
-    return sum;
-}
-
-/* A vertex's next-event estimates, one set of functions per code path with the same
- * names, which the path loop below calls alike: the CPU path adds the terms (above) to the
- * path's sums at once, the GPU path writes the vertex's record (nee_records.cl) for
- * lsqt_estimate (below), which adds the same terms. nee_layer_terms: a layer's, towards
- * wo with weight w (tab: the layer's table); nee_medium_terms: a medium's, at optical
- * depths tu above and td below the vertex; nee_ms_sink: where a microsurface's walks add
- * theirs (ms_vertex_walks; filled through a pointer: a struct returned by value, once
- * inlined, leaves an llvm.experimental.noalias.scope.decl that oclgrind cannot run);
- * nee_counting: 1 in the GPU path's counting walk, which tallies nothing but the
- * records. */
-#ifndef LSQT_NEE_RECORDS
-LSQT_INLINE void nee_layer_terms(const walk_ctx *c, __global const lsqt_dev_layer *l, int li, real3 wo, real w,
-                                 __global const real *tab)
-{
-    (void)li;
-    for (int k = 0; k < LSQT_NWI_PAD; k += LSQT_VW)
-        VBLOCK(realv, c->sum, k) += nee_layer_block(l, wo, w, c->wi, tab, k);
-}
-
-LSQT_INLINE void nee_medium_terms(const walk_ctx *c, __global const lsqt_dev_medium *m, int mi, real3 wo, real w,
-                                  const phase_vtx *pv, real tu, real td)
-{
-    /* The pointers in locals: on a CPU, PoCL's local, private and global memory are one
-     * address space, so the compiler cannot tell the sums' stores from the context's
-     * fields and would load them again at every block. */
-    __global const real *dirs = c->wi, *a_up = c->tab, *a_down = c->tab + LSQT_NWI_PAD;
-    __local real *sum = c->sum;
-    (void)mi;
-    for (int k = 0; k < LSQT_NWI_PAD; k += LSQT_VW)
-        VBLOCK(realv, sum, k) += nee_medium_block(m, pv, wo, w, tu, td, dirs, a_up, a_down, k);
-}
-
-LSQT_INLINE void nee_ms_sink(const walk_ctx *c, __global const real *tab, int li, ms_sink *k)
-{
-    k->sum = c->sum, k->wi = c->wi, k->tab = tab, k->count = c->work + WORK_NEE, k->out = 0, k->layer = li;
-}
-
-LSQT_INLINE int nee_counting(const walk_ctx *c)
-{
-    (void)c;
-    return 0;
-}
-
-/* At the path's end: its sums to the work-item's low words (then cleared). */
-LSQT_INLINE void nee_flush(const walk_ctx *c)
-{
-#if LSQT_NB > 1
-    const uint on = *c->touched;
-    *c->touched = 0;
-    for (int b = 0; b < LSQT_NB; b++) {
-        if (!(on >> b & 1u)) continue; /* its sums are 0 */
-        __local real *sum = c->bsum + b * LSQT_NWI_PAD;
-        __local ulong *lo = c->nee + b * LSQT_NWI_PAD;
-        __global ulong *g = c->nee_g + (size_t)b * c->scene->band_nee_words;
-        for (int k = 0; k < LSQT_NWI_PAD; k += LSQT_VW) {
-            realv v = VBLOCK(realv, sum, k);
-            VBLOCK(realv, sum, k) = (realv)(R(0.0));
-            VBLOCK(ulongv, lo, k) = nee_flush_block(v, VBLOCK(ulongv, lo, k), g, c->v, c->batch, k, c->flags);
-        }
-    }
-#else
-    for (int k = 0; k < LSQT_NWI_PAD; k += LSQT_VW) {
-        realv v = VBLOCK(realv, c->sum, k);
-        VBLOCK(realv, c->sum, k) = (realv)(R(0.0));
-        VBLOCK(ulongv, c->nee, k) = nee_flush_block(v, VBLOCK(ulongv, c->nee, k), c->nee_g, c->v, c->batch, k, c->flags);
-    }
-#endif
-}
-#else
-/* A layer's or a medium's record: wo, and a medium's phase normal m and optical depths
- * tu, td (0 for a layer) where a microsurface vertex keeps m, lam_v and lg_v. */
-LSQT_INLINE void nee_put(const walk_ctx *c, int kind, int index, real3 wo, real w, real3 m, real tu, real td)
-{
-    ms_vtx x;
-    x.v = wo, x.m = m, x.inv_area = R(0.0), x.lam_v = tu, x.lg_v = td;
-    x.log_c = x.log_cbar = x.e = R(0.0);
-    nee_write(c->out, kind, index, w, R(0.0), &x);
-}
-
-LSQT_INLINE void nee_layer_terms(const walk_ctx *c, __global const lsqt_dev_layer *l, int li, real3 wo, real w,
-                                 __global const real *tab)
-{
-    (void)l, (void)tab;
-    nee_put(c, NEE_LAYER, li, wo, w, (real3)(R(0.0)), R(0.0), R(0.0));
-}
-
-LSQT_INLINE void nee_medium_terms(const walk_ctx *c, __global const lsqt_dev_medium *m, int mi, real3 wo, real w,
-                                  const phase_vtx *pv, real tu, real td)
-{
-    (void)m;
-    nee_put(c, NEE_MEDIUM, mi, wo, w, pv->m, tu, td);
-}
-
-LSQT_INLINE void nee_ms_sink(const walk_ctx *c, __global const real *tab, int li, ms_sink *k)
-{
-    k->sum = 0, k->wi = c->wi, k->tab = tab, k->count = c->work + WORK_NEE, k->out = c->out, k->layer = li;
-}
-
-LSQT_INLINE int nee_counting(const walk_ctx *c) { return c->count_only; }
-#endif
-
-/* Whether layer l is a microsurface, which its random walk samples and estimates. */
-LSQT_INLINE int layer_is_micro(__global const lsqt_dev_layer *l)
-{
-#define X(ID, num, name, alias, p, sampler, mirror, transmits) \
-    LSQT_IF_WALK_##sampler(if (LSQT_ON(BSDF_##ID) && l->kind == LSQT_BSDF_##ID) return 1;)
-    LSQT_BSDFS(X)
-#undef X
-    (void)l;
-    return 0;
-}
-
-/* A vertex on layer li reached along d with weight w: next-event estimates towards upward
- * directions if it is the topmost non-null layer, downward if the bottommost, then the
- * sample that continues the path. Returns the weight factor and sets *wi. */
-LSQT_INLINE real layer_vertex(const walk_ctx *c, int li, real3 d, real w, rng_t *rng, real3 *wi)
-{
+    const int n = c->scene->n_layers;
     const int up = li == c->scene->top_nonnull, down = li == c->scene->bottom_nonnull;
     __global const lsqt_dev_layer *l = &c->layers[li];
+    if (LSQT_NB > 1 && !up && layer_bands_index(l)) {
+        /* under another layer: no term leaves it, and each band's index weighs its walk
+         * (light reaches it from above only) */
+        c->work[WORK_LAYER]++;
+        if (!(d.z < R(0.0))) return R(0.0);
+        ms_bands mb = {c->bw + LSQT_BAND_ETA(n, LSQT_NBP, 0, li), c->bw + LSQT_BAND_KAPPA(n, LSQT_NBP, 0, li), wb};
+        ms_sink none = {0, 0, 0};
+        return ms_vertex_walks(l, d, rng, R(0.0), 0, &none, &mb, wi);
+    }
     __global const lsqt_dev_medium *above = &c->media[li], *below = &c->media[li + 1];
-    real tau_up = above->tau_above + above->mut * above->thickness;
-    real tau_down = below->tau_below + below->mut * below->thickness;
+    const real tau_up = above->tau_above + above->mut * above->thickness;
+    const real tau_down = below->tau_below + below->mut * below->thickness;
     const int visible = c->nee_on && nee_visible(tau_up, tau_down, up, down);
     __global const real *tab = c->tab + LSQT_LAYER_TAB(li);
+    real cs[LSQT_NB], co[LSQT_NB], dtu[LSQT_NB], dtd[LSQT_NB];
+    if (LSQT_NB > 1)
+        for (int b = 0; b < LSQT_NB; b++) {
+            cs[b] = wb[b] * band_tab(c, LSQT_BAND_FS(n, LSQT_NBP, b, li));
+            co[b] = wb[b] * band_tab(c, LSQT_BAND_FO(n, LSQT_NBP, b, li));
+            band_depths(c, b, -1, R(0.0), li, tau_up, tau_down, &dtu[b], &dtd[b]);
+        }
+    const real vw = LSQT_NB > 1 ? R(1.0) : wb[0];
     c->work[WORK_LAYER]++;
-    if (layer_is_micro(l)) { /* constant 0, and the walk dead code, in a scene without one */
+    if (ms_layer(l)) { /* constant 0, and the walk dead code, in a scene without one */
         ms_sink k;
         nee_ms_sink(c, tab, li, &k);
-        return ms_vertex_walks(l, d, rng, w, visible, &k, wi);
+        const real f = ms_vertex_walks(l, d, rng, vw, visible, &k, 0, wi);
+        if (visible) band_spread(c, -d.z, cs, co, dtu, dtd);
+        return f;
     }
     if (visible) {
         c->work[WORK_NEE]++;
-        nee_layer_terms(c, l, li, -d, w, tab);
+        nee_layer_terms(c, l, li, -d, vw, tab);
+        band_spread(c, -d.z, cs, co, dtu, dtd);
     }
-    return bsdf_sample(l, -d, rng, wi);
+    if (LSQT_NB == 1 || !layer_bands_factored(l)) return bsdf_sample(l, -d, rng, wi);
+    return band_side_sample(c, l, li, d, cs, co, wb, rb, rng, wi) ? R(1.0) : R(0.0);
 }
 
-/* Next-event estimates from a scattering vertex at height h in interior medium mi. */
-LSQT_NOINLINE_CPU void nee_medium(const walk_ctx *c, int mi, real h, real3 d, real w, const phase_vtx *pv)
+/* Next-event estimates from a scattering vertex at height h in interior medium mi: one
+ * band's with its weight w, a block's (wb) at weight 1, spread to each band with its
+ * extra transmittance where its medium is deeper. */
+LSQT_NOINLINE_CPU void nee_medium(const walk_ctx *c, int mi, real h, real3 d, real w, const real *wb,
+                                  const phase_vtx *pv)
 {
     __global const lsqt_dev_medium *m = &c->media[mi];
     const int top = c->scene->top_nonnull, bottom = c->scene->bottom_nonnull;
     const int up = top < 0 || mi <= top, down = bottom < 0 || mi > bottom;
-    real tau_up = m->tau_above + m->mut * (m->thickness - h);
-    real tau_down = m->tau_below + m->mut * h;
+    const real tau_up = m->tau_above + m->mut * (m->thickness - h);
+    const real tau_down = m->tau_below + m->mut * h;
     if (!c->nee_on || !nee_visible(tau_up, tau_down, up, down)) return;
     c->work[WORK_NEE]++;
     /* A side light may not leave by, or too deep to count, is as good as infinitely deep
      * (2^-huge is 0; 1e30 times a 0 of the tables is still 0, never NaN). */
     const real tu = up && tau_up < LSQT_NEE_TAU_MAX ? tau_up : R(1e30);
     const real td = down && tau_down < LSQT_NEE_TAU_MAX ? tau_down : R(1e30);
-    nee_medium_terms(c, m, mi, -d, w, pv, tu, td);
+    nee_medium_terms(c, m, mi, -d, LSQT_NB > 1 ? R(1.0) : w, pv, tu, td);
+    if (LSQT_NB > 1) {
+        real dtu[LSQT_NB], dtd[LSQT_NB];
+        for (int b = 0; b < LSQT_NB; b++) band_depths(c, b, mi, h, -1, tau_up, tau_down, &dtu[b], &dtd[b]);
+        band_spread(c, -d.z, wb, wb, dtu, dtd);
+    }
 }
 
 /* The phi bin of (x, |y|), phi = atan2(|y|, x) in [0, pi], without atan2 (a tenth of a
@@ -396,24 +143,6 @@ LSQT_INLINE int hist_bin(real3 d, int up)
     return ((up ? 0 : 1) * LSQT_HIST_NMU + bm) * LSQT_HIST_NPHI + bp;
 }
 
-/* Russian roulette; returns 0 when the path ends. */
-LSQT_INLINE int roulette(real *w, rng_t *rng)
-{
-    if (*w >= LSQT_RR_WEIGHT) return 1;
-    if (rng_uniform(rng) * LSQT_RR_WEIGHT >= *w) return 0;
-    *w = LSQT_RR_WEIGHT;
-    return 1;
-}
-
-#if LSQT_NB > 1
-/* A band block's steps (bands.cl, which follows this file). */
-LSQT_INLINE int roulette_bands(real *wb, rng_t *rng);
-LSQT_INLINE int layer_vertex_bands(const walk_ctx *c, int li, real3 d, real *wb, real *rb, rng_t *rng, real3 *wi);
-LSQT_INLINE int flight_bands(const walk_ctx *c, int mi, real t, int collided, real *wb, real *rb);
-LSQT_NOINLINE_CPU void nee_medium_bands(const walk_ctx *c, int mi, real h, real3 d, const real *wb,
-                                        const phase_vtx *pv);
-#endif
-
 /* A path's exit: R or T, the unscattered part of T, and the exit histogram, each of
  * band b (0 in a one-band program) with weight w. */
 LSQT_INLINE void tally_exit(const walk_ctx *c, int b, real3 d, int up, int scattered, real w, __global ulong *hist)
@@ -434,17 +163,16 @@ LSQT_INLINE void tally_exit(const walk_ctx *c, int b, real3 d, int up, int scatt
     }
 }
 
+/* One path from wo, for every band of its block: each band's weight (wb) and its density
+ * of the path over the bands' mixture (rb; bands.cl). One band's code is the same text at
+ * width 1, where the mixture is the band itself. */
 LSQT_INLINE void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulong *hist)
 {
     const int n = c->scene->n_layers;
     real3 d = -wo;
-    real w = R(1.0), h = R(0.0);
-#if LSQT_NB > 1
-    /* each band's weight, and its density of the path over the bands' mixture (bands.cl) */
-    real wb[LSQT_NBP], rb[LSQT_NBP];
-    for (int b = 0; b < LSQT_NBP; b++) wb[b] = rb[b] = b < LSQT_NB ? R(1.0) : R(0.0);
-    (void)w;
-#endif
+    real h = R(0.0);
+    real wb[LSQT_NBW], rb[LSQT_NBW];
+    for (int b = 0; b < LSQT_NBW; b++) wb[b] = rb[b] = b < LSQT_NB ? R(1.0) : R(0.0);
     int scattered = 0, at_layer = 1, layer = 0, medium = 0;
     for (int events = 0;; events++) {
         if (events >= LSQT_MAX_EVENTS) {
@@ -456,14 +184,8 @@ LSQT_INLINE void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulon
             const int bounced = l->kind != LSQT_BSDF_NULL;
             if (bounced) {
                 real3 wi;
-#if LSQT_NB > 1
                 scattered = 1;
-                if (!layer_vertex_bands(c, layer, d, wb, rb, rng, &wi)) return;
-#else
-                w *= layer_vertex(c, layer, d, w, rng, &wi);
-                scattered = 1;
-                if (!(w > R(0.0))) return;
-#endif
+                if (!band_scale(wb, layer_vertex(c, layer, d, wb, rb, rng, &wi))) return;
                 d = wi;
             }
             at_layer = 0;
@@ -483,72 +205,43 @@ LSQT_INLINE void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulon
                     vstore4(scattered ? (real4)(d.x, d.y, d.z, R(1.0)) : (real4)(R(0.0)), 0, c->exit_dir);
                     return;
                 }
-#if LSQT_NB > 1
                 for (int b = 0; b < LSQT_NB; b++) tally_exit(c, b, d, up, scattered, wb[b], hist);
-#else
-                tally_exit(c, 0, d, up, scattered, w, hist);
-#endif
                 return;
             }
             /* Roulette only for paths that go on inside the stack: on one that leaves it
              * would add noise and save no work. */
-#if LSQT_NB > 1
-            if (bounced && !roulette_bands(wb, rng)) return;
-#else
-            if (bounced && !roulette(&w, rng)) return;
-#endif
+            if (bounced && !roulette(wb, rng)) return;
             continue;
         }
-        /* Inside interior medium `medium` at height h, travelling along d. */
+        /* Inside interior medium `medium` at height h, travelling along d: the hero band's
+         * free flight (bands.cl), unless the medium is clear in every band. */
         __global const lsqt_dev_medium *m = &c->media[medium];
-#if LSQT_NB > 1
-        /* The hero band's flight, every band's weight by spectral MIS (bands.cl); a
-         * medium clear in every band is crossed as it is without bands. */
-        if (c->bw[medium] > R(0.0)) {
-            const real mt_h = c->bw[LSQT_BAND_MUT(n, LSQT_NBP, c->hero, medium)];
+        if (band_most_mut(c, medium) > R(0.0)) {
+            const real mt_h = band_hero_mut(c, medium);
             const real s = mt_h > R(0.0) ? neg_log_unit(R(1.0) - rng_uniform(rng)) / mt_h : (real)INFINITY;
+            /* s < the distance to the boundary ahead, without dividing by d.z (a
+             * horizontal d scatters below the top; a NaN one goes on to a layer and
+             * leaves) */
             if (d.z < R(0.0) ? s * -d.z < h : s * d.z < m->thickness - h) {
                 h = clamp(h + s * d.z, R(0.0), (real)m->thickness);
-                if (!flight_bands(c, medium, s, 1, wb, rb)) return;
+                /* every band's albedo, and its density of the flight (absorbed in every
+                 * band, mus = 0: no scattering event) */
+                if (!flight_weights(c, medium, s, 1, wb, rb)) return;
                 scattered = 1;
                 c->work[WORK_MEDIUM]++;
                 phase_vtx pv = phase_vertex(m, -d, rng);
-                nee_medium_bands(c, medium, h, d, wb, &pv);
+                nee_medium(c, medium, h, d, wb[0], LSQT_NB > 1 ? wb : 0, &pv);
                 real3 wi;
                 const real f = phase_sample(m, &pv, -d, rng, &wi);
-                if (!(f > R(0.0))) return;
-                for (int b = 0; b < LSQT_NB; b++) wb[b] *= f;
-                if (!roulette_bands(wb, rng)) return;
+                if (!(f > R(0.0)) || !band_scale(wb, f) || !roulette(wb, rng)) return;
                 d = wi;
                 continue;
             }
             /* to the boundary ahead (a horizontal d never reaches one: it is clear in the
              * hero's band, and crosses nothing) */
             const real t = d.z < R(0.0) ? h / -d.z : d.z > R(0.0) ? (m->thickness - h) / d.z : R(0.0);
-            if (!flight_bands(c, medium, t, 0, wb, rb)) return;
+            if (!flight_weights(c, medium, t, 0, wb, rb)) return;
         }
-#else
-        if (m->mut > R(0.0)) {
-            real s = neg_log_unit(R(1.0) - rng_uniform(rng)) / (real)m->mut;
-            /* s < the distance to the boundary ahead, without dividing by d.z (a
-             * horizontal d scatters below the top; a NaN one goes on to a layer and
-             * leaves) */
-            if (d.z < R(0.0) ? s * -d.z < h : s * d.z < m->thickness - h) {
-                h = clamp(h + s * d.z, R(0.0), (real)m->thickness);
-                w *= (real)m->mus / (real)m->mut;
-                scattered = 1;
-                if (!(w > R(0.0))) return; /* absorbed (mus = 0): no scattering event */
-                c->work[WORK_MEDIUM]++;
-                phase_vtx pv = phase_vertex(m, -d, rng);
-                nee_medium(c, medium, h, d, w, &pv);
-                real3 wi;
-                w *= phase_sample(m, &pv, -d, rng, &wi);
-                if (!(w > R(0.0)) || !roulette(&w, rng)) return;
-                d = wi;
-                continue;
-            }
-        }
-#endif
         at_layer = 1;
         layer = d.z < R(0.0) ? medium : medium - 1;
     }
@@ -710,7 +403,7 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
     for (int k = 0; k < LSQT_NB * LSQT_NWI_PAD; k++) nee_priv[k] = 0;
     for (int k = 0; k < LSQT_SUM_ROWS * LSQT_NWI_PAD; k++) path_sum[k] = R(0.0);
     c.sum = path_sum, c.nee = nee_priv, c.out = 0, c.count_only = 0;
-    c.bsum = path_sum + LSQT_NWI_PAD; /* a band block's: after the vertex's row */
+    c.bsum = LSQT_NB > 1 ? path_sum + LSQT_NWI_PAD : path_sum; /* one band's: the vertex's row */
 #ifdef LSQT_RNG_WIDE
     rng_t ahead; /* the next path's stream, made with this one's (rng_init_pair) */
     int have_ahead = 0;
@@ -757,11 +450,7 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
     barrier(CLK_LOCAL_MEM_FENCE);
     for (int k = s.lid; k < LSQT_T_COUNT * LSQT_NB; k += s.lsz) {
         fix1 a = acc_read(acc + LSQT_ACC_WORDS * k);
-#if LSQT_NB > 1
         const int band = k / LSQT_T_COUNT, t = k % LSQT_T_COUNT;
-#else
-        const int band = 0, t = k;
-#endif
         __global ulong *sc = scalars + (size_t)band * scene->band_scalar_words;
         for (uint b = 0; b < g; b++) {
             const ulong base = (ulong)(v + b) * LSQT_BATCHES + (ulong)s.batch;

@@ -54,7 +54,7 @@ const lsqt_assembly *lsqt_assembly_band(const lsqt_assembly *a, int b)
 
 int lsqt_layer_transmits(const lsqt_layer *l)
 {
-#define TRANSMITS(ID, num, name, alias, prefix, sampler, mirror, transmits) \
+#define TRANSMITS(ID, num, name, alias, prefix, sampler, mirror, transmits, ...) \
     if (l->kind == LSQT_BSDF_##ID)                                          \
         return LSQT_TRANSMITS_##transmits(ID, l->v);
     LSQT_BSDFS(TRANSMITS)

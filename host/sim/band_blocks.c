@@ -31,24 +31,41 @@ static int tables_of(const lsqt_assembly *a, int b, band_tables *t)
 
 static void tables_free(band_tables *t) { free(t->media), free(t->layers); }
 
-/* A closed layer whose value is fs or fo times a unit model the bands share: its factors
- * and the parameters the factors stand for (the others must agree). */
-static int factored(int kind) { return kind == LSQT_BSDF_LAMBERTIAN || kind == LSQT_BSDF_OREN_NAYAR; }
+/* How the bands of a block may differ at a layer: the model list's BANDS, B0, B1 columns
+ * (include/lsqt/model_list.h); SAME for a model not in the list (NullBsdf). */
+enum { BANDS_SAME, BANDS_FACTORS, BANDS_INDEX };
+typedef struct {
+    int kind, mode, b0, b1;
+} band_rule;
 
-static void layer_factors(const lsqt_dev_layer_d *l, double *fs, double *fo)
+static band_rule rule_of(int kind)
 {
-    if (l->kind == LSQT_BSDF_LAMBERTIAN) *fs = l->p[0], *fo = l->p[1];
-    else if (l->kind == LSQT_BSDF_OREN_NAYAR) *fs = l->p[0], *fo = 0.0;
-    else if (l->kind == LSQT_BSDF_NULL) *fs = *fo = 0.0;
-    else *fs = *fo = 1.0; /* the same model in every band */
+#define RULE(ID, num, name, alias, prefix, sampler, mirror, transmits, bands, b0, b1, alpha) \
+    {LSQT_BSDF_##ID, BANDS_##bands, b0, b1},
+    static const band_rule rules[] = {LSQT_BSDFS(RULE)};
+#undef RULE
+    for (size_t i = 0; i < sizeof rules / sizeof rules[0]; i++)
+        if (rules[i].kind == kind) return rules[i];
+    band_rule same = {kind, BANDS_SAME, -1, -1};
+    return same;
 }
 
-/* A conductor under another layer that is not null (bands.cl: conductor_vertex_bands):
- * light leaves it only through that layer, so its n and k weigh its walk and no next-event
- * term; they may differ between the bands. */
-static int hidden_metal(const band_tables *t, int i)
+/* A layer's factors fs and fo (FACTORS: its value is fs or fo times a unit model the bands
+ * share); 1 and 1 where the bands' models are the same, 0 for NullBsdf. */
+static void layer_factors(const lsqt_dev_layer_d *l, double *fs, double *fo)
 {
-    return t->layers[i].kind == LSQT_BSDF_MS_CONDUCTIVE && t->scene.top_nonnull != i;
+    const band_rule r = rule_of(l->kind);
+    if (r.mode == BANDS_FACTORS) *fs = l->p[r.b0], *fo = r.b1 >= 0 ? l->p[r.b1] : 0.0;
+    else if (l->kind == LSQT_BSDF_NULL) *fs = *fo = 0.0;
+    else *fs = *fo = 1.0;
+}
+
+/* A layer of INDEX under another layer that is not null (microsurface.cl ms_bands): light
+ * leaves it only through that layer, so its index weighs its walk and no next-event term;
+ * the index may differ between the bands. */
+static int hidden_index(const band_tables *t, int i)
+{
+    return rule_of(t->layers[i].kind).mode == BANDS_INDEX && t->scene.top_nonnull != i;
 }
 
 static int tables_share(const band_tables *x, const band_tables *y, int n)
@@ -58,16 +75,15 @@ static int tables_share(const band_tables *x, const band_tables *y, int n)
         const lsqt_dev_layer_d *p = &x->layers[i], *q = &y->layers[i];
         if (p->kind != q->kind || p->iter_count != q->iter_count || p->multiple_scattering != q->multiple_scattering)
             return 0;
-        for (int k = 0; k < 8; k++) {
-            const int factor = (factored(p->kind) && (k == 0 || (k == 1 && p->kind == LSQT_BSDF_LAMBERTIAN))) ||
-                               (hidden_metal(x, i) && (k == 1 || k == 2));
-            if (!factor && p->p[k] != q->p[k]) return 0;
-        }
+        const band_rule r = rule_of(p->kind);
+        const int free_slots = r.mode == BANDS_FACTORS || (r.mode == BANDS_INDEX && hidden_index(x, i));
+        for (int k = 0; k < 8; k++)
+            if (!(free_slots && (k == r.b0 || k == r.b1)) && p->p[k] != q->p[k]) return 0;
     }
     for (int m = 0; m <= n; m++) {
         const lsqt_dev_medium_d *p = &x->media[m], *q = &y->media[m];
-        /* the metal's index is its conductor's n and k (compared there) */
-        const int metal = m == n && n > 0 && p->mus == 0 && x->layers[n - 1].kind == LSQT_BSDF_MS_CONDUCTIVE;
+        /* the medium under an INDEX layer is its index (compared there) */
+        const int metal = m == n && n > 0 && p->mus == 0 && rule_of(x->layers[n - 1].kind).mode == BANDS_INDEX;
         if ((!metal && p->eta != q->eta) || p->thickness != q->thickness) return 0;
         /* a phase function matters only where both bands scatter */
         if (p->mus > 0 && q->mus > 0 && (p->phase_kind != q->phase_kind || memcmp(p->pp, q->pp, sizeof p->pp)))
@@ -213,8 +229,10 @@ int lsqt_band_block_tables(const lsqt_assembly *a, const lsqt_band_block *blk, i
     }
     /* Unit models: the factors are the bands'. */
     for (int i = 0; i < n; i++) {
-        if (layers[i].kind == LSQT_BSDF_LAMBERTIAN) layers[i].p[0] = layers[i].p[1] = 1.0;
-        if (layers[i].kind == LSQT_BSDF_OREN_NAYAR) layers[i].p[0] = 1.0;
+        const band_rule r = rule_of(layers[i].kind);
+        if (r.mode != BANDS_FACTORS) continue;
+        layers[i].p[r.b0] = 1.0;
+        if (r.b1 >= 0) layers[i].p[r.b1] = 1.0;
     }
     /* Per slot, its band's factors; a padding slot repeats the block's last band (its
      * tallies are dropped; as a hero it draws that band's flights). */
@@ -226,8 +244,9 @@ int lsqt_band_block_tables(const lsqt_assembly *a, const lsqt_band_block *blk, i
             double fs = 0.0, fo = 0.0;
             layer_factors(&q->layers[i], &fs, &fo);
             bw[LSQT_BAND_FS(n, nbp, j, i)] = fs, bw[LSQT_BAND_FO(n, nbp, j, i)] = fo;
-            if (q->layers[i].kind == LSQT_BSDF_MS_CONDUCTIVE)
-                bw[LSQT_BAND_ETA(n, nbp, j, i)] = q->layers[i].p[1], bw[LSQT_BAND_KAPPA(n, nbp, j, i)] = q->layers[i].p[2];
+            const band_rule r = rule_of(q->layers[i].kind);
+            if (r.mode == BANDS_INDEX)
+                bw[LSQT_BAND_ETA(n, nbp, j, i)] = q->layers[i].p[r.b0], bw[LSQT_BAND_KAPPA(n, nbp, j, i)] = q->layers[i].p[r.b1];
         }
         for (int m = 0; m <= n; m++) {
             const int interior = m > 0 && m < n;

@@ -54,6 +54,13 @@ static void phase_params(const lsqt_phase *p, double pp[4])
 #undef PACK
 }
 
+/* The walk (kernels/microsurface.cl ms_alpha) reads a microsurface's roughness at p[0]:
+ * the model list's ALPHA column must say so of every walk. */
+#define ALPHA_AT_0(ID, num, name, alias, prefix, sampler, mirror, transmits, bands, b0, b1, alpha) \
+    LSQT_IF_WALK_##sampler(_Static_assert(alpha == 0, "the walk reads " #ID "'s alpha at p[0]");)
+LSQT_BSDFS(ALPHA_AT_0)
+#undef ALPHA_AT_0
+
 /* A layer's parameters as the kernels read them (kernels/bsdf_*.cl), from the layer and
  * the media on each side of it. */
 static void layer_params(const lsqt_layer *l, const lsqt_medium *up, const lsqt_medium *down, double p[8])

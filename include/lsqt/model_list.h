@@ -25,7 +25,7 @@
     X(DRAINE, 5, "DrainePhase", "Draine", draine, EXACT, 1)
 
 /* BSDFs (NullBsdf, kind 0, is the host's own): X(ID, kind number, seed name, short name,
- * kernel prefix, SAMPLER, MIRROR, TRANSMITS). kernels/bsdf_*.cl defines p_evalv(l, wo, wi)
+ * kernel prefix, SAMPLER, MIRROR, TRANSMITS, BANDS, B0, B1, ALPHA). kernels/bsdf_*.cl defines p_evalv(l, wo, wi)
  * and p_pdf(l, wo, wi). SAMPLER is
  * - CLOSED: p_sample(l, wo, u0, u1, u2, wi) returns the weight f / pdf; next-event
  *   estimation evaluates p_evalv;
@@ -38,16 +38,31 @@
  *   adds orders >= 2), p_evalv is it for one direction, and p_sample samples it (the
  *   layer's use_multiple_scattering=false).
  * TRANSMITS is ALWAYS, NEVER, or the key whose value > 0 lets light
- * through (FT, KT): a layer that transmits nothing prunes what lies below it. */
+ * through (FT, KT): a layer that transmits nothing prunes what lies below it.
+ * BANDS, B0, B1 say how the bands of a block that share their paths (kernels/bands.cl,
+ * host/sim/band_blocks.c) may differ at the layer:
+ * - SAME: not at all (B0 = B1 = -1);
+ * - FACTORS: the value is fs times a unit model towards wo's side and fo times it towards
+ *   the other, fs = p[B0], fo = p[B1] (0 where B1 is -1); the unit model (those slots 1)
+ *   is sampled by the cosine on the side the block's hero band chooses by its fs : fo;
+ * - INDEX: a walk whose facets' albedo depends on a complex index n = p[B0], k = p[B1]:
+ *   where no next-event term leaves the layer (under another layer), each band's albedo
+ *   weighs the one walk (p_albedo_bands(x, n_row, k_row, wb)).
+ * ALPHA is the slot in p[] of a walk's GGX roughness (its Lambda table, lsqt_prepare): 0
+ * for every walk (the walk reads p[0]; host/sim/tables.c refuses to build otherwise),
+ * NONE for a closed model. */
 #define LSQT_BSDFS(X)                                                                                  \
-    X(LAMBERTIAN, 1, "LambertianBsdf", "Lambertian", lambertian, CLOSED, 1, FT)                        \
-    X(MS_LAMBERTIAN, 2, "MicrosurfaceLambertianBrdf", "MicrosurfaceLambertian", mslambert, WALK, 1, FT) \
-    X(MS_DIELECTRIC, 3, "MicrosurfaceDielectricBsdf", "MicrosurfaceDielectric", dielectric, SINGLE_WALK, 1, KT) \
-    X(MS_CONDUCTIVE, 4, "MicrosurfaceConductiveBrdf", "MicrosurfaceConductive", conductor, SINGLE_WALK, 0, NEVER) \
-    X(OREN_NAYAR, 5, "OrenNayarDiffuseBrdf", "OrenNayarDiffuse", oren_nayar, CLOSED, 0, NEVER)
+    X(LAMBERTIAN, 1, "LambertianBsdf", "Lambertian", lambertian, CLOSED, 1, FT, FACTORS, 0, 1, NONE)          \
+    X(MS_LAMBERTIAN, 2, "MicrosurfaceLambertianBrdf", "MicrosurfaceLambertian", mslambert, WALK, 1, FT, SAME, -1, \
+      -1, 0)                                                                                                    \
+    X(MS_DIELECTRIC, 3, "MicrosurfaceDielectricBsdf", "MicrosurfaceDielectric", dielectric, SINGLE_WALK, 1, KT,   \
+      SAME, -1, -1, 0)                                                                                          \
+    X(MS_CONDUCTIVE, 4, "MicrosurfaceConductiveBrdf", "MicrosurfaceConductive", conductor, SINGLE_WALK, 0, NEVER, \
+      INDEX, 1, 2, 0)                                                                                           \
+    X(OREN_NAYAR, 5, "OrenNayarDiffuseBrdf", "OrenNayarDiffuse", oren_nayar, CLOSED, 0, NEVER, FACTORS, 0, -1, NONE)
 
 #define LSQT_X_PHASE_KIND_(ID, NUM, NAME, ALIAS, P, SAMPLER, MIRROR) LSQT_PHASE_##ID = NUM,
-#define LSQT_X_BSDF_KIND_(ID, NUM, NAME, ALIAS, P, SAMPLER, MIRROR, TRANSMITS) LSQT_BSDF_##ID = NUM,
+#define LSQT_X_BSDF_KIND_(ID, NUM, NAME, ALIAS, P, SAMPLER, MIRROR, TRANSMITS, BANDS, B0, B1, ALPHA) LSQT_BSDF_##ID = NUM,
 enum lsqt_phase_kind { LSQT_PHASE_NONE = 0, LSQT_PHASES(LSQT_X_PHASE_KIND_) };
 enum lsqt_bsdf_kind { LSQT_BSDF_NULL = 0, LSQT_BSDFS(LSQT_X_BSDF_KIND_) };
 #undef LSQT_X_PHASE_KIND_
@@ -65,7 +80,8 @@ enum lsqt_bsdf_kind { LSQT_BSDF_NULL = 0, LSQT_BSDFS(LSQT_X_BSDF_KIND_) };
 #define LSQT_ON_CAT(a, b) LSQT_ON_CAT_(a, b)
 #define LSQT_ON(M) LSQT_ON_CAT(LSQT_ON_, LSQT_HAS_##M)
 #define LSQT_ON_PHASE_(ID, num, name, alias, p, sampler, mirror) LSQT_ON_LSQT_HAS_PHASE_##ID = 0,
-#define LSQT_ON_BSDF_(ID, num, name, alias, p, sampler, mirror, transmits) LSQT_ON_LSQT_HAS_BSDF_##ID = 0,
+#define LSQT_ON_BSDF_(ID, num, name, alias, p, sampler, mirror, transmits, bands, b0, b1, alpha) \
+    LSQT_ON_LSQT_HAS_BSDF_##ID = 0,
 enum { LSQT_PHASES(LSQT_ON_PHASE_) LSQT_BSDFS(LSQT_ON_BSDF_) LSQT_ON_NONE_ = 0 };
 
 /* The list's SAMPLER column, as text kept or dropped (one argument: the statement's commas
@@ -82,6 +98,13 @@ enum { LSQT_PHASES(LSQT_ON_PHASE_) LSQT_BSDFS(LSQT_ON_BSDF_) LSQT_ON_NONE_ = 0 }
 #define LSQT_IF_SINGLE_SINGLE_WALK(s) s
 #define LSQT_IF_VERTEX_EXACT(s)
 #define LSQT_IF_VERTEX_VERTEX(s) s
+/* The BANDS column, likewise. */
+#define LSQT_IF_FACTORS_SAME(s)
+#define LSQT_IF_FACTORS_FACTORS(s) s
+#define LSQT_IF_FACTORS_INDEX(s)
+#define LSQT_IF_INDEX_SAME(s)
+#define LSQT_IF_INDEX_FACTORS(s)
+#define LSQT_IF_INDEX_INDEX(s) s
 
 /* Keys, packing and slots are the host's (the kernels read the packed tables); hidden from
  * OpenCL C, which has no variadic macros (LSQT_WORDS). */
@@ -175,7 +198,7 @@ enum { LSQT_PHASES(LSQT_ON_PHASE_) LSQT_BSDFS(LSQT_ON_BSDF_) LSQT_ON_NONE_ = 0 }
 #define LSQT_X_KEY_SLOT_(ID, F, NAME, TYPE, DEF, LO, LO_OPEN, HI, HI_OPEN, WORDS) LSQT_##ID##_##F,
 #define LSQT_X_SLOTS_(ID) enum { LSQT_KEYS_##ID(LSQT_X_KEY_SLOT_, ID) LSQT_##ID##_N_KEYS };
 #define LSQT_X_PHASE_SLOTS_(ID, NUM, NAME, ALIAS, P, SAMPLER, MIRROR) LSQT_X_SLOTS_(ID)
-#define LSQT_X_BSDF_SLOTS_(ID, NUM, NAME, ALIAS, P, SAMPLER, MIRROR, TRANSMITS) LSQT_X_SLOTS_(ID)
+#define LSQT_X_BSDF_SLOTS_(ID, NUM, NAME, ALIAS, P, SAMPLER, MIRROR, TRANSMITS, BANDS, B0, B1, ALPHA) LSQT_X_SLOTS_(ID)
 LSQT_PHASES(LSQT_X_PHASE_SLOTS_)
 LSQT_BSDFS(LSQT_X_BSDF_SLOTS_)
 #undef LSQT_X_PHASE_SLOTS_
