@@ -346,7 +346,7 @@ int run_command(const lsqt_cli *c)
     if (!rc) rc = read_wi_file(c, &a, &wi_dirs, &n_wi_dirs, &n_mirrored);
     outputs out;
     memset(&out, 0, sizeof out);
-    if (!rc && (rc = run_plan_outputs(c, from_stdin, &a, lsqt_assembly_transmits(&a), 0, &out, err, sizeof err)))
+    if (!rc && (rc = run_plan_outputs(c, from_stdin, &a, NULL, 0, &out, err, sizeof err)))
         fail(rc, "%s%s", err, "");
     if (!rc) rc = run_lock_states(&out, c->quiet) ? 1 : 0;
     lsqt_state st;
@@ -354,7 +354,10 @@ int run_command(const lsqt_cli *c)
     /* out.base: the state continued (a shard writes its own, out.f.path[LSQT_OUT_LSS]) */
     if (!rc) rc = run_open_state(&st, c, &a, out.base, wi_dirs, n_wi_dirs, n_mirrored, &continued);
     free(wi_dirs);
-    if (!rc) rc = run_plan_sides(c, from_stdin, &a, &st, continued, &out, err, sizeof err);
+    if (!rc && (rc = run_plan_outputs(c, from_stdin, &a, &st, continued, &out, err, sizeof err))) {
+        lsqt_state_free(&st);
+        fail(rc, "%s%s", err, "");
+    }
     if (!rc && (rc = check_memory(c, &a, &st))) lsqt_state_free(&st);
     else if (!rc && lsqt_state_pack_hist(&st, 0)) { /* many bands: histograms packed (state.h) */
         rc = fail(1, "out of memory packing the histograms%s%s", "", "");

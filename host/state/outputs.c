@@ -216,7 +216,7 @@ int lsqt_outputs_write(const lsqt_outputs *o, const lsqt_state *st, const lsqt_s
     const int two = lsqt_state_below_count(st) > 0;
     memset(sides, 0, sizeof sides);
     char *done = calloc((size_t)o->n_files + 1, 1); /* per file: 1 written, 2 failed */
-    if (!done || (two && (lsqt_state_split_sides(st, &sides[0], &sides[1]) || !(side_est[0] = lsqt_estimates(&sides[0])) ||
+    if (!done || (two && (lsqt_state_split_by_side(st, &sides[0], &sides[1]) || !(side_est[0] = lsqt_estimates(&sides[0])) ||
                           !(side_est[1] = lsqt_estimates(&sides[1]))))) {
         free_sides(sides, side_est);
         free(done);
