@@ -38,7 +38,7 @@ static void parse(const char *text, lsqt_assembly *a)
 {
     lsqt_diag diag;
     memset(&diag, 0, sizeof diag);
-    if (lsqt_parse(text, strlen(text), "test", a, &diag)) {
+    if (lsqt_parse(text, strlen(text), "test", NULL, 1, NULL, a, &diag)) {
         fprintf(stderr, "parse failed: %s\n", diag.error);
         exit(1);
     }
@@ -89,7 +89,7 @@ static void make_state(lsqt_state *st, const lsqt_assembly *a, const double *deg
                        uint64_t seed, int two)
 {
     char *c = canonical(a);
-    if (lsqt_state_init(st, c, lsqt_assembly_hash(a), seed, ns, nwi, lsqt_assembly_transmits(a))) exit(1);
+    if (lsqt_state_init(st, c, lsqt_assembly_hash(a), seed, ns, nwi, lsqt_assembly_transmits(a), 1, NULL)) exit(1);
     free(c);
     st->dir_method = LSQT_DIRS_FILE;
     for (int s = 0; s < ns; s++) {

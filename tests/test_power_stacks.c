@@ -105,7 +105,7 @@ static void run_case(const stack_case *c)
     lsqt_assembly a;
     lsqt_diag diag;
     memset(&diag, 0, sizeof diag);
-    if (lsqt_parse(text, strlen(text), "test", &a, &diag)) {
+    if (lsqt_parse(text, strlen(text), "test", NULL, 1, NULL, &a, &diag)) {
         fprintf(stderr, "parse failed: %s\n%s", diag.error, text);
         exit(1);
     }
@@ -115,7 +115,7 @@ static void run_case(const stack_case *c)
     enum { NS = 2, NWI = 16 };
     const double deg[NS] = {0.0, 75.0};
     lsqt_state st;
-    if (lsqt_state_init(&st, canon, lsqt_assembly_hash(&a), c->seed, NS, NWI, lsqt_assembly_transmits(&a))) exit(1);
+    if (lsqt_state_init(&st, canon, lsqt_assembly_hash(&a), c->seed, NS, NWI, lsqt_assembly_transmits(&a), 1, NULL)) exit(1);
     free(canon);
     CHECK(st.transmits, "%s: the stack must transmit", c->name);
     for (int s = 0; s < NS; s++) {

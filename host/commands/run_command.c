@@ -77,7 +77,7 @@ static int read_assembly(const lsqt_cli *c, int from_stdin, lsqt_assembly *a)
     const char *slash = from_stdin ? NULL : strrchr(c->input, '/');
     snprintf(dir, sizeof dir, "%.*s", slash ? (int)(slash - c->input) + (slash == c->input) : 1,
              slash ? c->input : ".");
-    int prc = lsqt_parse_bands(text, len, from_stdin ? "<stdin>" : c->input, wl, n_wl, dir, a, &diag);
+    int prc = lsqt_parse(text, len, from_stdin ? "<stdin>" : c->input, wl, n_wl, dir, a, &diag);
     free(text);
     free(wl);
     if (!c->quiet)
@@ -270,7 +270,7 @@ lsqt_memory_shape g_run_shape;
 static int check_memory(const lsqt_cli *c, const lsqt_assembly *a, const lsqt_state *st)
 {
     const int pilot = st->stage == LSQT_STAGE_PILOT, rx = pilot ? (int)st->rx : c->rx;
-    lsqt_memory_shape m = {st->n_bands, pilot && rx ? st->n_slices / rx : st->n_slices, st->n_wi, 0, 1,
+    lsqt_memory_shape m = {lsqt_state_bands(st), pilot && rx ? st->n_slices / rx : st->n_slices, st->n_wi, 0, 1,
                            st->use_double, a->n_layers, 0};
     /* the paths per slice it holds at the end (0: a target error without -p, unbounded) */
     if (c->total_paths) m.paths = c->total_paths;

@@ -109,7 +109,7 @@ int lsqt_state_below_count(const lsqt_state *st)
 /* OUT: N slices (zero), every setting and the ranges of ST. */
 static int init_like(lsqt_state *out, const lsqt_state *st, int n)
 {
-    if (lsqt_state_init_bands(out, st->canonical, st->hash, st->seed, n, st->n_wi, st->transmits, st->n_bands,
+    if (lsqt_state_init(out, st->canonical, st->hash, st->seed, n, st->n_wi, st->transmits, st->n_bands,
                               st->wavelengths))
         return -1;
     if (st->hist_pk && lsqt_state_pack_hist(out, 1)) { /* as ST holds them */

@@ -376,7 +376,7 @@ static int session_shape(lsqt_session *s, const lsqt_assembly *a, const lsqt_sta
     s->n_nee = lsqt_state_nee_count(st);
     s->n_scalars = lsqt_state_scalar_count(st);
     s->n_hist = (size_t)(st->n_slices / s->slice_group) * LSQT_BATCHES * LSQT_HIST_BINS; /* one a slice group */
-    /* One program serves one side: the slices from below are another lane (open_sides). */
+    /* One program serves one side: the slices from below are another lane (open_lanes). */
     for (int sl = 1; sl < st->n_slices; sl++)
         if ((st->slice_flags[sl] ^ st->slice_flags[0]) & LSQT_SLICE_BELOW) {
             snprintf(err, errcap, "a band block has slices from above and from below");
@@ -522,14 +522,14 @@ static int open_lane(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, 
 
 /* The sides of a two-sided state: each side's part of it and the state's slice of each
  * of the side's slices (in order), and the mirrored assembly of the lane from below. */
-typedef struct lsqt_sides {
+typedef struct lsqt_lanes {
     lsqt_state side[2];
     int *at[2];
     lsqt_assembly mirror;
-} lsqt_sides;
+} lsqt_lanes;
 
 /* at[] for ST's slices (0 done, -1 out of memory). */
-static int sides_index(lsqt_sides *sd, const lsqt_state *st)
+static int sides_index(lsqt_lanes *sd, const lsqt_state *st)
 {
     int k[2] = {0, 0};
     for (int i = 0; i < 2; i++) {
@@ -544,7 +544,7 @@ static int sides_index(lsqt_sides *sd, const lsqt_state *st)
     return 0;
 }
 
-static void sides_free(lsqt_sides *sd)
+static void sides_free(lsqt_lanes *sd)
 {
     if (!sd) return;
     for (int i = 0; i < 2; i++) lsqt_state_free(&sd->side[i]), free(sd->at[i]);
@@ -555,12 +555,12 @@ static void sides_free(lsqt_sides *sd)
 /* A two-sided ST's session: S the lane from above on A, s->below the lane from below on
  * A mirrored, each on its side of ST (split off: lsqt_state_split_by_side). With TAKE, ST's
  * tallies are given back (the sides hold them) and each lane takes its side's. */
-static int open_sides(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, int slice_group,
+static int open_lanes(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, int slice_group,
                       const char *extra_options, size_t local_size, int verbose, lsqt_state *take, char *err,
                       size_t errcap)
 {
     memset(s, 0, sizeof *s);
-    lsqt_sides *sd = calloc(1, sizeof *sd);
+    lsqt_lanes *sd = calloc(1, sizeof *sd);
     lsqt_session *dn = calloc(1, sizeof *dn);
     if (!sd || !dn) {
         free(sd), free(dn);
@@ -605,7 +605,7 @@ static int open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *
                         char *err, size_t errcap)
 {
     if (lsqt_state_below_count(st))
-        return open_sides(s, cx, a, st, slice_group, extra_options, local_size, verbose, take, err, errcap);
+        return open_lanes(s, cx, a, st, slice_group, extra_options, local_size, verbose, take, err, errcap);
     return open_lane(s, cx, a, st, slice_group, extra_options, local_size, verbose, take, err, errcap);
 }
 
@@ -615,7 +615,7 @@ static int open_lane(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, 
                      size_t errcap)
 {
     const int nb = lsqt_assembly_bands(a);
-    if (nb != (st->n_bands > 1 ? st->n_bands : 1)) {
+    if (nb != lsqt_state_bands(st)) {
         snprintf(err, errcap, "the assembly has %d bands and the state %d", nb, st->n_bands);
         return 1;
     }
@@ -869,7 +869,7 @@ static int read_lane(lsqt_session *s, lsqt_state *st, int release, char *err, si
  * above's slices first). */
 int lsqt_session_read(lsqt_session *s, lsqt_state *st, int release, char *err, size_t errcap)
 {
-    lsqt_sides *sd = s->sides;
+    lsqt_lanes *sd = s->sides;
     if (!sd) return read_lane(s, st, release, err, errcap);
     lsqt_state both;
     if (read_lane(s, &sd->side[0], release, err, errcap) || read_lane(s->below, &sd->side[1], release, err, errcap) ||
@@ -943,7 +943,7 @@ static int set_lane_directions(lsqt_session *s, const lsqt_state *st, char *err,
 /* Each side's directions from ST's (they are joined from the sides at a read). */
 int lsqt_session_set_directions(lsqt_session *s, const lsqt_state *st, char *err, size_t errcap)
 {
-    lsqt_sides *sd = s->sides;
+    lsqt_lanes *sd = s->sides;
     if (!sd) return set_lane_directions(s, st, err, errcap);
     const size_t nw = (size_t)st->n_wi * 4;
     for (int d = 0; d < 2; d++)
@@ -957,7 +957,7 @@ static int lane_exits(lsqt_session *s, uint64_t begin, uint32_t n, float *out, c
 /* Each lane's exits, put at its simulated slices' places among ST's. */
 int lsqt_session_exits(lsqt_session *s, uint64_t begin, uint32_t n, float *out, char *err, size_t errcap)
 {
-    lsqt_sides *sd = s->sides;
+    lsqt_lanes *sd = s->sides;
     if (!sd) return lane_exits(s, begin, n, out, err, errcap);
     const size_t per = (size_t)n * 4, g = (size_t)s->slice_group;
     for (int d = 0; d < 2; d++) {
@@ -1016,7 +1016,7 @@ static int lane_exits(lsqt_session *s, uint64_t begin, uint32_t n, float *out, c
 void lsqt_session_close(lsqt_session *s)
 {
     lsqt_session *below = s->below;
-    lsqt_sides *sides = s->sides; /* after the lanes: their packed histograms' home */
+    lsqt_lanes *sides = s->sides; /* after the lanes: their packed histograms' home */
     s->below = NULL, s->sides = NULL;
     if (below) lsqt_session_close(below);
     free(below);

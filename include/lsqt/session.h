@@ -62,7 +62,7 @@ typedef struct lsqt_session {
      * side of the state (held in sides, session.c), and a launch, read, exits or new
      * directions serve both lanes, on the same paths. NULL for a one-sided state. */
     struct lsqt_session *below;
-    struct lsqt_sides *sides;
+    struct lsqt_lanes *sides;
 } lsqt_session;
 
 /* The vector widths (LSQT_VW) of the two code paths by default (session.c says why). */
