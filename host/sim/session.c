@@ -379,7 +379,7 @@ static int session_shape(lsqt_session *s, const lsqt_assembly *a, const lsqt_sta
     /* One program serves one side: the slices from below are another lane (open_lanes). */
     for (int sl = 1; sl < st->n_slices; sl++)
         if ((st->slice_flags[sl] ^ st->slice_flags[0]) & LSQT_SLICE_BELOW) {
-            snprintf(err, errcap, "a band block has slices from above and from below");
+            snprintf(err, errcap, "a lane has slices from above and from below");
             return 1;
         }
     int line = 0;
@@ -520,8 +520,8 @@ static int open_lane(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, 
                      const char *extra_options, size_t local_size, int verbose, lsqt_state *take, char *err,
                      size_t errcap);
 
-/* The sides of a two-sided state: each side's part of it and the state's slice of each
- * of the side's slices (in order), and the mirrored assembly of the lane from below. */
+/* A two-sided state's lanes: each side's part of the state, the state's slice of each of
+ * the side's slices (in order), and the mirrored assembly of the lane from below. */
 typedef struct lsqt_lanes {
     lsqt_state side[2];
     int *at[2];
@@ -529,7 +529,7 @@ typedef struct lsqt_lanes {
 } lsqt_lanes;
 
 /* at[] for ST's slices (0 done, -1 out of memory). */
-static int sides_index(lsqt_lanes *sd, const lsqt_state *st)
+static int lanes_index(lsqt_lanes *sd, const lsqt_state *st)
 {
     int k[2] = {0, 0};
     for (int i = 0; i < 2; i++) {
@@ -544,7 +544,7 @@ static int sides_index(lsqt_lanes *sd, const lsqt_state *st)
     return 0;
 }
 
-static void sides_free(lsqt_lanes *sd)
+static void lanes_free(lsqt_lanes *sd)
 {
     if (!sd) return;
     for (int i = 0; i < 2; i++) lsqt_state_free(&sd->side[i]), free(sd->at[i]);
@@ -578,7 +578,7 @@ static int open_lanes(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a,
         snprintf(err, errcap, "out of memory");
         return 1;
     }
-    if (sides_index(sd, st)) {
+    if (lanes_index(sd, st)) {
         snprintf(err, errcap, "out of memory");
         rc = 1;
     }
@@ -593,10 +593,10 @@ static int open_lanes(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a,
     }
     if (rc) {
         free(dn);
-        sides_free(sd);
+        lanes_free(sd);
         return 1;
     }
-    s->below = dn, s->sides = sd;
+    s->below = dn, s->lanes = sd;
     return 0;
 }
 
@@ -869,7 +869,7 @@ static int read_lane(lsqt_session *s, lsqt_state *st, int release, char *err, si
  * above's slices first). */
 int lsqt_session_read(lsqt_session *s, lsqt_state *st, int release, char *err, size_t errcap)
 {
-    lsqt_lanes *sd = s->sides;
+    lsqt_lanes *sd = s->lanes;
     if (!sd) return read_lane(s, st, release, err, errcap);
     lsqt_state both;
     if (read_lane(s, &sd->side[0], release, err, errcap) || read_lane(s->below, &sd->side[1], release, err, errcap) ||
@@ -877,7 +877,7 @@ int lsqt_session_read(lsqt_session *s, lsqt_state *st, int release, char *err, s
         return 1;
     lsqt_state_free(st);
     *st = both;
-    if (sides_index(sd, st)) {
+    if (lanes_index(sd, st)) {
         snprintf(err, errcap, "out of memory");
         return 1;
     }
@@ -943,7 +943,7 @@ static int set_lane_directions(lsqt_session *s, const lsqt_state *st, char *err,
 /* Each side's directions from ST's (they are joined from the sides at a read). */
 int lsqt_session_set_directions(lsqt_session *s, const lsqt_state *st, char *err, size_t errcap)
 {
-    lsqt_lanes *sd = s->sides;
+    lsqt_lanes *sd = s->lanes;
     if (!sd) return set_lane_directions(s, st, err, errcap);
     const size_t nw = (size_t)st->n_wi * 4;
     for (int d = 0; d < 2; d++)
@@ -957,7 +957,7 @@ static int lane_exits(lsqt_session *s, uint64_t begin, uint32_t n, float *out, c
 /* Each lane's exits, put at its simulated slices' places among ST's. */
 int lsqt_session_exits(lsqt_session *s, uint64_t begin, uint32_t n, float *out, char *err, size_t errcap)
 {
-    lsqt_lanes *sd = s->sides;
+    lsqt_lanes *sd = s->lanes;
     if (!sd) return lane_exits(s, begin, n, out, err, errcap);
     const size_t per = (size_t)n * 4, g = (size_t)s->slice_group;
     for (int d = 0; d < 2; d++) {
@@ -1016,8 +1016,8 @@ static int lane_exits(lsqt_session *s, uint64_t begin, uint32_t n, float *out, c
 void lsqt_session_close(lsqt_session *s)
 {
     lsqt_session *below = s->below;
-    lsqt_lanes *sides = s->sides; /* after the lanes: their packed histograms' home */
-    s->below = NULL, s->sides = NULL;
+    lsqt_lanes *lanes = s->lanes; /* freed after the lanes: their packed histograms' home */
+    s->below = NULL, s->lanes = NULL;
     if (below) lsqt_session_close(below);
     free(below);
     for (int b = 1; b < s->n_blocks; b++) lsqt_session_close(&s->blocks[b - 1]);
@@ -1034,5 +1034,5 @@ void lsqt_session_close(lsqt_session *s)
     for (int i = 0; i < 3; i++) /* (every command that used them has finished) */
         if (s->host[i]) munmap(s->host[i], s->host_bytes[i]);
     memset(s, 0, sizeof *s);
-    sides_free(sides);
+    lanes_free(lanes);
 }

@@ -59,10 +59,10 @@ typedef struct lsqt_session {
     struct lsqt_session *blocks;
     /* A two-sided state (below.h): this session is the lane of its slices from above and
      * *below the lane of those from below, on the mirrored assembly; each lane runs its
-     * side of the state (held in sides, session.c), and a launch, read, exits or new
+     * side of the state (held in lanes, session.c), and a launch, read, exits or new
      * directions serve both lanes, on the same paths. NULL for a one-sided state. */
     struct lsqt_session *below;
-    struct lsqt_lanes *sides;
+    struct lsqt_lanes *lanes;
 } lsqt_session;
 
 /* The vector widths (LSQT_VW) of the two code paths by default (session.c says why). */
