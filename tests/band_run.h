@@ -20,7 +20,7 @@ static inline lsqt_slice_est *band_block_run(const char *who, const char *text, 
     lsqt_assembly a;
     lsqt_diag diag;
     memset(&diag, 0, sizeof diag);
-    if (lsqt_parse_bands(text, strlen(text), "test", NULL, 0, ".", &a, &diag)) {
+    if (lsqt_parse(text, strlen(text), "test", NULL, 0, ".", &a, &diag)) {
         fprintf(stderr, "%s: parse failed: %s\n", who, diag.error);
         exit(1);
     }
@@ -33,7 +33,7 @@ static inline lsqt_slice_est *band_block_run(const char *who, const char *text, 
     const size_t n = lsqt_assembly_canonical(&a, NULL, 0);
     char *canon = malloc(n + 1);
     lsqt_assembly_canonical(&a, canon, n + 1);
-    if (lsqt_state_init_bands(st, canon, lsqt_assembly_hash(&a), seed + seed_offset, n_slices, n_wi,
+    if (lsqt_state_init(st, canon, lsqt_assembly_hash(&a), seed + seed_offset, n_slices, n_wi,
                               lsqt_assembly_transmits(&a), lsqt_assembly_bands(&a), NULL))
         exit(1);
     free(canon);

@@ -271,14 +271,14 @@ static inline void fixture_state(const char *text, int n_slices, int n_wi, uint6
 {
     lsqt_diag diag;
     memset(&diag, 0, sizeof diag);
-    if (lsqt_parse(text, strlen(text), "test", a, &diag)) {
+    if (lsqt_parse(text, strlen(text), "test", NULL, 1, NULL, a, &diag)) {
         fprintf(stderr, "parse failed: %s\n", diag.error);
         exit(1);
     }
     size_t n = lsqt_assembly_canonical(a, NULL, 0);
     char *canon = malloc(n + 1);
     lsqt_assembly_canonical(a, canon, n + 1);
-    if (lsqt_state_init(st, canon, lsqt_assembly_hash(a), seed, n_slices, n_wi, lsqt_assembly_transmits(a)))
+    if (lsqt_state_init(st, canon, lsqt_assembly_hash(a), seed, n_slices, n_wi, lsqt_assembly_transmits(a), 1, NULL))
         exit(1);
     free(canon);
     st->use_double = use_double;

@@ -36,7 +36,7 @@ int main(int argc, char **argv)
     char *text = lsqt_read_file(argv[1], &len, err, sizeof err);
     lsqt_assembly a;
     lsqt_diag d;
-    if (!text || lsqt_parse(text, len, argv[1], &a, &d)) {
+    if (!text || lsqt_parse(text, len, argv[1], NULL, 1, NULL, &a, &d)) {
         fprintf(stderr, "gpu_program: %s%s\n", err, text ? d.error : "");
         free(text);
         return 2;

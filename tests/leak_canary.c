@@ -25,7 +25,7 @@ __attribute__((noinline)) static void canary_leak(void)
 __attribute__((noinline)) static void canary_leak_state(void)
 {
     lsqt_state *st = malloc(sizeof *st);
-    if (st && lsqt_state_init(st, "canary", 1, 2, 4, 16, 0) == 0) sink = st;
+    if (st && lsqt_state_init(st, "canary", 1, 2, 4, 16, 0, 1, NULL) == 0) sink = st;
     sink = NULL;
 }
 

@@ -153,7 +153,7 @@ static void parse_per_band(void)
               strstr(err, "error: band 3: fR + fT"), "%s", err);
     /* one band (lsqt_parse): a list is refused, as before bands */
     lsqt_diag d;
-    CHECK(lsqt_parse("Medium\nLayer z=0 Lambertian fR=0.1,0.2\nMedium\n", strlen("Medium\nLayer z=0 Lambertian fR=0.1,0.2\nMedium\n"), "t", &a, &d) == 2 &&
+    CHECK(lsqt_parse("Medium\nLayer z=0 Lambertian fR=0.1,0.2\nMedium\n", strlen("Medium\nLayer z=0 Lambertian fR=0.1,0.2\nMedium\n"), "t", NULL, 1, NULL, &a, &d) == 2 &&
               strstr(d.error, "a list of values in a run of one band"), "%s", d.error);
     lsqt_bands_free(&b);
     unlink(path);
@@ -171,7 +171,7 @@ static void bands_canonical(void)
                        "Layer z=-1 LambertianBsdf fR=0.3\nMedium\n";
     lsqt_assembly a, b;
     lsqt_diag d;
-    CHECK(lsqt_parse_bands(text, strlen(text), "t", NULL, 0, ".", &a, &d) == 0 && a.n_bands == 2 &&
+    CHECK(lsqt_parse(text, strlen(text), "t", NULL, 0, ".", &a, &d) == 0 && a.n_bands == 2 &&
               a.wavelengths == NULL && a.n_layers == 3, "%s", d.error);
     if (a.n_bands != 2) return;
     /* band 1: mus 0 keeps HG (band 0 scatters); the floor is kept (band 1 sees through) */
@@ -183,7 +183,7 @@ static void bands_canonical(void)
     CHECK(n < sizeof buf && strncmp(buf, "# bands 2\n", 10) == 0 && strstr(buf, " mus=1,0 ") &&
               strstr(buf, " iter_count=1,6 ") && strstr(buf, " fT=0,0.20000000000000001 ") &&
               strstr(buf, " mua=0.5 "), "%s", buf);
-    CHECK(lsqt_parse_bands(buf, n, "canonical", NULL, 0, ".", &b, &d) == 0, "reads back: %s", d.error);
+    CHECK(lsqt_parse(buf, n, "canonical", NULL, 0, ".", &b, &d) == 0, "reads back: %s", d.error);
     char buf2[2048];
     CHECK(lsqt_assembly_canonical(&b, buf2, sizeof buf2) == n && memcmp(buf, buf2, n) == 0 &&
               lsqt_assembly_hash(&a) == lsqt_assembly_hash(&b), "round trip: %s", buf2);
@@ -191,27 +191,27 @@ static void bands_canonical(void)
     lsqt_assembly_free(&a);
     /* bands alike still say how many they are: the first key is written as a list */
     const char *alike = "Medium\nLayer z=0 LambertianBsdf fR=0.5,0.5\nMedium\n";
-    CHECK(lsqt_parse_bands(alike, strlen(alike), "t", NULL, 0, ".", &a, &d) == 0 && a.n_bands == 2, "%s", d.error);
+    CHECK(lsqt_parse(alike, strlen(alike), "t", NULL, 0, ".", &a, &d) == 0 && a.n_bands == 2, "%s", d.error);
     n = lsqt_assembly_canonical(&a, buf, sizeof buf);
     CHECK(strcmp(buf, "# bands 2\nMedium eta=1,1 mua=0 mus=0\nLayer z=0 LambertianBsdf fR=0.5 fT=0\nMedium eta=1 "
                       "mua=0 mus=0\n") == 0, "%s", buf);
-    CHECK(lsqt_parse_bands(buf, n, "canonical", NULL, 0, ".", &b, &d) == 0 && b.n_bands == 2, "%s", d.error);
+    CHECK(lsqt_parse(buf, n, "canonical", NULL, 0, ".", &b, &d) == 0 && b.n_bands == 2, "%s", d.error);
     lsqt_assembly_free(&b);
     lsqt_assembly_free(&a);
     /* a failure in a later band leaves the assembly empty */
     const char *late = "Medium\nLayer z=0 LambertianBsdf fR=0.5,0.5 fT=0.2,0.6\nMedium\n";
     memset(&a, 0xff, sizeof a);
-    CHECK(lsqt_parse_bands(late, strlen(late), "t", NULL, 0, ".", &a, &d) == 2 && a.n_layers == 0 && !a.layers &&
+    CHECK(lsqt_parse(late, strlen(late), "t", NULL, 0, ".", &a, &d) == 2 && a.n_layers == 0 && !a.layers &&
               !a.band && strstr(d.error, "band 2: fR + fT = 1.1 exceeds 1"), "%s", d.error);
     /* a layer opaque in every band still prunes what lies below it */
     const char *opaque = "Medium\nLayer z=0 LambertianBsdf fR=0.2,0.3\nMedium eta=1.5\nLayer z=-1 LambertianBsdf\nMedium\n";
-    CHECK(lsqt_parse_bands(opaque, strlen(opaque), "t", NULL, 0, ".", &a, &d) == 0 && a.n_layers == 1 &&
+    CHECK(lsqt_parse(opaque, strlen(opaque), "t", NULL, 0, ".", &a, &d) == 0 && a.n_layers == 1 &&
               a.band[1].n_layers == 1 && a.n_pruned_layers == 1, "%s", d.error);
     lsqt_assembly_free(&a);
     /* a whole-number key takes a list, not a table */
     const double wl[] = {500, 600};
     const char *itab = "Medium\nLayer z=0 MicrosurfaceLambertian iter_count=@x.txt\nMedium\n";
-    CHECK(lsqt_parse_bands(itab, strlen(itab), "t", wl, 2, ".", &a, &d) == 2 &&
+    CHECK(lsqt_parse(itab, strlen(itab), "t", wl, 2, ".", &a, &d) == 2 &&
               strstr(d.error, "a table for a whole number at 'iter_count=@x.txt'"), "%s", d.error);
 }
 

@@ -28,6 +28,7 @@
 
 #include "cl_fixture.h"
 #include "lsqt/below.h"
+#include "lsqt/simulate.h"
 #include "stats.h"
 
 #define PI 3.14159265358979323846
@@ -37,7 +38,7 @@ static void parse(const char *text, lsqt_assembly *a)
 {
     lsqt_diag diag;
     memset(&diag, 0, sizeof diag);
-    if (lsqt_parse(text, strlen(text), "test", a, &diag)) {
+    if (lsqt_parse(text, strlen(text), "test", NULL, 1, NULL, a, &diag)) {
         fprintf(stderr, "parse failed: %s\n", diag.error);
         exit(1);
     }
@@ -88,7 +89,7 @@ static void make_state(lsqt_state *st, const lsqt_assembly *a, const double *deg
                        uint64_t seed, int two)
 {
     char *c = canonical(a);
-    if (lsqt_state_init(st, c, lsqt_assembly_hash(a), seed, ns, nwi, lsqt_assembly_transmits(a))) exit(1);
+    if (lsqt_state_init(st, c, lsqt_assembly_hash(a), seed, ns, nwi, lsqt_assembly_transmits(a), 1, NULL)) exit(1);
     free(c);
     st->dir_method = LSQT_DIRS_FILE;
     for (int s = 0; s < ns; s++) {
@@ -103,7 +104,7 @@ static void run(const lsqt_assembly *a, lsqt_state *st, uint64_t paths, size_t l
     lsqt_sim_opts o = {0, 0.0, local, NULL, NULL, 0, 0.0, 0.0, NULL, NULL, NULL};
     lsqt_sim_stats stats;
     char err[1024];
-    if (lsqt_simulate_sides(&fixture_cx, a, st, paths, &o, &stats, err, sizeof err)) {
+    if (lsqt_simulate(&fixture_cx, a, st, paths, &o, &stats, err, sizeof err)) {
         fprintf(stderr, "simulate failed: %s\n", err);
         exit(1);
     }
@@ -131,19 +132,19 @@ static void test_split_join(void)
           lsqt_state_below_count(&st));
     run(&a, &st, 3000, 0);
     char err[256];
-    CHECK(lsqt_state_split_sides(&st, &up, &dn) == 0, "split");
+    CHECK(lsqt_state_split_by_side(&st, &up, &dn) == 0, "split");
     CHECK(up.n_slices == 3 && dn.n_slices == 3 && lsqt_state_below_count(&up) == 0 &&
               lsqt_state_below_count(&dn) == 3 && up.paths == 3000 && dn.paths == 3000 && up.n_ranges == 1 &&
               dn.ranges[1] == 3000 && dn.span_end == st.span_end,
           "split sides");
-    CHECK(lsqt_state_join_sides(&up, &dn, &back, err, sizeof err) == 0 && same_tallies(&st, &back), "join: %s", err);
+    CHECK(lsqt_state_join_by_side(&up, &dn, &back, err, sizeof err) == 0 && same_tallies(&st, &back), "join: %s", err);
     lsqt_state_free(&back);
     dn.pilot_paths = 5;
-    CHECK(lsqt_state_join_sides(&up, &dn, &back, err, sizeof err) == 1 && strstr(err, "direction method"),
+    CHECK(lsqt_state_join_by_side(&up, &dn, &back, err, sizeof err) == 1 && strstr(err, "direction method"),
           "a mismatch is refused: %s", err);
     dn.pilot_paths = up.pilot_paths;
     lsqt_state_add_range(&dn, 3000, 3256);
-    CHECK(lsqt_state_join_sides(&up, &dn, &back, err, sizeof err) == 1 && strstr(err, "paths"),
+    CHECK(lsqt_state_join_by_side(&up, &dn, &back, err, sizeof err) == 1 && strstr(err, "paths"),
           "sides with other paths are refused: %s", err);
     lsqt_state_free(&up), lsqt_state_free(&dn), lsqt_state_free(&st);
     lsqt_assembly_free(&a);
@@ -214,7 +215,7 @@ static void test_symmetric(void)
     /* the side from above is the one-sided run; work-group size 16 gives the same bits */
     make_state(&one, &a, deg, 3, wi, n, 11, 0);
     run(&a, &one, 60000, 0);
-    CHECK(lsqt_state_split_sides(&st, &up, &dn) == 0 && same_tallies(&up, &one),
+    CHECK(lsqt_state_split_by_side(&st, &up, &dn) == 0 && same_tallies(&up, &one),
           "the side from above differs from the one-sided run");
     lsqt_state_free(&up), lsqt_state_free(&dn), lsqt_state_free(&one);
     lsqt_state w16;

@@ -130,7 +130,7 @@ static void test_band_zscores(void)
         lsqt_assembly a;
         lsqt_diag diag;
         memset(&diag, 0, sizeof diag);
-        if (lsqt_parse_bands(text, strlen(text), "test", NULL, 0, ".", &a, &diag)) {
+        if (lsqt_parse(text, strlen(text), "test", NULL, 0, ".", &a, &diag)) {
             fprintf(stderr, "parse failed: %s\n", diag.error);
             exit(1);
         }
@@ -142,7 +142,7 @@ static void test_band_zscores(void)
         char *canon = malloc(n + 1);
         lsqt_assembly_canonical(&a, canon, n + 1);
         lsqt_state st;
-        if (lsqt_state_init_bands(&st, canon, lsqt_assembly_hash(&a), 2000 + (uint64_t)j, 2, NWI,
+        if (lsqt_state_init(&st, canon, lsqt_assembly_hash(&a), 2000 + (uint64_t)j, 2, NWI,
                                   lsqt_assembly_transmits(&a), NBANDS, NULL))
             exit(1);
         free(canon);

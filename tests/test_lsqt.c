@@ -11,7 +11,7 @@
 
 static int parse(const char *text, lsqt_assembly *a, lsqt_diag *d)
 {
-    return lsqt_parse(text, strlen(text), NAME, a, d);
+    return lsqt_parse(text, strlen(text), NAME, NULL, 1, NULL, a, d);
 }
 
 static int has_note(const lsqt_diag *d, const char *part)
@@ -269,17 +269,17 @@ static void test_garbage(void)
     lsqt_assembly a;
     lsqt_diag d;
     static const char with_nul[] = "Medium\nLayer z=0 Null\nMedium eta=1\0 x\n";
-    CHECK(lsqt_parse(with_nul, sizeof with_nul - 1, NAME, &a, &d) == 2, "NUL accepted");
+    CHECK(lsqt_parse(with_nul, sizeof with_nul - 1, NAME, NULL, 1, NULL, &a, &d) == 2, "NUL accepted");
     CHECK(strstr(d.error, "invalid character at 'eta=1?'") && d.error_line == 3, "%s", d.error);
 
     /* a NUL inside a comment is ignored like the rest of the comment */
     static const char nul_comment[] = "Medium # \0 comment\nLayer z=0 Null\nMedium";
-    CHECK(lsqt_parse(nul_comment, sizeof nul_comment - 1, NAME, &a, &d) == 0, "%s", d.error);
+    CHECK(lsqt_parse(nul_comment, sizeof nul_comment - 1, NAME, NULL, 1, NULL, &a, &d) == 0, "%s", d.error);
     lsqt_assembly_free(&a);
 
     /* the text need not be NUL terminated: only len bytes are read */
     static const char sliced[] = "Medium\nLayer z=0 Null\nMediumXYZ";
-    CHECK(lsqt_parse(sliced, sizeof sliced - 4, NAME, &a, &d) == 0, "%s", d.error);
+    CHECK(lsqt_parse(sliced, sizeof sliced - 4, NAME, NULL, 1, NULL, &a, &d) == 0, "%s", d.error);
     lsqt_assembly_free(&a);
 
     char long_tok[600] = "Medium ";
@@ -291,18 +291,18 @@ static void test_garbage(void)
     char long_name[3000];
     memset(long_name, 'n', sizeof long_name - 1);
     long_name[sizeof long_name - 1] = '\0';
-    CHECK(lsqt_parse("Foo", 3, long_name, &a, &d) == 2, "bad input accepted");
+    CHECK(lsqt_parse("Foo", 3, long_name, NULL, 1, NULL, &a, &d) == 2, "bad input accepted");
     CHECK(strlen(d.error) < sizeof d.error, "message too long");
     CHECK(d.error_line == 1, "line %d", d.error_line);
 
     /* no diag and no name are allowed */
-    CHECK(lsqt_parse("Foo", 3, NAME, &a, NULL) == 2, "bad input accepted without diag");
-    CHECK(lsqt_parse("Foo", 3, NULL, &a, &d) == 2 && strncmp(d.error, "<input>:1:", 10) == 0,
+    CHECK(lsqt_parse("Foo", 3, NAME, NULL, 1, NULL, &a, NULL) == 2, "bad input accepted without diag");
+    CHECK(lsqt_parse("Foo", 3, NULL, NULL, 1, NULL, &a, &d) == 2 && strncmp(d.error, "<input>:1:", 10) == 0,
           "%s", d.error);
-    CHECK(lsqt_parse(NULL, 0, NAME, &a, &d) == 2 && strstr(d.error, "no layers"), "%s", d.error);
-    CHECK(lsqt_parse(NULL, 5, NAME, &a, &d) == 2 && strstr(d.error, "error: no text"), "%s",
+    CHECK(lsqt_parse(NULL, 0, NAME, NULL, 1, NULL, &a, &d) == 2 && strstr(d.error, "no layers"), "%s", d.error);
+    CHECK(lsqt_parse(NULL, 5, NAME, NULL, 1, NULL, &a, &d) == 2 && strstr(d.error, "error: no text"), "%s",
           d.error);
-    CHECK(lsqt_parse("Medium\nLayer z=0 Null\nMedium", 26, NAME, NULL, &d) == 2 &&
+    CHECK(lsqt_parse("Medium\nLayer z=0 Null\nMedium", 26, NAME, NULL, 1, NULL, NULL, &d) == 2 &&
           strstr(d.error, "error: no assembly to fill"), "%s", d.error);
 }
 

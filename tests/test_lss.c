@@ -25,7 +25,7 @@ void *__wrap_malloc(size_t n)
 static void fill(lsqt_state *st)
 {
     lsqt_state_init(st, "Medium eta=1\nLayer z=0 LambertianBsdf fR=0.6 fT=0\nMedium eta=1\n", 0x1234abcdULL, 42, 3,
-                    16, 1);
+                    16, 1, 1, NULL);
     const uint64_t r[] = {0, 100000, 100256, 123712}; /* 123456 paths, a gap between */
     lsqt_state_set_ranges(st, r, 2);
     st->span_end = 200000;
@@ -131,7 +131,7 @@ static int packed_streams(const char *path)
 {
     char err[512];
     lsqt_state z, b;
-    lsqt_state_init(&z, "Medium eta=1\nLayer z=0 LambertianBsdf fR=0.6 fT=0\nMedium eta=1\n", 1, 2, 1, 1, 0);
+    lsqt_state_init(&z, "Medium eta=1\nLayer z=0 LambertianBsdf fR=0.6 fT=0\nMedium eta=1\n", 1, 2, 1, 1, 0, 1, NULL);
     z.wi[2] = 1.0f;
     CHECK(lsqt_lss_write(path, &z, err, sizeof err) == 0, "%s", err);
     size_t n = 0;
@@ -212,7 +212,7 @@ static int hist_batch_is(const lsqt_state *p, int sp, const lsqt_state *d, int s
 static void sparse_bands(lsqt_state *d, const char *path)
 {
     const double wl[3] = {450, 550, 650};
-    lsqt_state_init_bands(d, "Medium eta=1\nLayer z=0 LambertianBsdf fR=0.6,0.5,0.4 fT=0\nMedium eta=1\n", 9, 3, 2, 4,
+    lsqt_state_init(d, "Medium eta=1\nLayer z=0 LambertianBsdf fR=0.6,0.5,0.4 fT=0\nMedium eta=1\n", 9, 3, 2, 4,
                           1, 3, wl);
     const uint64_t r[] = {0, 5000};
     lsqt_state_set_ranges(d, r, 1);
@@ -383,7 +383,7 @@ int main(void)
             char far[80];
             snprintf(far, sizeof far, "%s/limit%d.lss", dir, nb);
             lsqt_state m;
-            CHECK(lsqt_state_init_bands(&m, "# limit\nMedium eta=1\n", 9, 3, 1, 1, 0, nb, wl) == 0, "init %d", nb);
+            CHECK(lsqt_state_init(&m, "# limit\nMedium eta=1\n", 9, 3, 1, 1, 0, nb, wl) == 0, "init %d", nb);
             m.wi[2] = 1.0f;
             const size_t per = lsqt_state_nee_count(&m) / (size_t)nb;
             m.nee[0].lo = 5, m.nee[(size_t)(nb - 1) * per].lo = 7;
@@ -410,7 +410,7 @@ int main(void)
         const double wl[3] = {450, 550.5, 650};
         for (int named = 1; named >= 0; named--) {
             lsqt_state m;
-            lsqt_state_init_bands(&m, "# bands 3\nMedium eta=1\n", 9, 3, 2, 16, 0, 3, named ? wl : NULL);
+            lsqt_state_init(&m, "# bands 3\nMedium eta=1\n", 9, 3, 2, 16, 0, 3, named ? wl : NULL);
             for (size_t i = 0; i < (size_t)2 * 16; i++) m.wi[4 * i + 2] = 1.0f;
             for (size_t i = 0; i < lsqt_state_nee_count(&m); i++) m.nee[i].lo = 3 * i + 1;
             for (size_t i = 0; i < lsqt_state_scalar_count(&m); i++) m.scalars[i].hi = i;
@@ -515,7 +515,7 @@ int main(void)
      * LSS after a long run cannot fail for memory). 4 slices of 1024 directions, dense:
      * 8 MB of tallies. */
     lsqt_state big;
-    lsqt_state_init(&big, "Medium eta=1\nLayer z=0 LambertianBsdf fR=0.6 fT=0\nMedium eta=1\n", 7, 1, 4, 1024, 1);
+    lsqt_state_init(&big, "Medium eta=1\nLayer z=0 LambertianBsdf fR=0.6 fT=0\nMedium eta=1\n", 7, 1, 4, 1024, 1, 1, NULL);
     for (size_t i = 0; i < (size_t)4 * 1024; i++) big.wi[4 * i + 2] = 1.0f;
     for (size_t i = 0; i < lsqt_state_nee_count(&big); i++) big.nee[i].lo = i * 0x9E3779B97F4A7C15ULL;
     for (size_t i = 0; i < lsqt_state_hist_count(&big); i++) big.hist[i].lo = ~i;

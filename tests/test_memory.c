@@ -27,12 +27,12 @@ static uint64_t state_bytes(const lsqt_state *st)
 static void check_tallies(int nb, int ns, int nw, int rx)
 {
     lsqt_state st;
-    CHECK(lsqt_state_init_bands(&st, "x", 1, 2, ns, nw, 0, nb, NULL) == 0, "state of %d bands", nb);
+    CHECK(lsqt_state_init(&st, "x", 1, 2, ns, nw, 0, nb, NULL) == 0, "state of %d bands", nb);
     CHECK(lsqt_memory_tallies(nb, ns, nw, ns, 0) == state_bytes(&st), "%d bands x %d slices x %d: %llu, state %llu", nb,
           ns, nw, (unsigned long long)lsqt_memory_tallies(nb, ns, nw, ns, 0), (unsigned long long)state_bytes(&st));
     lsqt_state_free(&st);
     /* a pilot: rx candidate blocks a slice, one histogram a slice (rrss.c) */
-    CHECK(lsqt_state_init_bands(&st, "x", 1, 2, ns * rx, nw, 0, nb, NULL) == 0 && lsqt_state_group_hist(&st, rx) == 0,
+    CHECK(lsqt_state_init(&st, "x", 1, 2, ns * rx, nw, 0, nb, NULL) == 0 && lsqt_state_group_hist(&st, rx) == 0,
           "pilot state");
     CHECK(lsqt_memory_tallies(nb, ns * rx, nw, ns, 0) == state_bytes(&st), "pilot of %d bands, rx %d: %llu, state %llu",
           nb, rx, (unsigned long long)lsqt_memory_tallies(nb, ns * rx, nw, ns, 0), (unsigned long long)state_bytes(&st));
@@ -70,9 +70,9 @@ static void check_resident(void)
     lsqt_assembly a;
     lsqt_diag d;
     memset(&d, 0, sizeof d);
-    CHECK(lsqt_parse_bands(text, strlen(text), "t", NULL, 0, ".", &a, &d) == 0, "parse: %s", d.error);
+    CHECK(lsqt_parse(text, strlen(text), "t", NULL, 0, ".", &a, &d) == 0, "parse: %s", d.error);
     lsqt_state st;
-    CHECK(lsqt_state_init_bands(&st, "t", lsqt_assembly_hash(&a), 5, NS, NW, 0, NB, NULL) == 0, "state");
+    CHECK(lsqt_state_init(&st, "t", lsqt_assembly_hash(&a), 5, NS, NW, 0, NB, NULL) == 0, "state");
     for (int s = 0; s < NS; s++) {
         st.theta_o[s] = 0.3 * s;
         for (int k = 0; k < NW; k++) {

@@ -204,7 +204,7 @@ static void run_case(mrun *r, const char *text, int ns, const double *deg, const
     lsqt_assembly a;
     lsqt_diag diag;
     memset(&diag, 0, sizeof diag);
-    if (lsqt_parse(text, strlen(text), "test", &a, &diag)) {
+    if (lsqt_parse(text, strlen(text), "test", NULL, 1, NULL, &a, &diag)) {
         fprintf(stderr, "parse failed: %s\n", diag.error);
         exit(1);
     }
@@ -220,7 +220,7 @@ static void run_case(mrun *r, const char *text, int ns, const double *deg, const
     size_t n = lsqt_assembly_canonical(&a, NULL, 0);
     char *canon = malloc(n + 1);
     lsqt_assembly_canonical(&a, canon, n + 1);
-    if (lsqt_state_init(&r->st, canon, lsqt_assembly_hash(&a), seed, ns, n_wi, sphere)) exit(1);
+    if (lsqt_state_init(&r->st, canon, lsqt_assembly_hash(&a), seed, ns, n_wi, sphere, 1, NULL)) exit(1);
     free(canon);
     r->st.use_double = use_double;
     const size_t nw = (size_t)n_wi;

@@ -1,6 +1,6 @@
 /* Power test: asymmetric stacks of two and three transmitting
  * Lambertian layers, optionally with a clear absorber between them, from above and
- * (lsqt_simulate_sides, the host's mirror) from below, with enough paths to see a 1 %
+ * (lsqt_simulate's lane from below, the host's mirror) from below, with enough paths to see a 1 %
  * error in R or T, whether it comes from the walk (exit tallies) or from the point
  * estimates.
  *
@@ -41,6 +41,7 @@
  * interior absorber 2 % short fail at z 11.7. */
 #include "cl_fixture.h"
 #include "lsqt/below.h"
+#include "lsqt/simulate.h"
 #include "nee_albedo.h"
 #include "quadrature.h"
 
@@ -104,7 +105,7 @@ static void run_case(const stack_case *c)
     lsqt_assembly a;
     lsqt_diag diag;
     memset(&diag, 0, sizeof diag);
-    if (lsqt_parse(text, strlen(text), "test", &a, &diag)) {
+    if (lsqt_parse(text, strlen(text), "test", NULL, 1, NULL, &a, &diag)) {
         fprintf(stderr, "parse failed: %s\n%s", diag.error, text);
         exit(1);
     }
@@ -114,7 +115,7 @@ static void run_case(const stack_case *c)
     enum { NS = 2, NWI = 16 };
     const double deg[NS] = {0.0, 75.0};
     lsqt_state st;
-    if (lsqt_state_init(&st, canon, lsqt_assembly_hash(&a), c->seed, NS, NWI, lsqt_assembly_transmits(&a))) exit(1);
+    if (lsqt_state_init(&st, canon, lsqt_assembly_hash(&a), c->seed, NS, NWI, lsqt_assembly_transmits(&a), 1, NULL)) exit(1);
     free(canon);
     CHECK(st.transmits, "%s: the stack must transmit", c->name);
     for (int s = 0; s < NS; s++) {
@@ -125,7 +126,7 @@ static void run_case(const stack_case *c)
     lsqt_sim_opts o = {0, 0.0, 0, NULL, NULL, 0, 0.0, 0.0, NULL, NULL, NULL};
     lsqt_sim_stats stats;
     char err[1024];
-    if (lsqt_simulate_sides(&fixture_cx, &a, &st, PATHS, &o, &stats, err, sizeof err)) {
+    if (lsqt_simulate(&fixture_cx, &a, &st, PATHS, &o, &stats, err, sizeof err)) {
         fprintf(stderr, "simulate failed: %s\n", err);
         exit(1);
     }

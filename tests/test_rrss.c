@@ -194,12 +194,12 @@ static void fresh(run_t *r, const char *text, int n_slices, const double *deg, i
 {
     lsqt_diag diag;
     memset(&diag, 0, sizeof diag);
-    CHECK(lsqt_parse(text, strlen(text), "test", &r->a, &diag) == 0, "%s", diag.error);
+    CHECK(lsqt_parse(text, strlen(text), "test", NULL, 1, NULL, &r->a, &diag) == 0, "%s", diag.error);
     size_t n = lsqt_assembly_canonical(&r->a, NULL, 0);
     char *canon = malloc(n + 1);
     lsqt_assembly_canonical(&r->a, canon, n + 1);
     CHECK(lsqt_state_init(&r->st, canon, lsqt_assembly_hash(&r->a), seed, n_slices, n_wi,
-                          lsqt_assembly_transmits(&r->a)) == 0, "state");
+                          lsqt_assembly_transmits(&r->a), 1, NULL) == 0, "state");
     free(canon);
     for (int s = 0; s < n_slices; s++) {
         r->st.theta_o[s] = deg[s] * PI / 180;
@@ -329,7 +329,7 @@ static void test_pilot_blocks(void)
     CHECK(lsqt_rrss_pilot(&fixture_cx, &r.a, &r.st, RX, 2000, 2000, 0, 1000, &o, &half, &info, err, sizeof err) == 0,
           "%s", err);
     CHECK(half.hist_group == RX, "the pilot state's histograms are one a slice (group %u)", half.hist_group);
-    CHECK(lsqt_state_init_bands(&q, half.canonical, half.hash, half.seed, half.n_slices, half.n_wi, half.transmits, 1,
+    CHECK(lsqt_state_init(&q, half.canonical, half.hash, half.seed, half.n_slices, half.n_wi, half.transmits, 1,
                                 NULL) == 0 && lsqt_state_set_ranges(&q, half.ranges, half.n_ranges) == 0,
           "out of memory");
     q.use_double = half.use_double, q.dir_method = half.dir_method, q.rx = half.rx, q.stage = half.stage;

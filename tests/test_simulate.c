@@ -252,7 +252,7 @@ static void test_reproducible(void)
     lsqt_assembly a;
     lsqt_diag d;
     memset(&d, 0, sizeof d);
-    lsqt_parse(text, strlen(text), "t", &a, &d);
+    lsqt_parse(text, strlen(text), "t", NULL, 1, NULL, &a, &d);
     lsqt_sim_opts o = {0, 0.0, 32, NULL, NULL, 0, 0.0, 0.0, NULL, NULL, NULL};
     lsqt_sim_stats stats;
     char err[512];
@@ -264,7 +264,7 @@ static void test_reproducible(void)
     /* The 32-bit-atomics fallback (devices without cl_khr_int64_base_atomics) sums the
      * same integers. */
     lsqt_state st32;
-    lsqt_state_init(&st32, one.canonical, one.hash, one.seed, 2, 16, one.transmits);
+    lsqt_state_init(&st32, one.canonical, one.hash, one.seed, 2, 16, one.transmits, 1, NULL);
     memcpy(st32.theta_o, one.theta_o, sizeof(double) * 2);
     memcpy(st32.wi, one.wi, sizeof(float) * 2 * 16 * 4);
     lsqt_sim_opts o32 = {0, 0.0, 0, NULL, "-DLSQT_NO_INT64_ATOMICS=1", 0, 0.0, 0.0, NULL, NULL, NULL};

@@ -184,7 +184,7 @@ static void test_host(void)
 static void test_ranges(void)
 {
     lsqt_state st;
-    CHECK(lsqt_state_init(&st, "x", 1, 2, 1, 16, 0) == 0, "state");
+    CHECK(lsqt_state_init(&st, "x", 1, 2, 1, 16, 0, 1, NULL) == 0, "state");
     const uint64_t r[] = {9000, 9001, 0, 1000, 5000, 7000, 1000, 1300, 7100, 7100};
     CHECK(lsqt_state_set_ranges(&st, r, 5) == 0, "set ranges");
     CHECK(st.n_ranges == 3 && st.ranges[0] == 0 && st.ranges[1] == 1300 && st.ranges[2] == 5000 &&

@@ -385,7 +385,7 @@ static int find_grid(const lsqt_state *st, const char *input, grid *g, char *err
         return -1;
     }
     g->ni = (int)st->grid_ni, g->nphi = (int)st->grid_nphi, g->na = g->nphi / 2 + 1;
-    g->nb = st->n_bands > 1 ? st->n_bands : 1;
+    g->nb = lsqt_state_bands(st);
     int n[2] = {0, 0};
     for (int s = 0; s < st->n_slices; s++) n[(st->slice_flags[s] & LSQT_SLICE_BELOW) != 0]++;
     g->no = n[0], g->below = n[1] > 0;

@@ -193,7 +193,7 @@ int lsqt_rgl_write(const char *path, const lsqt_state *st, const lsqt_slice_est 
     if (lsqt_rgl_bands(st, "the state", spectral, err, errcap)) return -1;
     /* nb bands; nch channels of the colour field: rgb 3, spectra the run's wavelengths (one
      * band: 360 and 830 nm, the same value at both); nse bands in stderr */
-    const int nu = (int)st->grid_ni, nb = st->n_bands > 1 ? st->n_bands : 1;
+    const int nu = (int)st->grid_ni, nb = lsqt_state_bands(st);
     const int nch = spectral ? (nb > 1 ? nb : 2) : 3;
     const size_t plane = (size_t)nu * (size_t)nu, cells = (size_t)nt * plane, ns = (size_t)st->n_slices;
     float *theta = malloc(sizeof(float) * (size_t)nt), *vndf = malloc(sizeof(float) * 4 * (size_t)nt);

@@ -185,7 +185,7 @@ static void print_text(FILE *f, const char *path, const lsqt_state *st, const ls
                 (unsigned long long)st->pilot_paths, (unsigned long long)st->span_end);
     else fprintf(f, "stage: run\n");
     fprintf(f, "paths: %llu per slice\n", (unsigned long long)st->paths);
-    const int nb = st->n_bands > 1 ? st->n_bands : 1;
+    const int nb = lsqt_state_bands(st);
     if (nb > 1) {
         fprintf(f, "bands: %d", nb);
         for (int b = 0; st->wavelengths && b < nb; b++) fprintf(f, "%s%.10g", b ? ", " : " at ", st->wavelengths[b]);
@@ -276,7 +276,7 @@ static int write_json(const char *out, const char *path, const lsqt_state *st, c
             const float *w = st->wi + ((size_t)s * (size_t)st->n_wi + (size_t)k) * 4;
             fprintf(f, "%s[%.9g, %.9g, %.9g", k ? ", " : "", w[0], w[1], w[2]);
             /* with bands: [x, y, z, [value per band], [error per band]] */
-            const int nb = st->n_bands > 1 ? st->n_bands : 1;
+            const int nb = lsqt_state_bands(st);
             for (int part = 0; part < 2; part++) {
                 fprintf(f, ", %s", nb > 1 ? "[" : "");
                 for (int b = 0; b < nb; b++) {

@@ -219,7 +219,7 @@ static int add_inputs(merge_job *j, uint64_t *all)
     lsqt_state *st = j->st;
     const lsqt_state *f = &st[0];
     lsqt_state *sum = &j->sum;
-    if (lsqt_state_init_bands(sum, f->canonical, f->hash, f->seed, f->n_slices, f->n_wi, f->transmits, f->n_bands,
+    if (lsqt_state_init(sum, f->canonical, f->hash, f->seed, f->n_slices, f->n_wi, f->transmits, f->n_bands,
                               f->wavelengths) ||
         lsqt_state_pack_hist(sum, 0)) /* many bands: packed, as the inputs were read */
         return 1;

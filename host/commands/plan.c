@@ -137,7 +137,7 @@ int plan_command(const lsqt_cli *c)
     const double dn = (double)(n - PLAN_SHORT);
     const double wall_pp = fmax(w2 - w1, 1e-9) / dn, cpu_pp = fmax(c2 - c1, 1e-9) / dn;
     const double start = fmax(w1 - PLAN_SHORT * wall_pp, 0.0);
-    const int nb = st.n_bands > 1 ? st.n_bands : 1;
+    const int nb = lsqt_state_bands(&st);
     double worst = 0;
     FILE *f = stdout;
     fprintf(f, "plan for %s: %d slices x %d directions", c->input, st.n_slices, st.n_wi);

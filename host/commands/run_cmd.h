@@ -54,19 +54,17 @@ typedef struct outputs {
 } outputs;
 
 /* Decides every output name (every band's) and checks them against each other and every
- * file the run reads (the input, its tables, --wi-file) (below: the state has slices from
- * below). Returns 0, or 2 (1 out of memory) with err filled and nothing to free. */
-int run_plan_outputs(const lsqt_cli *c, int from_stdin, const lsqt_assembly *a, int transmits, int below,
+ * file the run reads (the input, its tables, --wi-file). ST NULL: before the state is
+ * read (the names to lock). ST given (continued: read from an LSS): the sides follow the
+ * state, so --from-below notes are printed and a two-sided state plans again with the
+ * RAW files of the side from below (O freed first). Returns 0, or 2 (1 out of memory)
+ * with err filled and nothing to free. */
+int run_plan_outputs(const lsqt_cli *c, int from_stdin, const lsqt_assembly *a, const lsqt_state *st, int continued,
                      outputs *o, char *err, size_t errcap);
 void run_outputs_free(outputs *o);
 /* Locks the LSS the run writes (exclusive) and, for a shard, the state it reads (shared),
  * before that is read. Returns 0, or 1 (printed) when another run holds one. */
 int run_lock_states(const outputs *o, int quiet);
-/* --from-below: the sides follow the state (a continued LSS decides); a two-sided state
- * adds the RAW files of the side from below. Returns 0, or an exit status (printed; st
- * freed). */
-int run_plan_sides(const lsqt_cli *c, int from_stdin, const lsqt_assembly *a, lsqt_state *st, int continued,
-                   outputs *out, char *err, size_t errcap);
 /* Writes every output (lsqt_outputs_write): the LSS is lss_st (an interrupted RRSS
  * pilot's own state), the rest from st. Returns 0 or 1. */
 int run_write_outputs(const outputs *o, const lsqt_cli *c, const lsqt_state *st, const lsqt_state *lss_st,

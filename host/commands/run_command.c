@@ -77,7 +77,7 @@ static int read_assembly(const lsqt_cli *c, int from_stdin, lsqt_assembly *a)
     const char *slash = from_stdin ? NULL : strrchr(c->input, '/');
     snprintf(dir, sizeof dir, "%.*s", slash ? (int)(slash - c->input) + (slash == c->input) : 1,
              slash ? c->input : ".");
-    int prc = lsqt_parse_bands(text, len, from_stdin ? "<stdin>" : c->input, wl, n_wl, dir, a, &diag);
+    int prc = lsqt_parse(text, len, from_stdin ? "<stdin>" : c->input, wl, n_wl, dir, a, &diag);
     free(text);
     free(wl);
     if (!c->quiet)
@@ -270,7 +270,7 @@ lsqt_memory_shape g_run_shape;
 static int check_memory(const lsqt_cli *c, const lsqt_assembly *a, const lsqt_state *st)
 {
     const int pilot = st->stage == LSQT_STAGE_PILOT, rx = pilot ? (int)st->rx : c->rx;
-    lsqt_memory_shape m = {st->n_bands, pilot && rx ? st->n_slices / rx : st->n_slices, st->n_wi, 0, 1,
+    lsqt_memory_shape m = {lsqt_state_bands(st), pilot && rx ? st->n_slices / rx : st->n_slices, st->n_wi, 0, 1,
                            st->use_double, a->n_layers, 0};
     /* the paths per slice it holds at the end (0: a target error without -p, unbounded) */
     if (c->total_paths) m.paths = c->total_paths;
@@ -346,7 +346,7 @@ int run_command(const lsqt_cli *c)
     if (!rc) rc = read_wi_file(c, &a, &wi_dirs, &n_wi_dirs, &n_mirrored);
     outputs out;
     memset(&out, 0, sizeof out);
-    if (!rc && (rc = run_plan_outputs(c, from_stdin, &a, lsqt_assembly_transmits(&a), 0, &out, err, sizeof err)))
+    if (!rc && (rc = run_plan_outputs(c, from_stdin, &a, NULL, 0, &out, err, sizeof err)))
         fail(rc, "%s%s", err, "");
     if (!rc) rc = run_lock_states(&out, c->quiet) ? 1 : 0;
     lsqt_state st;
@@ -354,7 +354,10 @@ int run_command(const lsqt_cli *c)
     /* out.base: the state continued (a shard writes its own, out.f.path[LSQT_OUT_LSS]) */
     if (!rc) rc = run_open_state(&st, c, &a, out.base, wi_dirs, n_wi_dirs, n_mirrored, &continued);
     free(wi_dirs);
-    if (!rc) rc = run_plan_sides(c, from_stdin, &a, &st, continued, &out, err, sizeof err);
+    if (!rc && (rc = run_plan_outputs(c, from_stdin, &a, &st, continued, &out, err, sizeof err))) {
+        lsqt_state_free(&st);
+        fail(rc, "%s%s", err, "");
+    }
     if (!rc && (rc = check_memory(c, &a, &st))) lsqt_state_free(&st);
     else if (!rc && lsqt_state_pack_hist(&st, 0)) { /* many bands: histograms packed (state.h) */
         rc = fail(1, "out of memory packing the histograms%s%s", "", "");

@@ -95,8 +95,9 @@ static int state_names(const lsqt_cli *c, int from_stdin, outputs *o, char *err,
 
 void run_outputs_free(outputs *o) { lsqt_outputs_free(&o->f); }
 
-int run_plan_outputs(const lsqt_cli *c, int from_stdin, const lsqt_assembly *a, int transmits, int below,
-                     outputs *o, char *err, size_t errcap)
+/* The plan for a state that transmits or not, with slices from below or not. */
+static int plan_outputs(const lsqt_cli *c, int from_stdin, const lsqt_assembly *a, int transmits, int below,
+                        outputs *o, char *err, size_t errcap)
 {
     memset(o, 0, sizeof *o);
     o->f.n_bands = lsqt_assembly_bands(a), o->f.wl = a->wavelengths, o->f.hemi = c->only_hemispherical;
@@ -164,20 +165,17 @@ int run_write_outputs(const outputs *o, const lsqt_cli *c, const lsqt_state *st,
     return rc;
 }
 
-int run_plan_sides(const lsqt_cli *c, int from_stdin, const lsqt_assembly *a, lsqt_state *st, int continued,
-                   outputs *out, char *err, size_t errcap)
+int run_plan_outputs(const lsqt_cli *c, int from_stdin, const lsqt_assembly *a, const lsqt_state *st, int continued,
+                     outputs *o, char *err, size_t errcap)
 {
+    if (!st) return plan_outputs(c, from_stdin, a, lsqt_assembly_transmits(a), 0, o, err, errcap);
     const int below = lsqt_state_below_count(st) > 0;
     if (!c->quiet && c->from_below && !lsqt_assembly_transmits(a))
         fprintf(stderr, "note: --from-below: the stack transmits nothing, so no light from below reaches it; "
                         "only the slices from above are simulated\n");
     else if (!c->quiet && continued && below && !c->from_below) /* the other case is refused */
         fprintf(stderr, "note: the LSS has slices from below: both sides are continued\n");
-    if (below) run_outputs_free(out);
-    int rc = below ? run_plan_outputs(c, from_stdin, a, st->transmits, 1, out, err, errcap) : 0;
-    if (rc) {
-        lsqt_state_free(st);
-        fail(rc, "%s%s", err, "");
-    }
-    return rc;
+    if (!below) return 0; /* the plan made without the state stands */
+    run_outputs_free(o);
+    return plan_outputs(c, from_stdin, a, st->transmits, 1, o, err, errcap);
 }

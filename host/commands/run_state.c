@@ -22,7 +22,7 @@ int run_new_state(lsqt_state *st, const lsqt_cli *c, const lsqt_assembly *a, con
              : grid        ? lsqt_grid_wi_count(c->grid_ni, c->grid_nphi, lower)
              : wi_file     ? n_wi_file
                            : c->wi_count;
-    if (lsqt_state_init_bands(st, canonical, lsqt_assembly_hash(a), c->seed, n_slices, n_wi, lower,
+    if (lsqt_state_init(st, canonical, lsqt_assembly_hash(a), c->seed, n_slices, n_wi, lower,
                               lsqt_assembly_bands(a), a->wavelengths))
         return -1;
     st->use_double = c->use_double;

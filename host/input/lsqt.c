@@ -153,7 +153,7 @@ typedef struct parser {
     int n_pruned;
     lsqt_bands *bands; /* NULL: one band, numbers only */
     int band;          /* the band whose values are read */
-    /* A run with bands parses every band twice (lsqt_parse_bands): first a survey (no
+    /* A run with bands parses every band twice (lsqt_parse): first a survey (no
      * pruning, no rule on the bottom medium) that finds what every band shares, then each
      * band with the shared decisions. */
     int survey;
@@ -975,12 +975,6 @@ static int parse_lines(parser *P, const char *text, size_t len)
     return 0;
 }
 
-int lsqt_parse(const char *text, size_t len, const char *name, lsqt_assembly *out,
-               lsqt_diag *diag)
-{
-    return lsqt_parse_band(text, len, name, NULL, 0, out, diag);
-}
-
 /* One parse with the parser's settings (bands, survey, shared decisions) filled in. */
 static int parse_into(parser *P, const char *text, size_t len, const char *name, lsqt_assembly *out,
                       lsqt_diag *diag)
@@ -1093,8 +1087,8 @@ static void keep_tables(lsqt_bands *b, lsqt_assembly *a)
     b->n_tables = 0, b->table_paths = NULL, b->tables = NULL;
 }
 
-int lsqt_parse_bands(const char *text, size_t len, const char *name, const double *wl, int n_wl,
-                     const char *dir, lsqt_assembly *out, lsqt_diag *diag)
+int lsqt_parse(const char *text, size_t len, const char *name, const double *wl, int n_wl, const char *dir,
+               lsqt_assembly *out, lsqt_diag *diag)
 {
     if (out)
         memset(out, 0, sizeof *out); /* a failure leaves it empty */
@@ -1118,7 +1112,7 @@ int lsqt_parse_bands(const char *text, size_t len, const char *name, const doubl
         rc = lsqt_parse_band(text, len, name, &bands, 0, out, diag);
         keep_tables(&bands, rc ? NULL : out);
         /* one band at one wavelength keeps it (its RAW header, the JSON, the LSS) */
-        if (!rc && n_wl == 1 && (out->wavelengths = malloc(sizeof *out->wavelengths)) != NULL)
+        if (!rc && wl && n_wl == 1 && (out->wavelengths = malloc(sizeof *out->wavelengths)) != NULL)
             out->wavelengths[0] = wl[0];
         return rc;
     }

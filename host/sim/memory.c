@@ -28,7 +28,7 @@ static uint64_t rows_bytes(uint64_t rows, uint64_t w, uint64_t k)
 
 uint64_t lsqt_memory_tallies(int n_bands, int n_slices, int n_wi, int hist_slices, uint64_t paths)
 {
-    const uint64_t nb = n_bands > 1 ? (uint64_t)n_bands : 1, ns = (uint64_t)n_slices;
+    const uint64_t nb = (uint64_t)n_bands, ns = (uint64_t)n_slices;
     const uint64_t chunks = (paths + LSQT_CHUNK - 1) / LSQT_CHUNK, k = paths && chunks < LSQT_BATCHES ? chunks : LSQT_BATCHES;
     /* state.h: per band [slice][batch][n_wi] nee, [slice][batch][LSQT_T_COUNT] scalars,
      * [histogram][batch][LSQT_HIST_BINS] exit histograms */
@@ -57,7 +57,7 @@ static uint64_t packed_hist(uint64_t nb, uint64_t hist_slices, uint64_t paths)
 static void state_and_device(const lsqt_memory_shape *m, int n_slices, int hist_slices, uint64_t *state,
                              uint64_t *device)
 {
-    const uint64_t nb = m->n_bands > 1 ? (uint64_t)m->n_bands : 1;
+    const uint64_t nb = (uint64_t)m->n_bands;
     if (!hist_packs(nb, (uint64_t)hist_slices)) {
         *state = *device = lsqt_memory_tallies(m->n_bands, n_slices, m->n_wi, hist_slices, m->paths);
         return;
@@ -72,7 +72,7 @@ static void state_and_device(const lsqt_memory_shape *m, int n_slices, int hist_
  * a block of its own (the most there can be; session.c's upload). */
 static uint64_t device_tables(const lsqt_memory_shape *m, int n_slices)
 {
-    const uint64_t nb = m->n_bands > 1 ? (uint64_t)m->n_bands : 1, pad = (uint64_t)m->n_wi + 15;
+    const uint64_t nb = (uint64_t)m->n_bands, pad = (uint64_t)m->n_wi + 15;
     const uint64_t dsz = m->use_double ? 8 : 4, rows = (uint64_t)m->n_layers * LSQT_LAYER_TAB_ROWS + LSQT_MEDIA_TAB_ROWS;
     return nb * (uint64_t)n_slices * (rows + 3) * pad * dsz;
 }
@@ -81,7 +81,7 @@ lsqt_memory lsqt_memory_estimate(const lsqt_memory_shape *m)
 {
     lsqt_memory r;
     memset(&r, 0, sizeof r);
-    const uint64_t nb = m->n_bands > 1 ? (uint64_t)m->n_bands : 1, ns = (uint64_t)m->n_slices;
+    const uint64_t nb = (uint64_t)m->n_bands, ns = (uint64_t)m->n_slices;
     uint64_t st_tallies, dev_tallies;
     state_and_device(m, m->n_slices, m->n_slices, &st_tallies, &dev_tallies);
     r.state = st_tallies + ns * (uint64_t)m->n_wi * 16;

@@ -370,7 +370,7 @@ int lsqt_rrss_pilot(lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *
     const int n = st->n_wi, m = rx * n, ns = st->n_slices;
     info->candidates = m;
     /* slice s's candidate block j is launch slice s * rx + j */
-    if (lsqt_state_init_bands(ps, st->canonical, st->hash, st->seed, ns * rx, n, st->transmits, st->n_bands,
+    if (lsqt_state_init(ps, st->canonical, st->hash, st->seed, ns * rx, n, st->transmits, st->n_bands,
                               st->wavelengths)) {
         snprintf(err, errcap, "out of memory");
         return 1;
@@ -437,7 +437,7 @@ static int choose(const lsqt_state *ps, lsqt_state *used, lsqt_state *st, lsqt_r
 {
     const int rx = (int)ps->rx, n = ps->n_wi, m = rx * n, ns = ps->n_slices / rx;
     info->candidates = m;
-    if (lsqt_state_init_bands(st, ps->canonical, ps->hash, ps->seed, ns, n, ps->transmits, ps->n_bands,
+    if (lsqt_state_init(st, ps->canonical, ps->hash, ps->seed, ns, n, ps->transmits, ps->n_bands,
                               ps->wavelengths)) {
         snprintf(err, errcap, "out of memory");
         return 1;
@@ -456,7 +456,7 @@ static int choose(const lsqt_state *ps, lsqt_state *used, lsqt_state *st, lsqt_r
     double *f = calloc((size_t)m, sizeof *f);
     unsigned char *keep = calloc((size_t)m, 1);
     /* With bands, the choice is made on their sum: a direction bright in any band counts. */
-    const int nbands = ps->n_bands > 1 ? ps->n_bands : 1;
+    const int nbands = lsqt_state_bands(ps);
     lsqt_slice_est **est = calloc((size_t)nbands, sizeof *est);
     int rc = 1, have_est = est != NULL;
     for (int b = 0; have_est && b < nbands; b++) {

@@ -16,7 +16,7 @@ double lsqt_max_rel_err(const lsqt_state *st)
 {
     if (st->paths < LSQT_STOP_ERR_PATHS) return NAN;
     double m = 0.0;
-    for (int b = 0; b < (st->n_bands > 1 ? st->n_bands : 1); b++) {
+    for (int b = 0; b < lsqt_state_bands(st); b++) {
         const lsqt_state view = lsqt_state_band(st, b);
         lsqt_slice_est *est = lsqt_estimates(&view);
         if (!est) return NAN;

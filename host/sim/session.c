@@ -8,6 +8,7 @@
 #include <string.h>
 #include <sys/mman.h>
 
+#include "lsqt/below.h"
 #include "lsqt/tables.h"
 
 static cl_mem make_buffer(lsqt_context *cx, cl_mem_flags fl, size_t size, void *host, cl_int *e)
@@ -375,11 +376,10 @@ static int session_shape(lsqt_session *s, const lsqt_assembly *a, const lsqt_sta
     s->n_nee = lsqt_state_nee_count(st);
     s->n_scalars = lsqt_state_scalar_count(st);
     s->n_hist = (size_t)(st->n_slices / s->slice_group) * LSQT_BATCHES * LSQT_HIST_BINS; /* one a slice group */
-    /* One assembly serves one side: the slices from below run the mirrored one (below.h). */
+    /* One program serves one side: the slices from below are another lane (open_lanes). */
     for (int sl = 1; sl < st->n_slices; sl++)
         if ((st->slice_flags[sl] ^ st->slice_flags[0]) & LSQT_SLICE_BELOW) {
-            snprintf(err, errcap, "the state has slices from above and from below: run each side with its own "
-                                  "assembly (lsqt_simulate_sides)");
+            snprintf(err, errcap, "a lane has slices from above and from below");
             return 1;
         }
     int line = 0;
@@ -516,12 +516,106 @@ int lsqt_session_open_taking(lsqt_session *s, lsqt_context *cx, const lsqt_assem
     return open_grouped(s, cx, a, st, 1, extra_options, local_size, verbose, st, err, errcap);
 }
 
+static int open_lane(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, int slice_group,
+                     const char *extra_options, size_t local_size, int verbose, lsqt_state *take, char *err,
+                     size_t errcap);
+
+/* A two-sided state's lanes: each side's part of the state, the state's slice of each of
+ * the side's slices (in order), and the mirrored assembly of the lane from below. */
+typedef struct lsqt_lanes {
+    lsqt_state side[2];
+    int *at[2];
+    lsqt_assembly mirror;
+} lsqt_lanes;
+
+/* at[] for ST's slices (0 done, -1 out of memory). */
+static int lanes_index(lsqt_lanes *sd, const lsqt_state *st)
+{
+    int k[2] = {0, 0};
+    for (int i = 0; i < 2; i++) {
+        free(sd->at[i]);
+        sd->at[i] = malloc(((size_t)st->n_slices + 1) * sizeof *sd->at[i]);
+        if (!sd->at[i]) return -1;
+    }
+    for (int sl = 0; sl < st->n_slices; sl++) {
+        const int d = (st->slice_flags[sl] & LSQT_SLICE_BELOW) != 0;
+        sd->at[d][k[d]++] = sl;
+    }
+    return 0;
+}
+
+static void lanes_free(lsqt_lanes *sd)
+{
+    if (!sd) return;
+    for (int i = 0; i < 2; i++) lsqt_state_free(&sd->side[i]), free(sd->at[i]);
+    lsqt_assembly_free(&sd->mirror);
+    free(sd);
+}
+
+/* A two-sided ST's session: S the lane from above on A, s->below the lane from below on
+ * A mirrored, each on its side of ST (split off: lsqt_state_split_by_side). With TAKE, ST's
+ * tallies are given back (the sides hold them) and each lane takes its side's. */
+static int open_lanes(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, int slice_group,
+                      const char *extra_options, size_t local_size, int verbose, lsqt_state *take, char *err,
+                      size_t errcap)
+{
+    memset(s, 0, sizeof *s);
+    lsqt_lanes *sd = calloc(1, sizeof *sd);
+    lsqt_session *dn = calloc(1, sizeof *dn);
+    if (!sd || !dn) {
+        free(sd), free(dn);
+        snprintf(err, errcap, "out of memory");
+        return 1;
+    }
+    if (lsqt_assembly_mirror(a, &sd->mirror, err, errcap)) {
+        free(sd), free(dn);
+        return 1;
+    }
+    int rc = 0;
+    if (lsqt_state_split_by_side(st, &sd->side[0], &sd->side[1])) {
+        lsqt_assembly_free(&sd->mirror);
+        free(sd), free(dn);
+        snprintf(err, errcap, "out of memory");
+        return 1;
+    }
+    if (lanes_index(sd, st)) {
+        snprintf(err, errcap, "out of memory");
+        rc = 1;
+    }
+    if (!rc && take) lsqt_state_drop_tallies(st);
+    if (!rc)
+        rc = open_lane(s, cx, a, &sd->side[0], slice_group, extra_options, local_size, verbose,
+                       take ? &sd->side[0] : NULL, err, errcap);
+    if (!rc && open_lane(dn, cx, &sd->mirror, &sd->side[1], slice_group, extra_options, local_size, verbose,
+                         take ? &sd->side[1] : NULL, err, errcap)) {
+        lsqt_session_close(s);
+        rc = 1;
+    }
+    if (rc) {
+        free(dn);
+        lanes_free(sd);
+        return 1;
+    }
+    s->below = dn, s->lanes = sd;
+    return 0;
+}
+
 static int open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st,
                         int slice_group, const char *extra_options, size_t local_size, int verbose, lsqt_state *take,
                         char *err, size_t errcap)
 {
+    if (lsqt_state_below_count(st))
+        return open_lanes(s, cx, a, st, slice_group, extra_options, local_size, verbose, take, err, errcap);
+    return open_lane(s, cx, a, st, slice_group, extra_options, local_size, verbose, take, err, errcap);
+}
+
+/* One side's session: its band blocks. */
+static int open_lane(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, int slice_group,
+                     const char *extra_options, size_t local_size, int verbose, lsqt_state *take, char *err,
+                     size_t errcap)
+{
     const int nb = lsqt_assembly_bands(a);
-    if (nb != (st->n_bands > 1 ? st->n_bands : 1)) {
+    if (nb != lsqt_state_bands(st)) {
         snprintf(err, errcap, "the assembly has %d bands and the state %d", nb, st->n_bands);
         return 1;
     }
@@ -715,11 +809,12 @@ static int stream_hist(lsqt_session *s, uint64_t begin, uint64_t end, int in, ch
     return rc || e != CL_SUCCESS;
 }
 
-int lsqt_session_launch(lsqt_session *s, uint64_t begin, uint64_t end, char *err, size_t errcap)
+/* Paths [begin, end) of one lane (every band block of one side). */
+static int launch_lane(lsqt_session *s, uint64_t begin, uint64_t end, char *err, size_t errcap)
 {
     for (int b = 1; b < s->n_blocks; b++) {
         swap_records(s, &s->blocks[b - 1]);
-        const int rc = lsqt_session_launch(&s->blocks[b - 1], begin, end, err, errcap);
+        const int rc = launch_lane(&s->blocks[b - 1], begin, end, err, errcap);
         swap_records(s, &s->blocks[b - 1]);
         if (rc) return 1;
     }
@@ -739,6 +834,11 @@ int lsqt_session_launch(lsqt_session *s, uint64_t begin, uint64_t end, char *err
     return s->hist_home && stream_hist(s, begin, end, 0, err, errcap);
 }
 
+int lsqt_session_launch(lsqt_session *s, uint64_t begin, uint64_t end, char *err, size_t errcap)
+{
+    return launch_lane(s, begin, end, err, errcap) || (s->below && launch_lane(s->below, begin, end, err, errcap));
+}
+
 static int read_block(lsqt_session *s, lsqt_state *st, int release, char *err, size_t errcap);
 
 /* A block's tally buffer I released (and a CPU device's pages unmapped). */
@@ -752,7 +852,7 @@ static void release_tally(lsqt_session *s, int i)
     s->host[i] = NULL;
 }
 
-int lsqt_session_read(lsqt_session *s, lsqt_state *st, int release, char *err, size_t errcap)
+static int read_lane(lsqt_session *s, lsqt_state *st, int release, char *err, size_t errcap)
 {
     for (int b = 0; b < (s->n_blocks > 1 ? s->n_blocks : 1); b++) {
         lsqt_session *blk = b ? &s->blocks[b - 1] : s;
@@ -761,6 +861,25 @@ int lsqt_session_read(lsqt_session *s, lsqt_state *st, int release, char *err, s
             return 1;
         }
         if (read_block(blk, st, release, err, errcap)) return 1;
+    }
+    return 0;
+}
+
+/* Each lane into its side, the sides joined into ST (which is then in the join's order:
+ * above's slices first). */
+int lsqt_session_read(lsqt_session *s, lsqt_state *st, int release, char *err, size_t errcap)
+{
+    lsqt_lanes *sd = s->lanes;
+    if (!sd) return read_lane(s, st, release, err, errcap);
+    lsqt_state both;
+    if (read_lane(s, &sd->side[0], release, err, errcap) || read_lane(s->below, &sd->side[1], release, err, errcap) ||
+        lsqt_state_join_by_side(&sd->side[0], &sd->side[1], &both, err, errcap))
+        return 1;
+    lsqt_state_free(st);
+    *st = both;
+    if (lanes_index(sd, st)) {
+        snprintf(err, errcap, "out of memory");
+        return 1;
     }
     return 0;
 }
@@ -797,10 +916,10 @@ static int read_block(lsqt_session *s, lsqt_state *st, int release, char *err, s
     return 0;
 }
 
-int lsqt_session_set_directions(lsqt_session *s, const lsqt_state *st, char *err, size_t errcap)
+static int set_lane_directions(lsqt_session *s, const lsqt_state *st, char *err, size_t errcap)
 {
     for (int b = 1; b < s->n_blocks; b++)
-        if (lsqt_session_set_directions(&s->blocks[b - 1], st, err, errcap)) return 1;
+        if (set_lane_directions(&s->blocks[b - 1], st, err, errcap)) return 1;
     size_t bytes = 0;
     void *dirs = directions_of(st, s->slice_group, s->vw, &bytes);
     if (!dirs) {
@@ -821,7 +940,44 @@ int lsqt_session_set_directions(lsqt_session *s, const lsqt_state *st, char *err
     return 0;
 }
 
+/* Each side's directions from ST's (they are joined from the sides at a read). */
+int lsqt_session_set_directions(lsqt_session *s, const lsqt_state *st, char *err, size_t errcap)
+{
+    lsqt_lanes *sd = s->lanes;
+    if (!sd) return set_lane_directions(s, st, err, errcap);
+    const size_t nw = (size_t)st->n_wi * 4;
+    for (int d = 0; d < 2; d++)
+        for (int i = 0; i < sd->side[d].n_slices; i++)
+            memcpy(sd->side[d].wi + (size_t)i * nw, st->wi + (size_t)sd->at[d][i] * nw, nw * sizeof *st->wi);
+    return set_lane_directions(s, &sd->side[0], err, errcap) || set_lane_directions(s->below, &sd->side[1], err, errcap);
+}
+
+static int lane_exits(lsqt_session *s, uint64_t begin, uint32_t n, float *out, char *err, size_t errcap);
+
+/* Each lane's exits, put at its simulated slices' places among ST's. */
 int lsqt_session_exits(lsqt_session *s, uint64_t begin, uint32_t n, float *out, char *err, size_t errcap)
+{
+    lsqt_lanes *sd = s->lanes;
+    if (!sd) return lane_exits(s, begin, n, out, err, errcap);
+    const size_t per = (size_t)n * 4, g = (size_t)s->slice_group;
+    for (int d = 0; d < 2; d++) {
+        lsqt_session *lane = d ? s->below : s;
+        const size_t n_sim = (size_t)(lane->n_slices / lane->slice_group);
+        float *part = malloc((n_sim ? n_sim : 1) * per * sizeof *part);
+        if (!part) {
+            snprintf(err, errcap, "out of memory");
+            return 1;
+        }
+        const int rc = lane_exits(lane, begin, n, part, err, errcap);
+        for (size_t i = 0; !rc && i < n_sim; i++)
+            memcpy(out + (size_t)sd->at[d][i * g] / g * per, part + i * per, per * sizeof *part);
+        free(part);
+        if (rc) return 1;
+    }
+    return 0;
+}
+
+static int lane_exits(lsqt_session *s, uint64_t begin, uint32_t n, float *out, char *err, size_t errcap)
 {
     const size_t n_sim = (size_t)(s->n_slices / s->slice_group), count = n_sim * n * 4;
     const size_t sz = s->use_double ? sizeof(double) : sizeof(float);
@@ -859,6 +1015,11 @@ int lsqt_session_exits(lsqt_session *s, uint64_t begin, uint32_t n, float *out, 
 
 void lsqt_session_close(lsqt_session *s)
 {
+    lsqt_session *below = s->below;
+    lsqt_lanes *lanes = s->lanes; /* freed after the lanes: their packed histograms' home */
+    s->below = NULL, s->lanes = NULL;
+    if (below) lsqt_session_close(below);
+    free(below);
     for (int b = 1; b < s->n_blocks; b++) lsqt_session_close(&s->blocks[b - 1]);
     free(s->blocks);
     cl_mem *all[] = {&s->scene, &s->media, &s->layers, &s->wo, &s->wi, &s->tab,  &s->nee,
@@ -873,4 +1034,5 @@ void lsqt_session_close(lsqt_session *s)
     for (int i = 0; i < 3; i++) /* (every command that used them has finished) */
         if (s->host[i]) munmap(s->host[i], s->host_bytes[i]);
     memset(s, 0, sizeof *s);
+    lanes_free(lanes);
 }

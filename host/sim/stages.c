@@ -81,12 +81,12 @@ static int shard_pilot(const stage_ctx *k, lsqt_state *st, int resumed, lsqt_sta
     int rc;
     if (resumed) {
         o->ps = *prev;
-        rc = lsqt_rrss_pilot_continue_sides(k->cx, k->a, &o->ps, resume, o->part_hi - resume, k->so, &o->rinfo, err,
-                                            errcap);
+        rc = lsqt_rrss_pilot_continue(k->cx, k->a, &o->ps, resume, o->part_hi - resume, k->so, &o->rinfo, err,
+                                      errcap);
         if (rc) lsqt_state_free(&o->ps);
     } else {
-        rc = lsqt_rrss_pilot_sides(k->cx, k->a, st, p->rx, o->pilot, p->paths, o->part_lo, o->part_hi - o->part_lo,
-                                   k->so, &o->ps, &o->rinfo, err, errcap);
+        rc = lsqt_rrss_pilot(k->cx, k->a, st, p->rx, o->pilot, p->paths, o->part_lo, o->part_hi - o->part_lo, k->so,
+                             &o->ps, &o->rinfo, err, errcap);
     }
     if (!rc) {
         lsqt_state_free(st);
@@ -131,7 +131,7 @@ static int run_shard(const stage_ctx *k, lsqt_state *st, const char *own_lss, ls
     } else {
         lsqt_state_clear_tallies(st);
     }
-    int rc = lsqt_simulate_range_sides(k->cx, k->a, st, resume, o->part_hi - resume, k->so, &o->stats, err, errcap);
+    int rc = lsqt_simulate_range(k->cx, k->a, st, resume, o->part_hi - resume, k->so, &o->stats, err, errcap);
     st->span_end = o->run_hi;
     return rc;
 }
@@ -159,8 +159,8 @@ static int resume_pilot(const stage_ctx *k, lsqt_state *st, int *finish_pilot, l
         snprintf(err, errcap, "'%s' does not hold one range [0, h) of its RRSS pilot", k->lss_path);
         return 1;
     }
-    return lsqt_rrss_pilot_continue_sides(k->cx, k->a, &o->ps, k->held, o->ps.pilot_paths - k->held, k->so, &o->rinfo,
-                                          err, errcap);
+    return lsqt_rrss_pilot_continue(k->cx, k->a, &o->ps, k->held, o->ps.pilot_paths - k->held, k->so, &o->rinfo, err,
+                                    errcap);
 }
 
 /* The choice of directions from the pilot o->ps into st, and the paths left to add. An
@@ -198,8 +198,8 @@ static int run_whole(const stage_ctx *k, lsqt_state *st, lsqt_stages *o, char *e
     uint64_t add = k->add;
     int rc = 0, finish_pilot = 1;
     if (k->fresh_rrss) {
-        rc = lsqt_rrss_pilot_sides(k->cx, k->a, st, p->rx, o->pilot, add == UINT64_MAX ? o->pilot : p->paths, 0,
-                                   o->pilot, k->so, &o->ps, &o->rinfo, err, errcap);
+        rc = lsqt_rrss_pilot(k->cx, k->a, st, p->rx, o->pilot, add == UINT64_MAX ? o->pilot : p->paths, 0, o->pilot,
+                             k->so, &o->ps, &o->rinfo, err, errcap);
         o->have_ps = !rc;
     } else if (k->pilot_base) {
         rc = resume_pilot(k, st, &finish_pilot, o, err, errcap);
@@ -213,7 +213,7 @@ static int run_whole(const stage_ctx *k, lsqt_state *st, lsqt_stages *o, char *e
         lsqt_state_free(&o->ps);
         o->have_ps = 0;
     }
-    if (!rc && !o->rinfo.interrupted) rc = lsqt_simulate_sides(k->cx, k->a, st, add, &ro, &o->stats, err, errcap);
+    if (!rc && !o->rinfo.interrupted) rc = lsqt_simulate(k->cx, k->a, st, add, &ro, &o->stats, err, errcap);
     o->stats.seconds += o->rinfo.seconds;
     o->stats.paths_added = st->paths - paths_before;
     if (o->rinfo.interrupted)
@@ -247,8 +247,8 @@ int lsqt_run_stages(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, co
         if (o->pilot < 1) o->pilot = 1;
         if (o->pilot > p->paths) o->pilot = p->paths;
     }
-    /* (every run goes through the _sides functions: a state with slices from below runs
-     * each side with its own assembly on the same paths, below.h) */
+    /* (a state with slices from below runs each side as a lane of the same session, on
+     * the same paths: session.h) */
     int rc = p->shard_n ? run_shard(&k, st, own_lss, o, err, errcap) : run_whole(&k, st, o, err, errcap);
     if (!rc && !p->quiet) lsqt_rrss_notes(stderr, &o->rinfo);
     return rc;

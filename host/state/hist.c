@@ -10,7 +10,7 @@
  * tally (the zero runs between them are shorter than the tallies they stand for). */
 #define PACK_MAX ((size_t)LSQT_HIST_BINS * 17 + 16)
 
-static size_t bands_of(const lsqt_state *st) { return st->n_bands > 1 ? (size_t)st->n_bands : 1; }
+static size_t bands_of(const lsqt_state *st) { return (size_t)lsqt_state_bands(st); }
 static size_t group_of(const lsqt_state *st) { return st->hist_group > 1 ? st->hist_group : 1; }
 static size_t hists_of(const lsqt_state *st) { return (size_t)st->n_slices / group_of(st); }
 

@@ -545,7 +545,7 @@ static int read_state(rbuf *r, const lss_header *h, lsqt_state *st, char *err, s
         bad_wl |= !(wl[b] > 0 && wl[b] <= 1e6) || (b && !(wl[b] > wl[b - 1]));
     }
     int rc = (h->named && !wl) ? -1
-                               : lsqt_state_init_bands(st, text, h->hash, h->seed, (int)h->n_slices, (int)h->n_wi,
+                               : lsqt_state_init(st, text, h->hash, h->seed, (int)h->n_slices, (int)h->n_wi,
                                                        (int)h->transmits, (int)h->n_bands, wl);
     free(text);
     free(wl);

@@ -173,7 +173,7 @@ static int write_held(const lsqt_out_file *f, const lsqt_outputs *o, const lsqt_
     const int b = f->kind == LSQT_OUT_RAW_B || f->kind == LSQT_OUT_RAW_BT, two = lsqt_state_below_count(st) > 0;
     const lsqt_state *rs = two ? &sides[b] : st;
     const lsqt_slice_est *re = (two ? side_est[b] : est) + (size_t)f->band * (size_t)rs->n_slices;
-    const lsqt_state view = o->n_bands > 1 ? lsqt_state_band(rs, f->band) : *rs;
+    const lsqt_state view = lsqt_state_bands(rs) > 1 ? lsqt_state_band(rs, f->band) : *rs;
     const int mode = f->kind == LSQT_OUT_RAW_T || f->kind == LSQT_OUT_RAW_BT ? LSQT_RAW_TRANSMIT
                    : o->hemi                                                ? LSQT_RAW_REFLECT
                                                                             : LSQT_RAW_ALL;
@@ -216,7 +216,7 @@ int lsqt_outputs_write(const lsqt_outputs *o, const lsqt_state *st, const lsqt_s
     const int two = lsqt_state_below_count(st) > 0;
     memset(sides, 0, sizeof sides);
     char *done = calloc((size_t)o->n_files + 1, 1); /* per file: 1 written, 2 failed */
-    if (!done || (two && (lsqt_state_split_sides(st, &sides[0], &sides[1]) || !(side_est[0] = lsqt_estimates(&sides[0])) ||
+    if (!done || (two && (lsqt_state_split_by_side(st, &sides[0], &sides[1]) || !(side_est[0] = lsqt_estimates(&sides[0])) ||
                           !(side_est[1] = lsqt_estimates(&sides[1]))))) {
         free_sides(sides, side_est);
         free(done);

@@ -28,7 +28,7 @@ void lsqt_report_summary(FILE *f, const lsqt_state *st, const lsqt_slice_est *es
     fprintf(f, "device: %s%s\n", ri->device, st->use_double ? " (double)" : "");
     fprintf(f, "paths: %llu added per slice (%llu per slice in all) in %.3g s: %.4g paths/s\n",
             ri->paths_added, (unsigned long long)st->paths, ri->seconds, ri->paths_per_second);
-    const int nbands = st->n_bands > 1 ? st->n_bands : 1;
+    const int nbands = lsqt_state_bands(st);
     /* Many bands: one line a band (a spectrum of 32 printed 452 lines); -v, or lsqt-cl
      * info, gives every band's table. */
     const int compact = nbands > LSQT_SUMMARY_BANDS && !ri->all_bands;
@@ -117,7 +117,7 @@ static void json_est(FILE *f, const char *name, lsqt_est v)
 
 void lsqt_json_bands(FILE *f, const lsqt_state *st)
 {
-    fprintf(f, ",\n \"bands\": %d, \"wavelengths\": ", st->n_bands > 1 ? st->n_bands : 1);
+    fprintf(f, ",\n \"bands\": %d, \"wavelengths\": ", lsqt_state_bands(st));
     if (!st->wavelengths) fprintf(f, "null");
     for (int b = 0; st->wavelengths && b < st->n_bands; b++) fprintf(f, "%s%.17g", b ? ", " : "[", st->wavelengths[b]);
     if (st->wavelengths) fprintf(f, "]");
@@ -147,7 +147,7 @@ static void json_band_list(FILE *f, const char *name, const lsqt_slice_est *e, i
 void lsqt_json_slice_fields(FILE *f, const lsqt_state *st, const lsqt_slice_est *e, int s, int detail)
 {
     /* with bands, e[b * n_slices] is band b's estimate of this slice */
-    const int nb = st->n_bands > 1 ? st->n_bands : 1;
+    const int nb = lsqt_state_bands(st);
     const size_t ns = (size_t)st->n_slices;
     fprintf(f, "{\"theta_o\": %.17g, \"paths\": %llu", e->theta_o, (unsigned long long)e->paths);
     if (nb == 1) {

@@ -10,7 +10,10 @@
 #include <sys/mman.h>
 #endif
 
-static size_t bands_of(const lsqt_state *st) { return st->n_bands > 1 ? (size_t)st->n_bands : 1; }
+static size_t bands_of(const lsqt_state *st) { return (size_t)lsqt_state_bands(st); }
+
+/* A zeroed state (0) and a one-band state (1) both have one band's tallies. */
+int lsqt_state_bands(const lsqt_state *st) { return st->n_bands > 1 ? st->n_bands : 1; }
 
 /* One band's counts. */
 static size_t nee_per_band(const lsqt_state *st) { return (size_t)st->n_slices * LSQT_BATCHES * (size_t)st->n_wi; }
@@ -75,14 +78,8 @@ int lsqt_state_copy_slice_tallies(lsqt_state *dst, int ds, const lsqt_state *src
     return lsqt_state_copy_hist(dst, ds, src, ss);
 }
 
-int lsqt_state_init(lsqt_state *st, const char *canonical, uint64_t hash, uint64_t seed,
-                    int n_slices, int n_wi, int transmits)
-{
-    return lsqt_state_init_bands(st, canonical, hash, seed, n_slices, n_wi, transmits, 1, NULL);
-}
-
-int lsqt_state_init_bands(lsqt_state *st, const char *canonical, uint64_t hash, uint64_t seed, int n_slices,
-                          int n_wi, int transmits, int n_bands, const double *wl)
+int lsqt_state_init(lsqt_state *st, const char *canonical, uint64_t hash, uint64_t seed, int n_slices, int n_wi,
+                    int transmits, int n_bands, const double *wl)
 {
     memset(st, 0, sizeof *st);
     st->n_bands = n_bands > 1 ? n_bands : 1;

@@ -96,7 +96,7 @@ static void band_estimates(const lsqt_state *st, lsqt_slice_est *out, lsqt_est *
 
 lsqt_slice_est *lsqt_estimates(const lsqt_state *st)
 {
-    const size_t nb = st->n_bands > 1 ? (size_t)st->n_bands : 1, ns = (size_t)st->n_slices;
+    const size_t nb = (size_t)lsqt_state_bands(st), ns = (size_t)st->n_slices;
     lsqt_slice_est *out = calloc(nb * ns + 1, sizeof *out);
     /* one block holds every f; out[0].f is its start (lsqt_estimates_free) */
     lsqt_est *f = calloc(nb * ns * (size_t)st->n_wi + 1, sizeof *f);

@@ -58,27 +58,24 @@ typedef struct lsqt_diag {
     char notes[LSQT_DIAG_MAX_NOTES][256];
 } lsqt_diag;
 
-/* Parse and validate LSQT text (need not be NUL terminated). `name` is used in messages
- * ("file.lsqt:3: ..."). Returns 0 on success; on error returns 2 and fills diag->error,
- * leaving *out empty. Applies every rule of the LSQT language (docs/guide.md) including pruning (with notes). */
-int lsqt_parse(const char *text, size_t len, const char *name, lsqt_assembly *out,
-               lsqt_diag *diag);
+/* Parses and validates LSQT text (need not be NUL terminated). `name` is used in messages
+ * ("file.lsqt:3: ..."). Every rule of the LSQT language (docs/guide.md) applies, pruning
+ * included (with notes). The bands: wavelengths wl (n_wl of them, nm, increasing) or, wl
+ * NULL, n_wl 1 for one band (a comma list is refused) or 0 (the first comma list sets the
+ * band count); relative @FILE tables read from dir. One band gives a one-band assembly;
+ * more give every band's assembly (n_bands, band[]), each parsed and checked with
+ * lsqt_parse_band, pruned where every band is stopped (notes are band 1's). Returns 0, or
+ * 2 with diag->error filled and *out left empty. */
+int lsqt_parse(const char *text, size_t len, const char *name, const double *wl, int n_wl, const char *dir,
+               lsqt_assembly *out, lsqt_diag *diag);
 
-/* The same for band `band` of a run with bands (lsqt/bands.h): a number key may then be a
+/* lsqt_parse of band `band` alone, for a run with bands (lsqt/bands.h): a number key may then be a
  * comma list (one value per band) or @FILE (a table, interpolated at the band's
  * wavelength), and this takes band `band`'s value; every rule holds per band, and an error
- * names the band. bands NULL is lsqt_parse. */
+ * names the band. bands NULL is one band, where a list is refused. */
 struct lsqt_bands;
 int lsqt_parse_band(const char *text, size_t len, const char *name, struct lsqt_bands *bands, int band,
                     lsqt_assembly *out, lsqt_diag *diag);
-
-/* The bands: wavelengths wl (n_wl of them, nm, increasing; 0 when --wavelengths is not
- * given, and the first comma list then sets the band count), relative @FILE tables read
- * from dir. One band gives a one-band assembly, as lsqt_parse; more give every band's
- * assembly (n_bands, band[]), each parsed and checked with lsqt_parse_band, pruned where
- * every band is stopped. Notes are band 1's. Returns 0 or 2 (diag). */
-int lsqt_parse_bands(const char *text, size_t len, const char *name, const double *wl, int n_wl,
-                     const char *dir, lsqt_assembly *out, lsqt_diag *diag);
 
 /* Joins n one-band assemblies of the same stack (moved into out->band; not freed) and a
  * copy of wl (NULL: unnamed) into one with bands. Returns 0, or 2 out of memory (each
@@ -94,7 +91,7 @@ void lsqt_assembly_free(lsqt_assembly *a);
 /* Canonical text of the assembly: one line per medium/layer, seed model names, every
  * key written with %.17g, so that equal assemblies give equal text. With bands, a first
  * line "# bands N: W1,W2,... nm" (or "# bands N") and a comma list wherever the bands'
- * values differ, which lsqt_parse_bands reads back. Returns the length
+ * values differ, which lsqt_parse reads back. Returns the length
  * it needs (excluding NUL); writes at most cap bytes including the NUL. */
 size_t lsqt_assembly_canonical(const lsqt_assembly *a, char *buf, size_t cap);
 

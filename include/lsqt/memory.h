@@ -15,7 +15,7 @@ extern "C" {
 #endif
 
 typedef struct lsqt_memory_shape {
-    int n_bands;    /* wavelength bands (1 or more) */
+    int n_bands;    /* wavelength bands (1 or more: lsqt_state_bands) */
     int n_slices;   /* slices of the state (both sides for --from-below) */
     int n_wi;       /* incident directions per slice */
     int pilot_rx;   /* a fresh RRSS pilot: its candidates per direction (-rx); 0: no pilot */
@@ -36,8 +36,8 @@ typedef struct lsqt_memory {
                        * state + device + extra */
 } lsqt_memory;
 
-/* Bytes of the tallies of a state of this many bands, slices and directions, with
- * hist_slices exit histograms per band (n_slices; a pilot's slices share theirs), that
+/* Bytes of the tallies of a state of this many bands (1 or more), slices and directions,
+ * with hist_slices exit histograms per band (n_slices; a pilot's slices share theirs), that
  * can be resident when it holds PATHS per slice (0: every batch; then all of them, the
  * allocation's size). */
 uint64_t lsqt_memory_tallies(int n_bands, int n_slices, int n_wi, int hist_slices, uint64_t paths);

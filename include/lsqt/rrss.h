@@ -48,6 +48,7 @@ int lsqt_rrss(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, int rx, 
  *    directions with their pilot tallies, PS's ranges, pilot_paths = PS's paths;
  *  - lsqt_rrss_choose_using the same from a PS it uses up: each slice's candidate tallies
  *    are zeroed and their pages given back once copied (PS is only to be freed then).
+ * A two-sided ST or PS (below.h) runs both sides' candidates and pilot on the same paths.
  * Each returns 0, or 1 with err filled. */
 int lsqt_rrss_pilot(lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *st, int rx, uint64_t pilot_total,
                     uint64_t run_paths, uint64_t begin, uint64_t n_paths, const lsqt_sim_opts *o, lsqt_state *ps,

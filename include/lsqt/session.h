@@ -57,6 +57,12 @@ typedef struct lsqt_session {
      * program. A launch runs every block over the same path indices. */
     int n_blocks;
     struct lsqt_session *blocks;
+    /* A two-sided state (below.h): this session is the lane of its slices from above and
+     * *below the lane of those from below, on the mirrored assembly; each lane runs its
+     * side of the state (held in lanes, session.c), and a launch, read, exits or new
+     * directions serve both lanes, on the same paths. NULL for a one-sided state. */
+    struct lsqt_session *below;
+    struct lsqt_lanes *lanes;
 } lsqt_session;
 
 /* The vector widths (LSQT_VW) of the two code paths by default (session.c says why). */
@@ -71,7 +77,9 @@ int lsqt_kernel_options(const lsqt_assembly *a, int n_wi, int group, int vw, int
                         int int64_atomics, char *opt, size_t cap);
 
 /* Builds the program for assembly A and state ST (its precision and direction count),
- * uploads the tables, directions and ST's tallies, and fills the direction tables.
+ * uploads the tables, directions and ST's tallies, and fills the direction tables. A
+ * state with slices from below gets a lane per side (A mirrored for below); its reads
+ * then give ST both sides joined (lsqt_state_join_by_side: above's slices first).
  * extra_options: appended to the build options (tests, tuning); local_size 0 = automatic.
  * Returns 0, or 1 with err filled (a build log, if any, already printed to stderr). */
 int lsqt_session_open(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st,

@@ -50,7 +50,9 @@ typedef struct lsqt_sim_stats {
 } lsqt_sim_stats;
 
 /* Returns 0, or 1 with err filled (build log, if any, already printed to stderr). Models
- * the kernels do not implement yet are refused before anything runs. */
+ * the kernels do not implement yet are refused before anything runs. A two-sided ST
+ * (below.h) runs both sides on the same paths, A mirrored for below (the session's lanes),
+ * and comes back with its slices from above first. */
 int lsqt_simulate(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, uint64_t add_paths,
                   const lsqt_sim_opts *o, lsqt_sim_stats *stats, char *err, size_t errcap);
 

@@ -63,12 +63,13 @@ enum { LSQT_DIRS_SPREAD = 0, LSQT_DIRS_RRSS = 1, LSQT_DIRS_FILE = 2, LSQT_DIRS_G
 enum { LSQT_STAGE_RUN = 0, LSQT_STAGE_PILOT = 1 };
 enum { LSQT_SLICE_BELOW = 1u }; /* light enters from the bottom medium */
 
-/* Allocates zeroed tallies for the given shape, one band; copies canonical. Returns 0 or -1. */
-int lsqt_state_init(lsqt_state *st, const char *canonical, uint64_t hash, uint64_t seed,
-                    int n_slices, int n_wi, int transmits);
-/* The same with n_bands bands (wl: their wavelengths, copied, or NULL). */
-int lsqt_state_init_bands(lsqt_state *st, const char *canonical, uint64_t hash, uint64_t seed, int n_slices,
-                          int n_wi, int transmits, int n_bands, const double *wl);
+/* Allocates zeroed tallies for the given shape and n_bands bands (1: one; wl their
+ * wavelengths, copied, or NULL); copies canonical. Returns 0 or -1. */
+int lsqt_state_init(lsqt_state *st, const char *canonical, uint64_t hash, uint64_t seed, int n_slices, int n_wi,
+                    int transmits, int n_bands, const double *wl);
+/* ST's band count, at least 1 (n_bands is stored as it is read: an LSS before bands, or
+ * a zeroed state, has 0). */
+int lsqt_state_bands(const lsqt_state *st);
 /* Band b of ST as a one-band state: the same fields, its tallies (and its wavelength, if
  * any) pointing into ST's (not to be freed; valid while ST is). */
 lsqt_state lsqt_state_band(const lsqt_state *st, int b);

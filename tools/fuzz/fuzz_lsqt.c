@@ -1,6 +1,6 @@
 /* libFuzzer target for the LSQT parser: any input must parse or fail cleanly, and what
  * parses must write canonical text that parses back to the same canonical text. Comma
- * lists set bands (lsqt_parse_bands without wavelengths), so every band's parse runs too. */
+ * lists set bands (lsqt_parse without wavelengths), so every band's parse runs too. */
 #include "lsqt/assembly.h"
 
 #include <stdint.h>
@@ -25,7 +25,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     lsqt_assembly a, b;
     lsqt_diag diag;
-    int rc = lsqt_parse_bands((const char *)data, size, "fuzz", NULL, 0, ".", &a, &diag);
+    int rc = lsqt_parse((const char *)data, size, "fuzz", NULL, 0, ".", &a, &diag);
     if (rc != 0) {
         /* a failure leaves nothing behind and always says why */
         if (rc != 2 || a.n_layers != 0 || a.layers || a.media || !diag.error[0])
@@ -37,7 +37,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 
     size_t n1, n2;
     char *t1 = canonical(&a, &n1);
-    if (lsqt_parse_bands(t1, n1, "canonical", NULL, 0, ".", &b, &diag) != 0) {
+    if (lsqt_parse(t1, n1, "canonical", NULL, 0, ".", &b, &diag) != 0) {
         fprintf(stderr, "canonical text does not parse: %s\n%s", diag.error, t1);
         abort();
     }

@@ -253,7 +253,7 @@ struct Colour {
 Colour colour_of(const lsqt_state &st, const Options &o, char *err, size_t cap)
 {
     Colour c;
-    const int n = st.n_bands > 1 ? st.n_bands : 1;
+    const int n = lsqt_state_bands(&st);
     char lab[32], buf[160];
     if (o.channel >= n) {
         if (n == 1) std::snprintf(err, cap, "--channel %d: '%s' has one band: K must be 0", o.channel, o.in.c_str());
