@@ -336,13 +336,6 @@ int lsqt_phase_table_parse(const char *text, size_t len, const char *name, lsqt_
         PT_FAIL("%s: cos theta covers [%.9g, %.9g]: a phase table must cover [-1, 1] (its first and last rows at -1 "
                 "and 1)", name, t->mu[0], t->mu[t->n - 1]);
     t->mu[0] = -1, t->mu[t->n - 1] = 1;
-    uint64_t h = 14695981039346656037ULL;
-    for (int i = 0; i < t->n; i++) {
-        const double row[2] = {t->mu[i], t->p[i]};
-        const unsigned char *b = (const unsigned char *)row;
-        for (size_t k = 0; k < sizeof row; k++) h = (h ^ b[k]) * 1099511628211ULL;
-    }
-    t->hash = h;
     if (!(t->cdf = malloc((size_t)t->n * sizeof *t->cdf))) PT_FAIL("%s: out of memory", name);
     /* the trapezoid rule is the integral of the linear interpolation; 2 pi for the azimuth */
     t->cdf[0] = 0;
@@ -353,5 +346,13 @@ int lsqt_phase_table_parse(const char *text, size_t len, const char *name, lsqt_
         PT_FAIL("%s: the phase function integrates to %g: it must be positive somewhere (and finite)", name, total);
     for (int i = 0; i < t->n; i++) t->p[i] /= total, t->cdf[i] /= t->cdf[t->n - 1];
     t->cdf[t->n - 1] = 1;
+    /* the phase function's identity: its rows normalised (a table and its multiple are one) */
+    uint64_t h = 14695981039346656037ULL;
+    for (int i = 0; i < t->n; i++) {
+        const double row[2] = {t->mu[i], t->p[i]};
+        const unsigned char *b = (const unsigned char *)row;
+        for (size_t k = 0; k < sizeof row; k++) h = (h ^ b[k]) * 1099511628211ULL;
+    }
+    t->hash = h;
     return 0;
 }

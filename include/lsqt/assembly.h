@@ -24,8 +24,9 @@ typedef struct lsqt_phase {
 /* A phase function's table (a model's TABLE key, model_list.h): n >= 2 rows of cos theta
  * (mu, increasing from -1 to 1), its value p normalised to 2 pi int p dmu = 1 (the
  * trapezoid rule: exact for the linear interpolation the kernels evaluate), and cdf, the
- * integral from -1 to mu[i] (0 at mu[0], 1 at mu[n-1]). hash: FNV-1a of the rows as read
- * (sorted), what the canonical text says of the table. */
+ * integral from -1 to mu[i] (0 at mu[0], 1 at mu[n-1]). hash: FNV-1a of the rows (mu, p)
+ * normalised, what the canonical text says of the table (a table and its multiples are
+ * the same phase function). */
 typedef struct lsqt_phase_table {
     int n;
     double *mu, *p, *cdf;
