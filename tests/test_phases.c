@@ -86,10 +86,11 @@
  *    of their closed forms (relative 2e-4) and as the host's own interpolation in double
  *    (relative 1e-5, float); the sampler against its own interpolated density (goodness of
  *    fit as in 1, normalisation to 1e-4) for those two and a coarse 6-row table whose
- *    interpolation is far from any closed form (a zero row included); the stack of 7 with
- *    the HG table against the same stack with HenyeyGreensteinPhase g = 0.7 (the reference:
- *    the closed-form model), same seeds, R and T per slice within 4 sigma of the batch
- *    means of the paired difference plus the interpolation's 2e-4, a test that sees 1 %.
+ *    interpolation is far from any closed form (a zero row included); a stack of the HG
+ *    table over the Rayleigh one against the same stack with HenyeyGreensteinPhase g = 0.7
+ *    over RayleighPhase (the reference: the closed-form models), same seeds, R and T per
+ *    slice within 4 sigma of the batch means of the paired difference plus the
+ *    interpolation's 2e-4, a test that sees 1 %; the coarse table in a slab as in 7.
  * usage: test_phases [SECTION...] (all by default; sections: hg2 rayleigh sggx-specular
  * sggx-diffuse oren-nayar peaks rayleigh-ks limits reciprocity stacks draine tabulated). */
 #include <stdint.h>
@@ -1279,29 +1280,39 @@ static void tabulated(void)
         gof(&gc, 110 + i);
     }
 
-    /* a stack: the table against the closed form it tabulates, on the same paths */
+    /* a stack of two tables (each medium finds its own) against the closed forms they
+     * tabulate, on the same paths */
     const double deg[] = {0, 45, 80};
-    char text[512];
-    snprintf(text, sizeof text, "Medium\nLayer z=1 NullBsdf\nMedium mus=1 TabulatedPhase table=@%s\nLayer z=0 NullBsdf\n"
-             "Medium\n", hg_path);
+    char text[1024], rayleigh_path[256];
+    snprintf(rayleigh_path, sizeof rayleigh_path, "%s/rayleigh.txt", tab_dir);
+    snprintf(text, sizeof text, "Medium\nLayer z=2 NullBsdf\nMedium mus=1 TabulatedPhase table=@%s\nLayer z=1 NullBsdf\n"
+             "Medium mus=0.5 TabulatedPhase table=@%s\nLayer z=0 NullBsdf\nMedium\n", hg_path, rayleigh_path);
     lsqt_state sa, sb;
     lsqt_slice_est *ea = fixture_run(text, 3, deg, 64, 40000, 23, &sa);
-    lsqt_slice_est *eb = fixture_run("Medium\nLayer z=1 NullBsdf\nMedium mus=1 HenyeyGreensteinPhase g=0.7\n"
-                                     "Layer z=0 NullBsdf\nMedium\n", 3, deg, 64, 40000, 23, &sb);
+    lsqt_slice_est *eb = fixture_run("Medium\nLayer z=2 NullBsdf\nMedium mus=1 HenyeyGreensteinPhase g=0.7\n"
+                                     "Layer z=1 NullBsdf\nMedium mus=0.5 RayleighPhase\nLayer z=0 NullBsdf\nMedium\n",
+                                     3, deg, 64, 40000, 23, &sb);
     for (int s = 0; s < 3; s++) {
         const lsqt_est dr = paired(&sa, &sb, s, LSQT_T_R), dt = paired(&sa, &sb, s, LSQT_T_T);
         const double r = eb[s].R.mean, tt = eb[s].T.mean;
-        CHECK(fabs(dr.mean) <= 4 * dr.err + 2e-4 * r, "Tabulated HG slab, %g degrees: R - R(HG) = %.3g +- %.2g (R %.4f)",
-              deg[s], dr.mean, dr.err, r);
-        CHECK(fabs(dt.mean) <= 4 * dt.err + 2e-4 * tt, "Tabulated HG slab, %g degrees: T - T(HG) = %.3g +- %.2g (T %.4f)",
-              deg[s], dt.mean, dt.err, tt);
+        CHECK(fabs(dr.mean) <= 4 * dr.err + 2e-4 * r, "Tabulated HG over Rayleigh, %g degrees: R - R(closed forms) = "
+              "%.3g +- %.2g (R %.4f)", deg[s], dr.mean, dr.err, r);
+        CHECK(fabs(dt.mean) <= 4 * dt.err + 2e-4 * tt, "Tabulated HG over Rayleigh, %g degrees: T - T(closed forms) = "
+              "%.3g +- %.2g (T %.4f)", deg[s], dt.mean, dt.err, tt);
         CHECK(4 * dr.err + 2e-4 * r < 0.01 * r && 4 * dt.err + 2e-4 * tt < 0.01 * tt,
-              "Tabulated HG slab, %g degrees: the test cannot see 1 %% (R +- %.2g, T +- %.2g)", deg[s], dr.err, dt.err);
-        printf("Tabulated HG slab %2g deg: R %.5f - HG %+.2e +- %.1e, T %.5f - HG %+.2e +- %.1e\n", deg[s],
-               ea[s].R.mean, dr.mean, dr.err, ea[s].T.mean, dt.mean, dt.err);
+              "Tabulated HG over Rayleigh, %g degrees: the test cannot see 1 %% (R +- %.2g, T +- %.2g)", deg[s], dr.err,
+              dt.err);
+        printf("Tabulated HG over Rayleigh %2g deg: R %.5f - closed %+.2e +- %.1e, T %.5f - closed %+.2e +- %.1e\n",
+               deg[s], ea[s].R.mean, dr.mean, dr.err, ea[s].T.mean, dt.mean, dt.err);
     }
     lsqt_estimates_free(ea, 3), lsqt_estimates_free(eb, 3);
     lsqt_state_free(&sa), lsqt_state_free(&sb);
+    /* the coarse table in a lossless slab: R + T = 1, next-event estimates = exits (7) */
+    char coarse_path[256];
+    snprintf(coarse_path, sizeof coarse_path, "%s/coarse.txt", tab_dir);
+    snprintf(text, sizeof text, "Medium\nLayer z=1 NullBsdf\nMedium mus=1 TabulatedPhase table=@%s\nLayer z=0 NullBsdf\n"
+             "Medium\n", coarse_path);
+    stack("Tabulated coarse slab", text, 100000);
     for (int i = 0; i < 3; i++) lsqt_phase_table_free(&t[i]), free(store[i]);
     const char *names[] = {"hg07.txt", "rayleigh.txt", "coarse.txt"};
     for (int i = 0; i < 3; i++) {
