@@ -90,7 +90,8 @@
  *    table over the Rayleigh one against the same stack with HenyeyGreensteinPhase g = 0.7
  *    over RayleighPhase (the reference: the closed-form models), same seeds, R and T per
  *    slice within 4 sigma of the batch means of the paired difference plus the
- *    interpolation's 2e-4, a test that sees 1 %; the coarse table in a slab as in 7.
+ *    interpolation's 2e-4, a test that sees 1 %, in float and in double (--double); the
+ *    coarse table in a slab as in 7.
  * usage: test_phases [SECTION...] (all by default; sections: hg2 rayleigh sggx-specular
  * sggx-diffuse oren-nayar peaks rayleigh-ks limits reciprocity stacks draine tabulated). */
 #include <stdint.h>
@@ -1287,26 +1288,29 @@ static void tabulated(void)
     snprintf(rayleigh_path, sizeof rayleigh_path, "%s/rayleigh.txt", tab_dir);
     snprintf(text, sizeof text, "Medium\nLayer z=2 NullBsdf\nMedium mus=1 TabulatedPhase table=@%s\nLayer z=1 NullBsdf\n"
              "Medium mus=0.5 TabulatedPhase table=@%s\nLayer z=0 NullBsdf\nMedium\n", hg_path, rayleigh_path);
-    lsqt_state sa, sb;
-    lsqt_slice_est *ea = fixture_run(text, 3, deg, 64, 40000, 23, &sa);
-    lsqt_slice_est *eb = fixture_run("Medium\nLayer z=2 NullBsdf\nMedium mus=1 HenyeyGreensteinPhase g=0.7\n"
-                                     "Layer z=1 NullBsdf\nMedium mus=0.5 RayleighPhase\nLayer z=0 NullBsdf\nMedium\n",
-                                     3, deg, 64, 40000, 23, &sb);
-    for (int s = 0; s < 3; s++) {
-        const lsqt_est dr = paired(&sa, &sb, s, LSQT_T_R), dt = paired(&sa, &sb, s, LSQT_T_T);
-        const double r = eb[s].R.mean, tt = eb[s].T.mean;
-        CHECK(fabs(dr.mean) <= 4 * dr.err + 2e-4 * r, "Tabulated HG over Rayleigh, %g degrees: R - R(closed forms) = "
-              "%.3g +- %.2g (R %.4f)", deg[s], dr.mean, dr.err, r);
-        CHECK(fabs(dt.mean) <= 4 * dt.err + 2e-4 * tt, "Tabulated HG over Rayleigh, %g degrees: T - T(closed forms) = "
-              "%.3g +- %.2g (T %.4f)", deg[s], dt.mean, dt.err, tt);
-        CHECK(4 * dr.err + 2e-4 * r < 0.01 * r && 4 * dt.err + 2e-4 * tt < 0.01 * tt,
-              "Tabulated HG over Rayleigh, %g degrees: the test cannot see 1 %% (R +- %.2g, T +- %.2g)", deg[s], dr.err,
-              dt.err);
-        printf("Tabulated HG over Rayleigh %2g deg: R %.5f - closed %+.2e +- %.1e, T %.5f - closed %+.2e +- %.1e\n",
-               deg[s], ea[s].R.mean, dr.mean, dr.err, ea[s].T.mean, dt.mean, dt.err);
+    for (int dbl = 0; dbl < 2; dbl++) { /* float and --double: the tables in each precision */
+        lsqt_state sa, sb;
+        lsqt_slice_est *ea = fixture_run_prec(text, 3, deg, 64, 40000, 23, dbl, &sa);
+        lsqt_slice_est *eb = fixture_run_prec("Medium\nLayer z=2 NullBsdf\nMedium mus=1 HenyeyGreensteinPhase g=0.7\n"
+                                              "Layer z=1 NullBsdf\nMedium mus=0.5 RayleighPhase\nLayer z=0 NullBsdf\n"
+                                              "Medium\n", 3, deg, 64, 40000, 23, dbl, &sb);
+        const char *prec = dbl ? "double" : "float";
+        for (int s = 0; s < 3; s++) {
+            const lsqt_est dr = paired(&sa, &sb, s, LSQT_T_R), dt = paired(&sa, &sb, s, LSQT_T_T);
+            const double r = eb[s].R.mean, tt = eb[s].T.mean;
+            CHECK(fabs(dr.mean) <= 4 * dr.err + 2e-4 * r, "Tabulated HG over Rayleigh (%s), %g degrees: R - R(closed "
+                  "forms) = %.3g +- %.2g (R %.4f)", prec, deg[s], dr.mean, dr.err, r);
+            CHECK(fabs(dt.mean) <= 4 * dt.err + 2e-4 * tt, "Tabulated HG over Rayleigh (%s), %g degrees: T - T(closed "
+                  "forms) = %.3g +- %.2g (T %.4f)", prec, deg[s], dt.mean, dt.err, tt);
+            CHECK(4 * dr.err + 2e-4 * r < 0.01 * r && 4 * dt.err + 2e-4 * tt < 0.01 * tt,
+                  "Tabulated HG over Rayleigh (%s), %g degrees: the test cannot see 1 %% (R +- %.2g, T +- %.2g)", prec,
+                  deg[s], dr.err, dt.err);
+            printf("Tabulated HG over Rayleigh (%s) %2g deg: R %.5f - closed %+.2e +- %.1e, T %.5f - closed %+.2e +- "
+                   "%.1e\n", prec, deg[s], ea[s].R.mean, dr.mean, dr.err, ea[s].T.mean, dt.mean, dt.err);
+        }
+        lsqt_estimates_free(ea, 3), lsqt_estimates_free(eb, 3);
+        lsqt_state_free(&sa), lsqt_state_free(&sb);
     }
-    lsqt_estimates_free(ea, 3), lsqt_estimates_free(eb, 3);
-    lsqt_state_free(&sa), lsqt_state_free(&sb);
     /* the coarse table in a lossless slab: R + T = 1, next-event estimates = exits (7) */
     char coarse_path[256];
     snprintf(coarse_path, sizeof coarse_path, "%s/coarse.txt", tab_dir);
