@@ -252,7 +252,7 @@ void lsqt_band_path(const char *path, const char *label, char *dst, size_t cap)
     snprintf(dst, cap, "%.*s.%s%s", (int)(raw ? n - 4 : n), path, label, raw ? ".raw" : "");
 }
 
-/* ---- A phase function's table (TabulatedPhase table=@FILE; lsqt/assembly.h) ---------- */
+/* ---- A phase function's table (a TABLE key, KEY=@FILE; lsqt/assembly.h) --------------- */
 
 void lsqt_phase_table_free(lsqt_phase_table *t)
 {

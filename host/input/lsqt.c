@@ -563,7 +563,7 @@ static int band_value(parser *P, const lsqt_key *k, span tok, span text, double 
             return fail(P, P->line, &tok, "a table without wavelengths",
                         "a number or a comma list (KEY=@FILE is a spectral table, wavelength and value, and needs "
                         "--wavelengths: the table is read at them; a phase function's table of cos theta is "
-                        "TabulatedPhase table=@FILE)");
+                        "a key of a tabulated model, such as table=@FILE)");
         span file = { text.p + 1, text.n - 1 };
         const lsqt_band_table *t = band_table(P, tok, file);
         if (!t)
