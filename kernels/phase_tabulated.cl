@@ -25,7 +25,8 @@ LSQT_INLINE real tab_value(__global const real *t, int n, real c)
     const int j = clamp((int)((c + R(1.0)) * R(0.5) * (real)n), 0, n - 1);
     const int lo = (int)t[3 * n + max(j - 1, 0)], hi = min((int)t[3 * n + min(j + 2, n)] + 1, n - 1);
     const int i = tab_interval(t, lo, hi, c);
-    const real h = t[i + 1] - t[i], x = clamp((c - t[i]) / h, R(0.0), R(1.0));
+    /* rows closer than float tells apart round to one: their interval then has no width */
+    const real h = t[i + 1] - t[i], x = h > R(0.0) ? clamp((c - t[i]) / h, R(0.0), R(1.0)) : R(0.0);
     return t[n + i] + x * (t[n + i + 1] - t[n + i]);
 }
 

@@ -681,6 +681,8 @@ static int read_key(parser *P, line_state *ls, span tok, const char *eq)
                     k->name, show(*given, shown));
     double v = 0;
     if (k->type == LSQT_TABLE) {
+        if (ls->desc != &lsqt_medium_line)
+            return fail(P, P->line, &tok, "a table key of a BSDF", "a phase function's table (BSDFs have none yet)");
         if (phase_table(P, k, tok, text, &v))
             return 2;
         ((lsqt_medium *)(void *)ls->base)->phase.table = (int)v;
