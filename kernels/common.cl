@@ -224,3 +224,13 @@ LSQT_INLINE real lgamma_ge1(real x) LSQT_LGAMMA_GE1(real)
 typedef struct {
     real3 m;
 } phase_vtx;
+
+/* A model's table (a TABLE key, include/lsqt/model_list.h): the host puts the tables after
+ * the media in the media's buffer (host/sim/tables.c), and a medium with one holds in
+ * pp[0] the media from it to their end and in pp[1] its table's offset in reals from
+ * there (pp[2]: its row count), so the address is the medium's own plus those: no kernel
+ * argument, and the same on every device. */
+LSQT_INLINE __global const real *medium_table(__global const lsqt_dev_medium *m)
+{
+    return (__global const real *)(m + (int)m->pp[0]) + (int)m->pp[1];
+}

@@ -36,7 +36,11 @@ int main(int argc, char **argv)
     char *text = lsqt_read_file(argv[1], &len, err, sizeof err);
     lsqt_assembly a;
     lsqt_diag d;
-    if (!text || lsqt_parse(text, len, argv[1], NULL, 1, NULL, &a, &d)) {
+    /* its tables (KEY=@FILE, TabulatedPhase table=@FILE) read from FILE's folder, as lsqt-cl does */
+    char dir[LSQT_PATH_CAP];
+    const char *slash = strrchr(argv[1], '/');
+    snprintf(dir, sizeof dir, "%.*s", slash ? (int)(slash - argv[1]) + (slash == argv[1]) : 1, slash ? argv[1] : ".");
+    if (!text || lsqt_parse(text, len, argv[1], NULL, 0, dir, &a, &d)) {
         fprintf(stderr, "gpu_program: %s%s\n", err, text ? d.error : "");
         free(text);
         return 2;

@@ -48,6 +48,7 @@ FAMILIES = [
     ("sggx-dust.lsqt", "SGGX"),
     ("rayleigh-oren-nayar.lsqt", "Rayleigh-ON"),
     ("dust-over-cloud.lsqt", "Draine-HG2"),
+    ("mie-fog.lsqt", "Tabulated"),
 ]
 
 # Defects known and not yet fixed: (kernel, check) -> why. The check still runs and is
@@ -68,6 +69,7 @@ CEILINGS = {
     "SGGX": {"lsqt_walk": 80, "lsqt_estimate": 95, "lsqt_exits": 64, "lsqt_prepare": 26},
     "Rayleigh-ON": {"lsqt_walk": 88, "lsqt_estimate": 79, "lsqt_exits": 74, "lsqt_prepare": 26},
     "Draine-HG2": {"lsqt_walk": 82, "lsqt_estimate": 90, "lsqt_exits": 64, "lsqt_prepare": 26},
+    "Tabulated": {"lsqt_walk": 76, "lsqt_estimate": 80, "lsqt_exits": 64, "lsqt_prepare": 26},
 }
 
 

@@ -51,6 +51,7 @@ same Dusty "$EX/tutorial/Dusty.lsqt" -p 300 -wo 4 -wi 24 --wi-spread
 same Silver "$EX/tutorial/Silver.lsqt" -p 300 -wo 4 -wi 24 --wi-spread
 same SGGX "$EX/sggx-dust.lsqt" -p 300 -wo 4 -wi 24 --wi-spread
 same Rayleigh-ON "$EX/rayleigh-oren-nayar.lsqt" -p 300 -wo 4 -wi 24 --wi-spread --from-below
+same Tabulated "$EX/mie-fog.lsqt" -p 300 -wo 4 -wi 24 --wi-spread
 same MCX mcx.lsqt -p 300 -wo 4 -wi 24 --wi-spread
 same two two.lsqt -p 300 -wo 4 -wi 24 --wi-spread --from-below
 LSQT_NEE_RECORD_CAP=30 same Substr-parts "$EX/tutorial/Substr.lsqt" -p 300 -wo 4 -wi 24 --wi-spread

@@ -38,7 +38,7 @@ static char *canonical(const lsqt_assembly *a)
 #define MEDIUM1(x) "Medium " x "\nLayer z=0 Null\nMedium\n"                    /* line 1 */
 #define LAYER2(x) "Medium\nLayer z=0 " x "\nMedium\n"                          /* line 2 */
 #define MEDIUM3(x) "Medium\nLayer z=1 Null\nMedium " x "\nLayer z=0 Null\nMedium\n" /* line 3 */
-#define PHASES "HenyeyGreensteinPhase, HenyeyGreenstein2Phase, RayleighPhase, SggxPhase, DrainePhase"
+#define PHASES "HenyeyGreensteinPhase, HenyeyGreenstein2Phase, RayleighPhase, SggxPhase, DrainePhase, TabulatedPhase"
 #define BSDFS "NullBsdf, LambertianBsdf, MicrosurfaceLambertianBrdf, " \
     "MicrosurfaceDielectricBsdf, MicrosurfaceConductiveBrdf, OrenNayarDiffuseBrdf"
 
@@ -923,8 +923,100 @@ static void test_build_options(void)
     }
 }
 
+/* TabulatedPhase table=@FILE: the table's errors (line and token), its normalisation and
+ * order, and the canonical text, which names the table by its content. */
+static char tab_dir[] = "/tmp/test_lsqt_tab.XXXXXX";
+
+static const char *tab_file(const char *name, const char *content)
+{
+    static char path[256];
+    snprintf(path, sizeof path, "%s/%s", tab_dir, name);
+    FILE *f = fopen(path, "w");
+    if (f) fputs(content, f), fclose(f);
+    return path;
+}
+
+static int tab_parse(const char *path, lsqt_assembly *a, lsqt_diag *d)
+{
+    char text[512];
+    snprintf(text, sizeof text, MEDIUM3("mus=1 TabulatedPhase table=@%s"), path);
+    return parse(text, a, d);
+}
+
+static void tab_bad(const char *name, const char *content, const char *msg)
+{
+    lsqt_assembly a;
+    lsqt_diag d;
+    const char *path = content ? tab_file(name, content) : name;
+    CHECK(tab_parse(path, &a, &d) == 2 && d.error_line == 3, "%s: rc/line %d", name, d.error_line);
+    CHECK(strstr(d.error, "unreadable phase table at 'table=@") && strstr(d.error, msg), "%s: [%s] lacks [%s]", name,
+          d.error, msg);
+}
+
+static void test_phase_table(void)
+{
+    if (!mkdtemp(tab_dir)) {
+        CHECK(0, "mkdtemp");
+        return;
+    }
+    tab_bad("/nonexistent/t.txt", NULL, "cannot open");
+    tab_bad("one.txt", "1\n-1\n", "one.txt:1: one column at '1'");
+    tab_bad("three.txt", "1 1 1\n-1 1 1\n", "three.txt:1: more than two columns");
+    tab_bad("word.txt", "# mu p\n1 abc\n-1 1\n", "word.txt:2: 'abc' is not a number");
+    tab_bad("range.txt", "1 1\n0 1\n-1.5 1\n", "range.txt:3: cos theta '-1.5' outside [-1, 1]");
+    tab_bad("neg.txt", "-1 1\n0 -0.5\n1 1\n", "neg.txt:2: value '-0.5' is negative");
+    tab_bad("few.txt", "1 1\n", "too few rows (1)");
+    tab_bad("cover.txt", "-1 1\n0.5 1\n", "covers [-1, 0.5]");
+    tab_bad("order.txt", "-1 1\n0.5 1\n0 1\n1 1\n", "order.txt:3: cos theta '0' after 0.5");
+    tab_bad("zero.txt", "-1 0\n1 0\n", "integrates to 0");
+    lsqt_assembly a, b;
+    lsqt_diag d;
+    CHECK(parse(MEDIUM3("mus=1 TabulatedPhase"), &a, &d) == 2 && strstr(d.error, "missing required key table"), "%s",
+          d.error);
+    CHECK(parse(MEDIUM3("mus=1 TabulatedPhase table=@x,@y"), &a, &d) == 2 &&
+              strstr(d.error, "a phase table is the same in every band"), "%s", d.error);
+    CHECK(parse(MEDIUM3("mus=1 HenyeyGreensteinPhase g=@x"), &a, &d) == 2 &&
+              strstr(d.error, "cos theta is a key of a tabulated model"), "%s", d.error);
+    /* normalised (2 pi int p dmu = 1, exact for the linear interpolation), turned round,
+     * the same whatever the scale; canonical text by content, not by name */
+    const char *up = "-1 1\n0 3\n1 5\n", *down = "1 10 # cos theta descending, x2\n0 6\n-1 2\n";
+    if (tab_parse(tab_file("up.txt", up), &a, &d) == 0) {
+        if (tab_parse(tab_file("down.txt", down), &b, &d) == 0) {
+            const lsqt_phase_table *t = &a.phase_tables[0], *u = &b.phase_tables[0];
+            const double norm = 1 / (2 * 3.14159265358979323846 * 6); /* int = (1 + 3) / 2 + (3 + 5) / 2 */
+            CHECK(a.n_phase_tables == 1 && a.media[1].phase.table == 1 && t->n == 3, "one table of 3 rows");
+            CHECK(t->mu[0] == -1 && t->mu[2] == 1 && fabs(t->p[1] - 3 * norm) < 1e-15 && fabs(t->cdf[1] - 4.0 / 12) < 1e-15 &&
+                      t->cdf[2] == 1, "normalised: p %.17g cdf %.17g", t->p[1], t->cdf[1]);
+            CHECK(u->mu[0] == -1 && fabs(u->p[0] - t->p[0]) < 1e-15 && fabs(u->p[2] - t->p[2]) < 1e-15, "descending, x2");
+            char *ca = canonical(&a), *cb = canonical(&b);
+            CHECK(ca && cb && strcmp(ca, cb) == 0 && strstr(ca, "TabulatedPhase table=@3rows:"),
+                  "a table and its multiple, by other names: [%s] [%s]", ca, cb);
+            free(cb);
+            lsqt_assembly_free(&b);
+            if (tab_parse(tab_file("other.txt", "-1 1\n0 3\n1 5.001\n"), &b, &d) == 0) { /* another table */
+                cb = canonical(&b);
+                CHECK(ca && cb && strcmp(ca, cb) != 0 && lsqt_assembly_hash(&a) != lsqt_assembly_hash(&b),
+                      "another table, the same text: [%s] [%s]", ca, cb);
+                free(cb);
+                lsqt_assembly_free(&b);
+            }
+            free(ca);
+        } else
+            CHECK(0, "%s", d.error);
+        lsqt_assembly_free(&a);
+    } else
+        CHECK(0, "%s", d.error);
+    const char *names[] = {"one.txt", "three.txt", "word.txt", "range.txt", "neg.txt", "few.txt", "cover.txt",
+                           "order.txt", "zero.txt", "up.txt", "down.txt", "other.txt"};
+    char path[256];
+    for (size_t i = 0; i < sizeof names / sizeof names[0]; i++)
+        snprintf(path, sizeof path, "%s/%s", tab_dir, names[i]), remove(path);
+    remove(tab_dir);
+}
+
 int main(void)
 {
+    test_phase_table();
     test_bad_inputs();
     test_garbage();
     test_tutorials();

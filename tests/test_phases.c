@@ -80,12 +80,26 @@
  *    (0.7, 0.5), (-0.5, 3), (0.95, 20) as in 1 (normalisation to 1e-4 included); the value
  *    against the formula in double; alpha = 0 is HG bit for bit; g = 0, alpha = 1 is
  *    Rayleigh rho = 0; a lossless Draine slab as in 7.
+ * 9. TabulatedPhase (section tabulated), tables made here as a Mie code writes them
+ *    (cos theta descending from 1 to -1, uniform in theta) and read by the host's parser:
+ *    HG g = 0.7 and Rayleigh rho = 0 at 2001 rows evaluate within the interpolation error
+ *    of their closed forms (relative 2e-4) and as the host's own interpolation in double
+ *    (relative 1e-5, float); the sampler against its own interpolated density (goodness of
+ *    fit as in 1, normalisation to 1e-4) for those two and a coarse 6-row table whose
+ *    interpolation is far from any closed form (a zero row included); a stack of the HG
+ *    table over the Rayleigh one against the same stack with HenyeyGreensteinPhase g = 0.7
+ *    over RayleighPhase (the reference: the closed-form models), same seeds, R and T per
+ *    slice within 4 sigma of the batch means of the paired difference plus the
+ *    interpolation's 2e-4, a test that sees 1 %, in float and in double (--double); the
+ *    coarse table in a slab as in 7.
  * usage: test_phases [SECTION...] (all by default; sections: hg2 rayleigh sggx-specular
- * sggx-diffuse oren-nayar peaks rayleigh-ks limits reciprocity stacks draine). */
+ * sggx-diffuse oren-nayar peaks rayleigh-ks limits reciprocity stacks draine tabulated). */
 #include <stdint.h>
 
 #include "cl_fixture.h"
 #include "gof.h"
+#include "lsqt/tables.h"
+#include "lsqt/util.h"
 #include "nee_albedo.h"
 #include "quadrature.h"
 #include "stats.h"
@@ -98,7 +112,7 @@
 #define MC_K 8 /* independent items per direction, stochastic evaluation */
 #endif
 #define NS 1000000
-#define N_FAMILY 100 /* p-values of a full run: the Bonferroni divisor of every run, full or a section */
+#define N_FAMILY 106 /* p-values of a full run: the Bonferroni divisor of every run, full or a section */
 
 static cl_program prog;
 
@@ -111,20 +125,35 @@ typedef struct {
     lsqt_dev_layer L;
     lsqt_dev_medium M;
     float wo[3];
+    const float *tab; /* the medium's table (TabulatedPhase), put after it in its buffer */
+    size_t tab_reals;
 } model_t;
+
+/* The medium's buffer: the medium, then its table as the host lays them out
+ * (include/lsqt/tables.h). */
+static cl_mem medium_mem(const model_t *m)
+{
+    const size_t bytes = sizeof m->M + m->tab_reals * sizeof(float);
+    unsigned char *buf = malloc(bytes);
+    memcpy(buf, &m->M, sizeof m->M);
+    if (m->tab_reals) memcpy(buf + sizeof m->M, m->tab, m->tab_reals * sizeof(float));
+    cl_mem r = fixture_mem(bytes, buf);
+    free(buf);
+    return r;
+}
 
 /* harness_sample: n samples (x, y, z, weight) for m->wo; harness_eval: (value, pdf) at n
  * directions (x, y, z, 0) for wo. */
 static void k_sample(const model_t *m, cl_uint seed, size_t n, float *out)
 {
-    cl_mem bl = fixture_mem(sizeof m->L, &m->L), bm = fixture_mem(sizeof m->M, &m->M);
+    cl_mem bl = fixture_mem(sizeof m->L, &m->L), bm = medium_mem(m);
     fixture_harness_sample(prog, bl, bm, m->use_phase, m->wo, seed, n, out);
     clReleaseMemObject(bl), clReleaseMemObject(bm);
 }
 
 static void k_eval(const model_t *m, const float wo[3], const float *dirs, size_t n, float *out)
 {
-    cl_mem bl = fixture_mem(sizeof m->L, &m->L), bm = fixture_mem(sizeof m->M, &m->M);
+    cl_mem bl = fixture_mem(sizeof m->L, &m->L), bm = medium_mem(m);
     fixture_harness_eval(prog, bl, bm, m->use_phase, wo, dirs, n, out);
     clReleaseMemObject(bl), clReleaseMemObject(bm);
 }
@@ -133,7 +162,7 @@ static void k_eval(const model_t *m, const float wo[3], const float *dirs, size_
 static void k_mc(const model_t *m, const float wo[3], const float *dirs, size_t n, cl_uint seed, cl_int reps,
                  float *out)
 {
-    cl_mem bm = fixture_mem(sizeof m->M, &m->M), bd = fixture_mem(n * 16, dirs), bo = fixture_mem(n * 4, NULL);
+    cl_mem bm = medium_mem(m), bd = fixture_mem(n * 16, dirs), bo = fixture_mem(n * 4, NULL);
     cl_kernel k = clCreateKernel(prog, "harness_phase_mc", NULL);
     const size_t sz[] = {sizeof bm, 4, 4, 4, sizeof bd, sizeof seed, sizeof reps, sizeof bo};
     const void *val[] = {&bm, &wo[0], &wo[1], &wo[2], &bd, &seed, &reps, &bo};
@@ -1132,6 +1161,172 @@ static void draine(void)
           "Medium\nLayer z=1 NullBsdf\nMedium mus=1 DrainePhase g=0.6 alpha=2\nLayer z=0 NullBsdf\nMedium\n", 100000);
 }
 
+/* ---------------------------------------------------------------- section 12: tabulated */
+
+static char tab_dir[] = "/tmp/test_phases_tab.XXXXXX";
+
+/* A table file of n rows of f(cos t), cos theta descending from 1 to -1 uniformly in theta
+ * (as miepython writes one), or the rows given (mu, p: n of them); its path. */
+static const char *tab_write(const char *name, double (*f)(double), int n, const double *mu, const double *p)
+{
+    static char path[256];
+    snprintf(path, sizeof path, "%s/%s", tab_dir, name);
+    FILE *fp = fopen(path, "w");
+    CHECK(fp != NULL, "cannot write %s", path);
+    if (!fp) return path;
+    fprintf(fp, "# cos(theta) p\n");
+    for (int i = 0; i < n; i++) {
+        const double c = mu ? mu[i] : cos(PI * i / (n - 1));
+        fprintf(fp, "%.17g %.17g\n", c, mu ? p[i] : f(c));
+    }
+    fclose(fp);
+    return path;
+}
+
+/* The table as the host reads it, and the model with it (pp as the host packs them: one
+ * medium to its end, then offset 0, the rows); *t stays for the references. */
+static model_t tab_model(const char *name, const char *path, const double wo[3], lsqt_phase_table *t, float **store)
+{
+    size_t len = 0;
+    char err[512];
+    char *text = lsqt_read_text(path, 1 << 26, &len, err, sizeof err);
+    CHECK(text && lsqt_phase_table_parse(text, len, path, t, err, sizeof err) == 0, "%s: %s", path, err);
+    free(text);
+    lsqt_assembly a;
+    memset(&a, 0, sizeof a);
+    a.n_phase_tables = 1, a.phase_tables = t;
+    const size_t n = lsqt_device_phase_tables(&a, NULL);
+    double *d = malloc(n * sizeof *d);
+    *store = malloc(n * sizeof **store);
+    lsqt_device_phase_tables(&a, d);
+    for (size_t i = 0; i < n; i++) (*store)[i] = (float)d[i];
+    free(d);
+    model_t m = phase_model(name, LSQT_PHASE_TABULATED, 1, 0, t->n, wo);
+    m.tab = *store, m.tab_reals = n;
+    return m;
+}
+
+/* The table's linear interpolation at cos t = c, in double. */
+static double tab_interp(const lsqt_phase_table *t, double c)
+{
+    int i = 0;
+    while (i + 2 < t->n && t->mu[i + 1] <= c) i++;
+    const double x = (c - t->mu[i]) / (t->mu[i + 1] - t->mu[i]);
+    return t->p[i] + x * (t->p[i + 1] - t->p[i]);
+}
+
+static double hg07(double c) { return hg_ref(0.7, c); }
+static double rayleigh0(double c) { return 3 / (16 * PI) * (1 + c * c); }
+
+/* Per slice, R or T (which) of a minus b on the same paths, with its batch-means error. */
+static lsqt_est paired(const lsqt_state *a, const lsqt_state *b, int s, int which)
+{
+    double d[LSQT_BATCHES], total = 0;
+    for (int k = 0; k < LSQT_BATCHES; k++) {
+        const size_t at = ((size_t)s * LSQT_BATCHES + (size_t)k) * LSQT_T_COUNT + (size_t)which;
+        d[k] = (lsqt_u128_to_double(a->scalars[at]) - lsqt_u128_to_double(b->scalars[at])) / LSQT_FIX_SCALE;
+        total += d[k];
+    }
+    const double n = (double)a->paths;
+    lsqt_est e = {total / n, 0};
+    double ss = 0;
+    for (int k = 0; k < LSQT_BATCHES; k++) ss += nee_sqr(d[k] - (double)lsqt_batch_paths(a->paths, k) * e.mean);
+    e.err = sqrt(ss * LSQT_BATCHES / (LSQT_BATCHES - 1)) / n;
+    return e;
+}
+
+static void tabulated(void)
+{
+    CHECK(mkdtemp(tab_dir) != NULL, "mkdtemp");
+    const double wos[][3] = {{0, 0, 1}, {0.3, -0.2, 0.9327379}, {0.99, 0.1, -0.0995}};
+    lsqt_phase_table t[3];
+    float *store[3];
+    char hg_path[256];
+    snprintf(hg_path, sizeof hg_path, "%s", tab_write("hg07.txt", hg07, 2001, NULL, NULL));
+    model_t m[3];
+    m[0] = tab_model("Tabulated HG g=0.7 (2001 rows)", hg_path, wos[0], &t[0], &store[0]);
+    m[1] = tab_model("Tabulated Rayleigh (2001 rows)", tab_write("rayleigh.txt", rayleigh0, 2001, NULL, NULL), wos[1],
+                     &t[1], &store[1]);
+    /* coarse, ascending, uneven, a zero row: its interpolation is no closed form */
+    const double cmu[] = {-1, -0.6, 0.1, 0.5, 0.9, 1}, cp[] = {0.3, 0, 0.2, 1.5, 4, 9};
+    m[2] = tab_model("Tabulated coarse (6 rows)", tab_write("coarse.txt", NULL, 6, cmu, cp), wos[2], &t[2], &store[2]);
+
+    /* the value: the host's interpolation (float), and the closed forms within the
+     * interpolation's error */
+    static float f[4 * NLIM], fp[2 * NLIM];
+    static double d[NLIM][3];
+    rand_dirs(13, NLIM, f, d);
+    double worst_i = 0, worst_c[2] = {0, 0};
+    for (int i = 0; i < 3; i++) {
+        double o[3];
+        wo_double(m[i].wo, o);
+        k_eval(&m[i], m[i].wo, f, NLIM, fp);
+        for (int k = 0; k < NLIM; k++) {
+            const double c = -dot3(o, d[k]), ref = tab_interp(&t[i], c);
+            worst_i = fmax(worst_i, fabs(fp[2 * k] - ref) / fmax(ref, 1e-3));
+            worst_i = fmax(worst_i, fabs(fp[2 * k + 1] - ref) / fmax(ref, 1e-3)); /* the density: exact sampler */
+            if (i < 2) worst_c[i] = fmax(worst_c[i], fabs(fp[2 * k] / (i ? rayleigh0(c) : hg07(c)) - 1));
+        }
+    }
+    CHECK(worst_i <= 1e-5, "Tabulated: largest relative departure from the table's interpolation %.3g", worst_i);
+    CHECK(worst_c[0] <= 2e-4, "Tabulated HG 0.7: largest relative departure from the closed form %.3g", worst_c[0]);
+    CHECK(worst_c[1] <= 2e-4, "Tabulated Rayleigh: largest relative departure from the closed form %.3g", worst_c[1]);
+    printf("tabulated: the interpolation within %.2g, HG within %.2g, Rayleigh within %.2g\n", worst_i, worst_c[0],
+           worst_c[1]);
+
+    /* the sampler against its own interpolated density, normalisation included */
+    for (int i = 0; i < 3; i++) {
+        gof_case gc = {.m = m[i], .lo = -1, .integral = 1, .int_tol = 1e-4};
+        for (int k = 0; k < 3; k++) gc.axis[k] = -wos[i][k];
+        gof(&gc, 110 + i);
+    }
+
+    /* a stack of two tables (each medium finds its own) against the closed forms they
+     * tabulate, on the same paths */
+    const double deg[] = {0, 45, 80};
+    char text[1024], rayleigh_path[256];
+    snprintf(rayleigh_path, sizeof rayleigh_path, "%s/rayleigh.txt", tab_dir);
+    snprintf(text, sizeof text, "Medium\nLayer z=2 NullBsdf\nMedium mus=1 TabulatedPhase table=@%s\nLayer z=1 NullBsdf\n"
+             "Medium mus=0.5 TabulatedPhase table=@%s\nLayer z=0 NullBsdf\nMedium\n", hg_path, rayleigh_path);
+    for (int dbl = 0; dbl < 2; dbl++) { /* float and --double: the tables in each precision */
+        lsqt_state sa, sb;
+        lsqt_slice_est *ea = fixture_run_prec(text, 3, deg, 64, 40000, 23, dbl, &sa);
+        lsqt_slice_est *eb = fixture_run_prec("Medium\nLayer z=2 NullBsdf\nMedium mus=1 HenyeyGreensteinPhase g=0.7\n"
+                                              "Layer z=1 NullBsdf\nMedium mus=0.5 RayleighPhase\nLayer z=0 NullBsdf\n"
+                                              "Medium\n", 3, deg, 64, 40000, 23, dbl, &sb);
+        const char *prec = dbl ? "double" : "float";
+        for (int s = 0; s < 3; s++) {
+            const lsqt_est dr = paired(&sa, &sb, s, LSQT_T_R), dt = paired(&sa, &sb, s, LSQT_T_T);
+            const double r = eb[s].R.mean, tt = eb[s].T.mean;
+            CHECK(fabs(dr.mean) <= 4 * dr.err + 2e-4 * r, "Tabulated HG over Rayleigh (%s), %g degrees: R - R(closed "
+                  "forms) = %.3g +- %.2g (R %.4f)", prec, deg[s], dr.mean, dr.err, r);
+            CHECK(fabs(dt.mean) <= 4 * dt.err + 2e-4 * tt, "Tabulated HG over Rayleigh (%s), %g degrees: T - T(closed "
+                  "forms) = %.3g +- %.2g (T %.4f)", prec, deg[s], dt.mean, dt.err, tt);
+            CHECK(4 * dr.err + 2e-4 * r < 0.01 * r && 4 * dt.err + 2e-4 * tt < 0.01 * tt,
+                  "Tabulated HG over Rayleigh (%s), %g degrees: the test cannot see 1 %% (R +- %.2g, T +- %.2g)", prec,
+                  deg[s], dr.err, dt.err);
+            printf("Tabulated HG over Rayleigh (%s) %2g deg: R %.5f - closed %+.2e +- %.1e, T %.5f - closed %+.2e +- "
+                   "%.1e\n", prec, deg[s], ea[s].R.mean, dr.mean, dr.err, ea[s].T.mean, dt.mean, dt.err);
+        }
+        lsqt_estimates_free(ea, 3), lsqt_estimates_free(eb, 3);
+        lsqt_state_free(&sa), lsqt_state_free(&sb);
+    }
+    /* the coarse table in a lossless slab: R + T = 1, next-event estimates = exits (7) */
+    char coarse_path[256];
+    snprintf(coarse_path, sizeof coarse_path, "%s/coarse.txt", tab_dir);
+    snprintf(text, sizeof text, "Medium\nLayer z=1 NullBsdf\nMedium mus=1 TabulatedPhase table=@%s\nLayer z=0 NullBsdf\n"
+             "Medium\n", coarse_path);
+    stack("Tabulated coarse slab", text, 100000);
+    for (int i = 0; i < 3; i++) lsqt_phase_table_free(&t[i]), free(store[i]);
+    const char *names[] = {"hg07.txt", "rayleigh.txt", "coarse.txt"};
+    for (int i = 0; i < 3; i++) {
+        char path[256];
+        snprintf(path, sizeof path, "%s/%s", tab_dir, names[i]);
+        remove(path);
+    }
+    remove(tab_dir);
+}
+
 /* ---------------------------------------------------------------- main */
 
 static int want(int argc, char **argv, const char *sec)
@@ -1156,13 +1351,14 @@ int main(int argc, char **argv)
     CHECK(fabs(ks_p(1.3581 / 1e6, 1e12) - 0.05) < 1e-4, "ks_p at Kolmogorov's 5 %% point: %.6f", ks_p(1.3581 / 1e6, 1e12));
     fixture_open();
     prog = fixture_build("-cl-std=CL1.2 -DLSQT_HAS_PHASE_HG=1 -DLSQT_HAS_PHASE_HG2=1 -DLSQT_HAS_PHASE_RAYLEIGH=1 "
-                         "-DLSQT_HAS_PHASE_SGGX=1 -DLSQT_HAS_PHASE_DRAINE=1 -DLSQT_HAS_BSDF_OREN_NAYAR=1");
+                         "-DLSQT_HAS_PHASE_SGGX=1 -DLSQT_HAS_PHASE_DRAINE=1 -DLSQT_HAS_PHASE_TABULATED=1 "
+                         "-DLSQT_HAS_BSDF_OREN_NAYAR=1");
     if (!prog) return check_finish("test_phases");
     printf("build %.1f s\n", check_now() - t_start);
     const char *secs[] = {"hg2", "rayleigh", "sggx-specular", "sggx-diffuse", "oren-nayar", "peaks", "rayleigh-ks",
-                          "limits", "reciprocity", "stacks", "draine"};
-    enum { NSEC = 11 };
-    static const int n_pvalues[NSEC] = {6, 8, 18, 18, 30, 6, 5, 0, 1, 0, 8}; /* per section; they sum to N_FAMILY */
+                          "limits", "reciprocity", "stacks", "draine", "tabulated"};
+    enum { NSEC = 12 };
+    static const int n_pvalues[NSEC] = {6, 8, 18, 18, 30, 6, 5, 0, 1, 0, 8, 6}; /* per section; they sum to N_FAMILY */
     int sum = 0;
     for (int k = 0; k < NSEC; k++) sum += n_pvalues[k];
     CHECK(sum == N_FAMILY, "n_pvalues sum to %d, N_FAMILY is %d", sum, N_FAMILY);
@@ -1189,6 +1385,7 @@ int main(int argc, char **argv)
         case 8: reciprocity(); break;
         case 9: stacks(); break;
         case 10: draine(); break;
+        case 11: tabulated(); break;
         }
         printf("[%s: %.1f s]\n", secs[k], check_now() - t0);
     }

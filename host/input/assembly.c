@@ -30,14 +30,24 @@ static const char *choice_word(const lsqt_key *k, int v)
     return "?";
 }
 
-/* " key=value" for every key of the model, read from the line's struct. */
-static void write_keys(lsqt_sb *sb, const lsqt_model *m, const unsigned char *base)
+/* " key=value" for every key of the model, read from the line's struct. A table is
+ * written by its content, not its file: "@ROWSrows:FNV" (its row count and the hash of its
+ * rows, lsqt_phase_table), so two runs differ where their tables do, whatever the files'
+ * names; such a text does not read back as input. */
+static void write_keys(lsqt_sb *sb, const lsqt_assembly *a, const lsqt_model *m, const unsigned char *base)
 {
     for (int i = 0; i < m->n_keys; i++) {
         const lsqt_key *k = &m->keys[i];
         const void *field = base + k->offset;
         if (k->type == LSQT_NUM) {
             lsqt_sb_printf(sb, " %s=%.17g", k->name, *(const double *)field);
+        } else if (k->type == LSQT_TABLE) {
+            const int t = (int)*(const double *)field;
+            if (t >= 1 && t <= a->n_phase_tables)
+                lsqt_sb_printf(sb, " %s=@%drows:%016llx", k->name, a->phase_tables[t - 1].n,
+                               (unsigned long long)a->phase_tables[t - 1].hash);
+            else
+                lsqt_sb_printf(sb, " %s=@?", k->name);
         } else {
             int v = k->in_double ? (int)*(const double *)field : *(const int *)field;
             if (k->type == LSQT_INT)
@@ -49,17 +59,17 @@ static void write_keys(lsqt_sb *sb, const lsqt_model *m, const unsigned char *ba
 }
 
 /* One line: head and its keys, then the model (if any) and its keys. */
-static void write_line(lsqt_sb *sb, const lsqt_line_desc *d, const void *obj, int with_model)
+static void write_line(lsqt_sb *sb, const lsqt_assembly *a, const lsqt_line_desc *d, const void *obj, int with_model)
 {
     const unsigned char *base = obj;
     lsqt_sb_printf(sb, "%s", d->head->name);
-    write_keys(sb, d->head, base);
+    write_keys(sb, a, d->head, base);
     if (with_model) {
         int kind = *(const int *)(const void *)(base + d->kind_offset);
         const lsqt_model *m = lsqt_model_of_kind(d, kind);
         lsqt_sb_printf(sb, " %s", m ? m->name : "?");
         if (m)
-            write_keys(sb, m, base);
+            write_keys(sb, a, m, base);
     }
     lsqt_sb_printf(sb, "\n");
 }
@@ -129,9 +139,9 @@ size_t lsqt_assembly_canonical(const lsqt_assembly *a, char *buf, size_t cap)
     lsqt_sb_init(&sb, buf, cap);
     for (int i = 0; a->media && i <= a->n_layers; i++) {
         const lsqt_medium *m = &a->media[i];
-        write_line(&sb, &lsqt_medium_line, m, m->phase.kind != LSQT_PHASE_NONE);
+        write_line(&sb, a, &lsqt_medium_line, m, m->phase.kind != LSQT_PHASE_NONE);
         if (i < a->n_layers)
-            write_line(&sb, &lsqt_layer_line, &a->layers[i], 1);
+            write_line(&sb, a, &lsqt_layer_line, &a->layers[i], 1);
     }
     return sb.len;
 }

@@ -1,5 +1,6 @@
 /* Wavelength lists and spectral tables (lsqt/bands.h). */
 #include "lsqt/bands.h"
+#include "lsqt/assembly.h"
 #include "lsqt/cli.h"
 #include "lsqt/colour.h"
 
@@ -249,4 +250,109 @@ void lsqt_band_path(const char *path, const char *label, char *dst, size_t cap)
     size_t n = strlen(path);
     const int raw = n >= 4 && strcmp(path + n - 4, ".raw") == 0;
     snprintf(dst, cap, "%.*s.%s%s", (int)(raw ? n - 4 : n), path, label, raw ? ".raw" : "");
+}
+
+/* ---- A phase function's table (a TABLE key, KEY=@FILE; lsqt/assembly.h) --------------- */
+
+void lsqt_phase_table_free(lsqt_phase_table *t)
+{
+    free(t->mu), free(t->p), free(t->cdf);
+    memset(t, 0, sizeof *t);
+}
+
+/* The token f (n bytes) for a message: at most 40 bytes. */
+static const char *token(const char *f, size_t n, char out[48])
+{
+    size_t k = n < 40 ? n : 40;
+    for (size_t i = 0; i < k; i++) out[i] = f[i] >= 0x20 && f[i] < 0x7f ? f[i] : '?';
+    out[k] = '\0';
+    return out;
+}
+
+#define PT_FAIL(...) \
+    do { snprintf(err, errcap, __VA_ARGS__); lsqt_phase_table_free(t); return 2; } while (0)
+
+int lsqt_phase_table_parse(const char *text, size_t len, const char *name, lsqt_phase_table *t, char *err,
+                           size_t errcap)
+{
+    memset(t, 0, sizeof *t);
+    int cap = 0, line = 0, dir = 0;
+    char tk[48];
+    const char *p = text, *end = text + len;
+    while (p < end) {
+        const char *nl = memchr(p, '\n', (size_t)(end - p)), *le = nl ? nl : end, *hash = memchr(p, '#', (size_t)(le - p));
+        line++;
+        const char *nul = memchr(p, '\0', (size_t)(le - p));
+        if (nul)
+            PT_FAIL("%s:%d: a NUL byte (column %d): a phase table is text, rows of cos theta and its value", name, line,
+                    (int)(nul - p) + 1);
+        const char *f[3];
+        size_t fn[3];
+        int k = fields(p, hash ? hash : le, f, fn);
+        p = nl ? nl + 1 : end;
+        if (k == 0) continue;
+        double mu, v;
+        if (k != 2)
+            PT_FAIL("%s:%d: %s at '%s': expected two numbers, cos theta and the phase function's value "
+                    "(a phase table, not a wavelength table)", name, line, k == 1 ? "one column" : "more than two columns",
+                    token(f[0], fn[0], tk));
+        if (number(f[0], fn[0], &mu)) PT_FAIL("%s:%d: '%s' is not a number: expected cos theta", name, line, token(f[0], fn[0], tk));
+        if (number(f[1], fn[1], &v)) PT_FAIL("%s:%d: '%s' is not a number: expected the phase function's value", name, line,
+                                             token(f[1], fn[1], tk));
+        if (!(fabs(mu) <= 1 + 1e-9))
+            PT_FAIL("%s:%d: cos theta '%s' outside [-1, 1] (a phase table's first column is cos theta, not an angle "
+                    "or a wavelength)", name, line, token(f[0], fn[0], tk));
+        if (!(v >= 0) || !isfinite(v))
+            PT_FAIL("%s:%d: value '%s' is negative: a phase function is >= 0", name, line, token(f[1], fn[1], tk));
+        mu = mu > 1 ? 1 : mu < -1 ? -1 : mu;
+        if (t->n > 0) {
+            const double prev = t->mu[t->n - 1];
+            const int d = mu > prev ? 1 : mu < prev ? -1 : 0;
+            if (d == 0 || (dir && d != dir))
+                PT_FAIL("%s:%d: cos theta '%s' after %.17g: the rows must go one way in cos theta, increasing or "
+                        "decreasing, with no repeats", name, line, token(f[0], fn[0], tk), prev);
+            dir = d;
+        }
+        if (t->n == cap) {
+            int nc = cap ? 2 * cap : 256;
+            double *a = realloc(t->mu, (size_t)nc * sizeof *a);
+            if (a) t->mu = a;
+            double *b = a ? realloc(t->p, (size_t)nc * sizeof *b) : NULL;
+            if (b) t->p = b;
+            if (!b) PT_FAIL("%s: out of memory", name);
+            cap = nc;
+        }
+        t->mu[t->n] = mu, t->p[t->n] = v, t->n++;
+    }
+    if (t->n < 2)
+        PT_FAIL("%s: too few rows (%d): a phase table needs at least 2 rows of cos theta and value, from -1 to 1", name,
+                t->n);
+    if (dir < 0) /* descending (theta from 0 to pi, as Mie codes write it): turn it round */
+        for (int i = 0, j = t->n - 1; i < j; i++, j--) {
+            double a = t->mu[i], b = t->p[i];
+            t->mu[i] = t->mu[j], t->p[i] = t->p[j], t->mu[j] = a, t->p[j] = b;
+        }
+    if (t->mu[0] > -1 + 1e-6 || t->mu[t->n - 1] < 1 - 1e-6)
+        PT_FAIL("%s: cos theta covers [%.9g, %.9g]: a phase table must cover [-1, 1] (its first and last rows at -1 "
+                "and 1)", name, t->mu[0], t->mu[t->n - 1]);
+    t->mu[0] = -1, t->mu[t->n - 1] = 1;
+    if (!(t->cdf = malloc((size_t)t->n * sizeof *t->cdf))) PT_FAIL("%s: out of memory", name);
+    /* the trapezoid rule is the integral of the linear interpolation; 2 pi for the azimuth */
+    t->cdf[0] = 0;
+    for (int i = 1; i < t->n; i++)
+        t->cdf[i] = t->cdf[i - 1] + 0.5 * (t->p[i - 1] + t->p[i]) * (t->mu[i] - t->mu[i - 1]);
+    const double total = 2 * 3.14159265358979323846 * t->cdf[t->n - 1];
+    if (!(total > 0) || !isfinite(total))
+        PT_FAIL("%s: the phase function integrates to %g: it must be positive somewhere (and finite)", name, total);
+    for (int i = 0; i < t->n; i++) t->p[i] /= total, t->cdf[i] /= t->cdf[t->n - 1];
+    t->cdf[t->n - 1] = 1;
+    /* the phase function's identity: its rows normalised (a table and its multiple are one) */
+    uint64_t h = 14695981039346656037ULL;
+    for (int i = 0; i < t->n; i++) {
+        const double row[2] = {t->mu[i], t->p[i]};
+        const unsigned char *b = (const unsigned char *)row;
+        for (size_t k = 0; k < sizeof row; k++) h = (h ^ b[k]) * 1099511628211ULL;
+    }
+    t->hash = h;
+    return 0;
 }

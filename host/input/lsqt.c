@@ -52,7 +52,8 @@ static const lsqt_model layer_head = MODEL("Layer", NULL, 0, NULL, layer_keys);
 /* The models' keys and tables, expanded from include/lsqt/model_list.h. A key fills its
  * slot of lsqt_phase.v or lsqt_layer.v (a double, integers and choices too). */
 #define PHASE_KEY(ID, F, name, type, def, lo, lo_open, hi, hi_open, words) \
-    { name, LSQT_##type, def, lo, hi, lo_open, hi_open, words, PHASE(v) + LSQT_##ID##_##F * sizeof(double), 0, 1 },
+    { name, LSQT_##type, def, lo, hi, lo_open, hi_open, words, PHASE(v) + LSQT_##ID##_##F * sizeof(double), \
+      LSQT_##type == LSQT_TABLE, 1 },
 #define BSDF_KEY(ID, F, name, type, def, lo, lo_open, hi, hi_open, words) \
     { name, LSQT_##type, def, lo, hi, lo_open, hi_open, words, LAY(v) + LSQT_##ID##_##F * sizeof(double), 0, 1 },
 #define PHASE_KEYS(ID, ...) static const lsqt_key ID##_phase_keys[] = { LSQT_KEYS_##ID(PHASE_KEY, ID) };
@@ -160,6 +161,8 @@ typedef struct parser {
     int prune_at;                   /* >= 0: prune below this layer (the first opaque in every band) */
     const unsigned char *keep_phase; /* per medium: 1 when it scatters in some band, so its phase
                                       * model stays where its mus is 0 */
+    lsqt_phase_table *ptabs;        /* the phase tables read (TABLE keys), for the assembly */
+    int n_ptabs;
 } parser;
 
 /* One line being read. */
@@ -354,6 +357,11 @@ static void describe_value(const lsqt_key *k, lsqt_sb *sb)
         lsqt_sb_printf(sb, "%s=", k->name);
         for (int i = 0; k->choices[i]; i++)
             lsqt_sb_printf(sb, "%s%s", i ? "|" : "", k->choices[i]);
+        return;
+    }
+    if (k->type == LSQT_TABLE) {
+        lsqt_sb_printf(sb, "%s=@FILE, a phase table (rows of cos theta and its value, covering [-1, 1]; the same in "
+                       "every band)", k->name);
         return;
     }
     lsqt_sb_printf(sb, "%s=<%s>", k->name, k->type == LSQT_INT ? "integer" : "number");
@@ -553,7 +561,9 @@ static int band_value(parser *P, const lsqt_key *k, span tok, span text, double 
             return fail(P, P->line, &tok, "a table for a whole number", "a number or a comma list of whole numbers");
         if (!P->bands || !P->bands->wl)
             return fail(P, P->line, &tok, "a table without wavelengths",
-                        "a number or a comma list (KEY=@FILE needs --wavelengths: the table is read at them)");
+                        "a number or a comma list (KEY=@FILE is a spectral table, wavelength and value, and needs "
+                        "--wavelengths: the table is read at them; a phase function's table of cos theta is "
+                        "a key of a tabulated model, such as table=@FILE)");
         span file = { text.p + 1, text.n - 1 };
         const lsqt_band_table *t = band_table(P, tok, file);
         if (!t)
@@ -605,6 +615,44 @@ static int band_value(parser *P, const lsqt_key *k, span tok, span text, double 
     return 0;
 }
 
+/* A TABLE key's value, table=@FILE: the phase table read (path relative to the bands'
+ * folder, as KEY=@FILE), kept for the assembly; *v its number (1-based). One table in
+ * every band: a list of them is refused. Returns 0, or 2 after fail(). */
+static int phase_table(parser *P, const lsqt_key *k, span tok, span text, double *v)
+{
+    char buf[400], path[LSQT_PATH_CAP], err[512];
+    lsqt_sb sb;
+    lsqt_sb_init(&sb, buf, sizeof buf);
+    describe_value(k, &sb);
+    if (text.n && memchr(text.p, ',', text.n))
+        return fail(P, P->line, &tok, "a list of phase tables", "one table, %s: a phase table is the same in every "
+                    "band (a table per band is not supported)", buf);
+    if (text.n < 2 || text.p[0] != '@')
+        return fail(P, P->line, &tok, text.n && text.p[0] == '@' ? "an empty table path" : "not a table", "%s", buf);
+    const char *dir = P->bands ? P->bands->dir : NULL;
+    int n = snprintf(path, sizeof path, "%s%s%.*s", text.p[1] != '/' && dir ? dir : "", text.p[1] != '/' && dir ? "/" : "",
+                     (int)text.n - 1, text.p + 1);
+    if (n < 0 || (size_t)n >= sizeof path)
+        return fail(P, P->line, &tok, "table path too long", "a path of fewer than %d bytes", LSQT_PATH_CAP);
+    size_t len = 0;
+    char *t_text = lsqt_read_text(path, LSQT_INPUT_MAX, &len, err, sizeof err);
+    lsqt_phase_table t;
+    if (!t_text || lsqt_phase_table_parse(t_text, len, path, &t, err, sizeof err)) {
+        free(t_text);
+        return fail(P, P->line, &tok, "unreadable phase table", "%s: %s", buf, err);
+    }
+    free(t_text);
+    lsqt_phase_table *all = realloc(P->ptabs, (size_t)(P->n_ptabs + 1) * sizeof *all);
+    if (!all) {
+        lsqt_phase_table_free(&t);
+        return out_of_memory(P);
+    }
+    P->ptabs = all;
+    P->ptabs[P->n_ptabs++] = t;
+    *v = P->n_ptabs;
+    return 0;
+}
+
 /* ---- One line ------------------------------------------------------------------------ */
 
 static int read_key(parser *P, line_state *ls, span tok, const char *eq)
@@ -632,7 +680,13 @@ static int read_key(parser *P, line_state *ls, span tok, const char *eq)
         return fail(P, P->line, &tok, "repeated key", "%s at most once (already given as '%s')",
                     k->name, show(*given, shown));
     double v = 0;
-    if (k->type != LSQT_CHOICE && text.n && (text.p[0] == '@' || memchr(text.p, ',', text.n))) {
+    if (k->type == LSQT_TABLE) {
+        if (ls->desc != &lsqt_medium_line)
+            return fail(P, P->line, &tok, "a table key of a BSDF", "a phase function's table (BSDFs have none yet)");
+        if (phase_table(P, k, tok, text, &v))
+            return 2;
+        ((lsqt_medium *)(void *)ls->base)->phase.table = (int)v;
+    } else if (k->type != LSQT_CHOICE && text.n && (text.p[0] == '@' || memchr(text.p, ',', text.n))) {
         if (band_value(P, k, tok, text, &v))
             return 2;
     } else {
@@ -711,6 +765,17 @@ static int check_required(parser *P, const line_state *ls)
             describe_value(&h->keys[i], &sb);
             snprintf(what, sizeof what, "missing required key %s", h->keys[i].name);
             return fail(P, P->line, &ls->head, what, "%s right after %s", buf, h->name);
+        }
+    }
+    const lsqt_model *m = ls->model;
+    for (int i = 0; m && i < m->n_keys; i++) {
+        if (m->keys[i].required && !ls->model_tok[i].p) {
+            char what[64], buf[256];
+            lsqt_sb sb;
+            lsqt_sb_init(&sb, buf, sizeof buf);
+            describe_value(&m->keys[i], &sb);
+            snprintf(what, sizeof what, "missing required key %s", m->keys[i].name);
+            return fail(P, P->line, &ls->head, what, "%s after %s", buf, m->name);
         }
     }
     return 0;
@@ -951,6 +1016,8 @@ static int hand_over(parser *P, lsqt_assembly *out)
         out->media[i] = P->media[i].m;
     out->n_layers = P->n_layers;
     out->n_pruned_layers = P->n_pruned;
+    out->phase_tables = P->ptabs, out->n_phase_tables = P->n_ptabs;
+    P->ptabs = NULL, P->n_ptabs = 0;
     return 0;
 }
 
@@ -998,6 +1065,9 @@ static int parse_into(parser *P, const char *text, size_t len, const char *name,
         rc = hand_over(P, out);
     free(P->media);
     free(P->layers);
+    for (int i = 0; i < P->n_ptabs; i++)
+        lsqt_phase_table_free(&P->ptabs[i]);
+    free(P->ptabs);
     return rc;
 }
 

@@ -13,7 +13,9 @@
 enum lsqt_value_type {
     LSQT_NUM,   /* finite double */
     LSQT_INT,   /* integer, stored in an int */
-    LSQT_CHOICE /* one word of `choices`, stored as its index in an int */
+    LSQT_CHOICE, /* one word of `choices`, stored as its index in an int */
+    LSQT_TABLE   /* KEY=@FILE, a phase function's table (lsqt_phase_table), required: stored
+                  * as 1 + its index in the assembly's phase_tables (and in lsqt_phase.table) */
 };
 
 typedef struct lsqt_key {

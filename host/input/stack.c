@@ -16,9 +16,30 @@ void lsqt_assembly_free(lsqt_assembly *a)
     for (int i = 0; i < a->n_tables; i++)
         free(a->tables[i]);
     free(a->tables);
+    for (int i = 0; i < a->n_phase_tables; i++)
+        lsqt_phase_table_free(&a->phase_tables[i]);
+    free(a->phase_tables);
     free(a->layers);
     free(a->media);
     memset(a, 0, sizeof *a);
+}
+
+int lsqt_phase_tables_copy(const lsqt_assembly *from, lsqt_assembly *to)
+{
+    to->n_phase_tables = 0;
+    to->phase_tables = from->n_phase_tables ? calloc((size_t)from->n_phase_tables, sizeof *to->phase_tables) : NULL;
+    if (from->n_phase_tables && !to->phase_tables) return 2;
+    for (int t = 0; t < from->n_phase_tables; t++) {
+        const lsqt_phase_table *f = &from->phase_tables[t];
+        lsqt_phase_table *c = &to->phase_tables[t];
+        const size_t bytes = (size_t)f->n * sizeof(double);
+        c->n = f->n, c->hash = f->hash;
+        c->mu = malloc(bytes), c->p = malloc(bytes), c->cdf = malloc(bytes);
+        to->n_phase_tables = t + 1; /* freed with it whatever happens */
+        if (!c->mu || !c->p || !c->cdf) return 2;
+        memcpy(c->mu, f->mu, bytes), memcpy(c->p, f->p, bytes), memcpy(c->cdf, f->cdf, bytes);
+    }
+    return 0;
 }
 
 int lsqt_assembly_join(lsqt_assembly *each, int n, const double *wl, lsqt_assembly *out)

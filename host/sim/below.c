@@ -52,6 +52,10 @@ static int mirror_one(const lsqt_assembly *a, lsqt_assembly *out)
         out->layers[i].z = 0.0 - a->layers[n - 1 - i].z; /* 0.0 - 0.0 is +0: no "-0" in the text */
     }
     for (int m = 0; m <= n; m++) out->media[m] = a->media[n - m];
+    if (lsqt_phase_tables_copy(a, out)) { /* the media's tables (their numbers stay) */
+        lsqt_assembly_free(out);
+        return 2;
+    }
     return 0;
 }
 

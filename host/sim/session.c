@@ -264,7 +264,26 @@ static int upload(lsqt_session *s, const lsqt_assembly *full, const lsqt_band_bl
     cl_mem_flags ro = CL_MEM_READ_ONLY, rw = CL_MEM_READ_WRITE;
     cl_uint flags0 = 0;
     s->scene = make_buffer(cx, ro, sizeof scene, &scene, &e);
-    s->media = make_buffer(cx, ro, ((size_t)n + 1) * media_size, (void *)media_up, &e);
+    /* the phase functions' tables follow the media in their buffer (tables.h) */
+    const size_t n_pt = lsqt_device_phase_tables(a, NULL), media_bytes = ((size_t)n + 1) * media_size;
+    unsigned char *media_all = malloc(media_bytes + n_pt * dir_size + 1);
+    double *pt = malloc(n_pt * sizeof *pt + 1);
+    if (!media_all || !pt || n_pt > ((size_t)1 << 24)) { /* pp holds offsets exactly in float up to 2^24 */
+        free(media_all), free(pt);
+        snprintf(err, errcap, !media_all || !pt ? "out of memory" : "phase tables too long (more than 2^24 reals)");
+        goto done;
+    }
+    lsqt_device_phase_tables(a, pt);
+    memcpy(media_all, media_up, media_bytes);
+    for (size_t i = 0; i < n_pt; i++) {
+        if (st->use_double) memcpy(media_all + media_bytes + i * sizeof(double), &pt[i], sizeof(double));
+        else {
+            const float f = (float)pt[i];
+            memcpy(media_all + media_bytes + i * sizeof f, &f, sizeof f);
+        }
+    }
+    s->media = make_buffer(cx, ro, media_bytes + n_pt * dir_size, media_all, &e);
+    free(media_all), free(pt);
     s->layers = make_buffer(cx, ro, (size_t)n * layer_size, (void *)layers_up, &e);
     s->wo = make_buffer(cx, ro, n_wo * dir_size, wo_up, &e);
     s->wi = make_buffer(cx, ro, wi_bytes, wi_up, &e);

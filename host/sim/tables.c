@@ -103,6 +103,12 @@ void lsqt_device_tables(const lsqt_assembly *a, lsqt_dev_scene *scene, lsqt_dev_
         d->thickness = medium_thickness(a, m);
         d->phase_kind = src->mus > 0 ? src->phase.kind : LSQT_PHASE_NONE;
         phase_params(&src->phase, d->pp);
+        const int t = src->phase.table;
+        if (t >= 1 && t <= a->n_phase_tables) { /* where its table is (model_list.h) */
+            size_t off = 0;
+            for (int u = 0; u < t - 1; u++) off += LSQT_PHASE_TABLE_REALS(a->phase_tables[u].n);
+            d->pp[0] = n + 1 - m, d->pp[1] = (double)off, d->pp[2] = a->phase_tables[t - 1].n;
+        }
     }
     /* Optical thickness of the interior media strictly above / below each medium. */
     double acc = 0.0;
@@ -115,6 +121,30 @@ void lsqt_device_tables(const lsqt_assembly *a, lsqt_dev_scene *scene, lsqt_dev_
         media[m].tau_below = acc;
         acc += medium_tau(a, m);
     }
+}
+
+size_t lsqt_device_phase_tables(const lsqt_assembly *a, double *out)
+{
+    size_t k = 0;
+    for (int t = 0; t < a->n_phase_tables; t++) {
+        const lsqt_phase_table *p = &a->phase_tables[t];
+        if (out) {
+            const size_t n = (size_t)p->n;
+            memcpy(out + k, p->mu, n * sizeof *out);
+            memcpy(out + k + n, p->p, n * sizeof *out);
+            memcpy(out + k + 2 * n, p->cdf, n * sizeof *out);
+            /* the index: per cell j of n equal cells in mu, the row interval holding its
+             * lower edge -1 + 2 j / n (j = n: the last interval) */
+            int i = 0;
+            for (size_t j = 0; j <= n; j++) {
+                const double x = -1.0 + 2.0 * (double)j / (double)n;
+                while (i + 2 < p->n && p->mu[i + 1] <= x) i++;
+                out[k + 3 * n + j] = i;
+            }
+        }
+        k += LSQT_PHASE_TABLE_REALS(p->n);
+    }
+    return k;
 }
 
 void lsqt_tables_to_float(const lsqt_dev_medium_d *md, lsqt_dev_medium *mf, int n_media,

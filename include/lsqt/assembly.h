@@ -17,7 +17,27 @@ extern "C" {
 typedef struct lsqt_phase {
     int kind;                  /* enum lsqt_phase_kind */
     double v[LSQT_MAX_MODEL_KEYS]; /* its keys' values, slot LSQT_<ID>_<key> (model_list.h) */
+    int table;                 /* its TABLE key's table: 1 + its index in the assembly's
+                                  phase_tables, 0 for none (also in v[], its key's slot) */
 } lsqt_phase;
+
+/* A phase function's table (a model's TABLE key, model_list.h): n >= 2 rows of cos theta
+ * (mu, increasing from -1 to 1), its value p normalised to 2 pi int p dmu = 1 (the
+ * trapezoid rule: exact for the linear interpolation the kernels evaluate), and cdf, the
+ * integral from -1 to mu[i] (0 at mu[0], 1 at mu[n-1]). hash: FNV-1a of the rows (mu, p)
+ * normalised, what the canonical text says of the table (a table and its multiples are
+ * the same phase function). */
+typedef struct lsqt_phase_table {
+    int n;
+    double *mu, *p, *cdf;
+    uint64_t hash;
+} lsqt_phase_table;
+
+/* Reads TEXT (rows "cos_theta value", '#' comments, either order in cos theta) into *t.
+ * Returns 0, or 2 with "NAME:LINE: why" in err. lsqt_phase_table_free frees it. */
+int lsqt_phase_table_parse(const char *text, size_t len, const char *name, lsqt_phase_table *t, char *err,
+                           size_t errcap);
+void lsqt_phase_table_free(lsqt_phase_table *t);
 
 typedef struct lsqt_medium {
     double eta, mua, mus;
@@ -47,6 +67,8 @@ typedef struct lsqt_assembly {
     double *wavelengths;   /* n_bands nm, or NULL: unnamed bands (three are R, G, B) */
     int n_tables;          /* the @FILE tables the text read (paths as opened), so that no */
     char **tables;         /* output of the run lands on one */
+    int n_phase_tables;    /* the phase functions' tables (lsqt_phase.table), the same */
+    lsqt_phase_table *phase_tables; /* in every band: each band's assembly holds its own copy */
 } lsqt_assembly;
 
 /* Diagnostics. The parser never prints: it fills this, the caller decides. */
@@ -87,6 +109,11 @@ int lsqt_assembly_bands(const lsqt_assembly *a);
 const lsqt_assembly *lsqt_assembly_band(const lsqt_assembly *a, int b);
 
 void lsqt_assembly_free(lsqt_assembly *a);
+
+/* A copy of FROM's phase tables into TO (which has none): an assembly made from another's
+ * media (a mirror image) must carry them. Returns 0, or 2 out of memory (TO's freed with
+ * TO). */
+int lsqt_phase_tables_copy(const lsqt_assembly *from, lsqt_assembly *to);
 
 /* Canonical text of the assembly: one line per medium/layer, seed model names, every
  * key written with %.17g, so that equal assemblies give equal text. With bands, a first

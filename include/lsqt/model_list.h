@@ -13,7 +13,13 @@
  * p_phase_sample(m, v, wo, u1, u2, rng, wi) (the weight p / pdf); SAMPLER is EXACT (draws
  * exactly the phase function: its pdf is its value) or VERTEX (p_phase_vertex fixes a
  * random state per vertex and p_phase_pdf gives the density). MIRROR is 1 when the phase
- * function is its own mirror image under z -> -z (light from below, host/sim/below.c). */
+ * function is its own mirror image under z -> -z (light from below, host/sim/below.c).
+ *
+ * A model may carry one table: a key of TYPE TABLE (KEY=@FILE, a file of rows cos theta,
+ * value: a phase function's p(cos theta), read by host/input/bands.c, normalised, the same
+ * in every band). The engine puts the table on the device after the media (host/sim/
+ * tables.c) and owns pp[0..2]: medium_table(m) (kernels/common.cl) is its first real, and
+ * (int)m->pp[2] its row count; the model's own packing has pp[3]. */
 #ifndef LSQT_MODEL_LIST_H
 #define LSQT_MODEL_LIST_H
 
@@ -22,7 +28,8 @@
     X(HG2, 2, "HenyeyGreenstein2Phase", "HenyeyGreenstein2", hg2, EXACT, 1)              \
     X(RAYLEIGH, 3, "RayleighPhase", "Rayleigh", rayleigh, EXACT, 1)                        \
     X(SGGX, 4, "SggxPhase", "Sggx", sggx, VERTEX, 1)                                       \
-    X(DRAINE, 5, "DrainePhase", "Draine", draine, EXACT, 1)
+    X(DRAINE, 5, "DrainePhase", "Draine", draine, EXACT, 1)                                \
+    X(TABULATED, 6, "TabulatedPhase", "Tabulated", tabulated, EXACT, 1)
 
 /* BSDFs (NullBsdf, kind 0, is the host's own): X(ID, kind number, seed name, short name,
  * kernel prefix, SAMPLER, MIRROR, TRANSMITS, BANDS, B0, B1, ALPHA). kernels/bsdf_*.cl defines p_evalv(l, wo, wi)
@@ -111,8 +118,8 @@ enum { LSQT_PHASES(LSQT_ON_PHASE_) LSQT_BSDFS(LSQT_ON_BSDF_) LSQT_ON_NONE_ = 0 }
 #if !defined(__OPENCL_VERSION__) && !defined(__OPENCL_C_VERSION__)
 
 /* ---- Keys: K(ID, FIELD, "name", TYPE, default, lo, lo_open, hi, hi_open, words) --------------
- * TYPE is NUM (a finite double), INT or CHOICE (one of the NULL-terminated words, stored as
- * its index). Every key has a slot in its line's v[] (lsqt_phase.v, lsqt_layer.v), named
+ * TYPE is NUM (a finite double), INT, CHOICE (one of the NULL-terminated words, stored as
+ * its index) or TABLE (KEY=@FILE, required; the table's number in the assembly, 1-based). Every key has a slot in its line's v[] (lsqt_phase.v, lsqt_layer.v), named
  * LSQT_<ID>_<FIELD>, in the order of the list, which is also the order keys are written back. */
 
 /* Henyey-Greenstein's g: its peak, (1 + |g|) / (4 pi (1 - |g|)^2), is a next-event
@@ -133,6 +140,8 @@ enum { LSQT_PHASES(LSQT_ON_PHASE_) LSQT_BSDFS(LSQT_ON_BSDF_) LSQT_ON_NONE_ = 0 }
 /* Draine's alpha: 0 is Henyey-Greenstein, 1 at g = 0 is Rayleigh's shape; the bound only
  * keeps the numbers sane (the sampler's acceptance stays above 1/3 for any alpha). */
 #define LSQT_KEYS_DRAINE(K, ID) LSQT_KEY_G_(K, ID, g, "g") K(ID, alpha, "alpha", NUM, 0, 0, 0, 1e3, 0, 0)
+/* TabulatedPhase: p(cos theta) from a table (required: no default) */
+#define LSQT_KEYS_TABULATED(K, ID) K(ID, table, "table", TABLE, 0, 0, 0, 0, 0, 0)
 
 /* Microsurfaces: alpha's default 0.5; iter_count's default 0 means "auto" (resolved from
  * alpha once the line is read). */
@@ -172,6 +181,8 @@ enum { LSQT_PHASES(LSQT_ON_PHASE_) LSQT_BSDFS(LSQT_ON_BSDF_) LSQT_ON_NONE_ = 0 }
 #define LSQT_PACK_DRAINE(v, pp)                                                                      \
     pp[0] = v[LSQT_DRAINE_g], pp[1] = v[LSQT_DRAINE_alpha],                                          \
     pp[2] = 1.0 / (1.0 + v[LSQT_DRAINE_alpha] * (1.0 + 2.0 * v[LSQT_DRAINE_g] * v[LSQT_DRAINE_g]) / 3.0);
+/* the table and its place are the engine's (pp[0..2], above) */
+#define LSQT_PACK_TABULATED(v, pp) pp[3] = 0;
 
 #define LSQT_PACK_LAMBERTIAN(v, up, down, p) p[0] = v[LSQT_LAMBERTIAN_fR], p[1] = v[LSQT_LAMBERTIAN_fT];
 #define LSQT_PACK_MS_LAMBERTIAN(v, up, down, p) \
