@@ -18,7 +18,7 @@
  *   weight grows without bound, and where another band would have gone elsewhere (its
  *   extinction or its fs : fo far from the hero's) a band keeps its path;
  * - a vertex's next-event terms are evaluated once, for the unit model and the least
- *   optical depths, into the scratch sums (c->sum), and spread to each band's sums with
+ *   optical depths, into the scratch sums (c->sink.sum), and spread to each band's sums with
  *   the band's factor and, where its media are deeper, its extra transmittance.
  * A block's paths are its own (the hero and the per-band roulette draw numbers a one-band
  * walk does not), so a band of a block agrees with its one-band run within the error
@@ -27,7 +27,7 @@
 #error "band blocks run on the CPU code path only"
 #endif
 
-LSQT_INLINE real band_tab(const walk_ctx *c, int at) { return c->bw[at]; }
+LSQT_INLINE real band_tab(const walk_ctx *c, int at) { return c->in.bw[at]; }
 
 /* Whether layer l's bands differ by factors of a unit model, or by the index of its
  * facets (the model list's BANDS column). */
@@ -53,13 +53,13 @@ LSQT_INLINE int layer_bands_index(__global const lsqt_dev_layer *l)
  * largest over the block (0: clear in every band). */
 LSQT_INLINE real band_hero_mut(const walk_ctx *c, int mi)
 {
-    if (LSQT_NB == 1) return c->media[mi].mut;
-    return band_tab(c, LSQT_BAND_MUT(c->scene->n_layers, LSQT_NBP, c->hero, mi));
+    if (LSQT_NB == 1) return c->in.media[mi].mut;
+    return band_tab(c, LSQT_BAND_MUT(c->in.scene->n_layers, LSQT_NBP, c->band.hero, mi));
 }
 
 LSQT_INLINE real band_most_mut(const walk_ctx *c, int mi)
 {
-    return LSQT_NB == 1 ? c->media[mi].mut : band_tab(c, mi);
+    return LSQT_NB == 1 ? c->in.media[mi].mut : band_tab(c, mi);
 }
 
 /* Russian roulette per band, as each band's own walk would play it: a band whose weight
@@ -96,7 +96,7 @@ LSQT_INLINE int band_scale(real *wb, real f)
     return live;
 }
 
-/* Spreads the scratch sums of one vertex (c->sum, weight 1, the unit model at the least
+/* Spreads the scratch sums of one vertex (c->sink.sum, weight 1, the unit model at the least
  * depths) into each band's sums: lanes on wo's side (z * woz > 0) times cs[b], the others
  * co[b], and each times 2^-(dtu[b] a_up + dtd[b] a_down), the band's transmittance beyond
  * the least depths (skipped where no band has any). Clears the scratch sums. One band's
@@ -107,26 +107,26 @@ LSQT_INLINE void band_spread(const walk_ctx *c, real woz, const real *cs, const 
     if (LSQT_NB == 1) return;
     int deeper = 0;
     for (int b = 0; b < LSQT_NB; b++) deeper |= dtu[b] != R(0.0) || dtd[b] != R(0.0);
-    __global const real *zs = c->wi + 2 * LSQT_NWI_PAD, *a_up = c->tab, *a_down = c->tab + LSQT_NWI_PAD;
-    __local real *u = c->sum, *bs = c->bsum;
+    __global const real *zs = c->in.wi + 2 * LSQT_NWI_PAD, *a_up = c->in.tab, *a_down = c->in.tab + LSQT_NWI_PAD;
+    __local real *u = c->sink.sum, *bs = c->sink.bsum;
     uint on = 0; /* the bands with a term here (the others' weights are 0) */
     for (int b = 0; b < LSQT_NB; b++) on |= (cs[b] != R(0.0) || co[b] != R(0.0)) ? 1u << b : 0u;
-    *c->touched |= on;
+    *c->band.touched |= on;
     for (int k = 0; k < LSQT_NWI_PAD; k += LSQT_VW) {
-        const realv v = VBLOCK(realv, u, k);
+        const realv v = VEC_AT(realv, u, k);
         if (!anyv(v != R(0.0))) continue;
-        VBLOCK(realv, u, k) = (realv)(R(0.0));
+        VEC_AT(realv, u, k) = (realv)(R(0.0));
         const maskv same = vloadv(0, zs + k) * woz > R(0.0);
         if (deeper) {
             const realv au = vloadv(0, a_up + k), ad = vloadv(0, a_down + k);
             for (int b = 0; b < LSQT_NB; b++) {
                 if (!(on >> b & 1u)) continue;
                 const realv t = exp2_negv(-(dtu[b] * au + dtd[b] * ad));
-                VBLOCK(realv, bs + b * LSQT_NWI_PAD, k) += select((realv)(co[b]), (realv)(cs[b]), same) * t * v;
+                VEC_AT(realv, bs + b * LSQT_NWI_PAD, k) += select((realv)(co[b]), (realv)(cs[b]), same) * t * v;
             }
         } else {
             for (int b = 0; b < LSQT_NB; b++)
-                if (on >> b & 1u) VBLOCK(realv, bs + b * LSQT_NWI_PAD, k) += select((realv)(co[b]), (realv)(cs[b]), same) * v;
+                if (on >> b & 1u) VEC_AT(realv, bs + b * LSQT_NWI_PAD, k) += select((realv)(co[b]), (realv)(cs[b]), same) * v;
         }
     }
 }
@@ -136,15 +136,15 @@ LSQT_INLINE void band_spread(const walk_ctx *c, real woz, const real *cs, const 
  * above it, all below). */
 LSQT_INLINE void band_depths(const walk_ctx *c, int b, int mi, real h, int li, real tu, real td, real *dtu, real *dtd)
 {
-    const int n = c->scene->n_layers;
+    const int n = c->in.scene->n_layers;
     if (mi >= 0) {
-        const real mut = band_tab(c, LSQT_BAND_MUT(n, LSQT_NBP, b, mi)), th = c->media[mi].thickness;
+        const real mut = band_tab(c, LSQT_BAND_MUT(n, LSQT_NBP, b, mi)), th = c->in.media[mi].thickness;
         *dtu = band_tab(c, LSQT_BAND_TAU_ABOVE(n, LSQT_NBP, b, mi)) + mut * (th - h) - tu;
         *dtd = band_tab(c, LSQT_BAND_TAU_BELOW(n, LSQT_NBP, b, mi)) + mut * h - td;
     } else {
-        *dtu = band_tab(c, LSQT_BAND_TAU_ABOVE(n, LSQT_NBP, b, li)) + band_tab(c, LSQT_BAND_MUT(n, LSQT_NBP, b, li)) * c->media[li].thickness - tu;
+        *dtu = band_tab(c, LSQT_BAND_TAU_ABOVE(n, LSQT_NBP, b, li)) + band_tab(c, LSQT_BAND_MUT(n, LSQT_NBP, b, li)) * c->in.media[li].thickness - tu;
         *dtd = band_tab(c, LSQT_BAND_TAU_BELOW(n, LSQT_NBP, b, li + 1)) +
-               band_tab(c, LSQT_BAND_MUT(n, LSQT_NBP, b, li + 1)) * c->media[li + 1].thickness - td;
+               band_tab(c, LSQT_BAND_MUT(n, LSQT_NBP, b, li + 1)) * c->in.media[li + 1].thickness - td;
     }
     /* Rounding may leave a hair below 0 where the depths are equal. */
     *dtu = fmax(*dtu, R(0.0)), *dtd = fmax(*dtd, R(0.0));
@@ -153,7 +153,7 @@ LSQT_INLINE void band_depths(const walk_ctx *c, int b, int mi, real h, int li, r
 /* The probability that band b's sampler leaves layer li on wo's side. */
 LSQT_INLINE real side_probability(const walk_ctx *c, int b, int li)
 {
-    const int n = c->scene->n_layers;
+    const int n = c->in.scene->n_layers;
     const real fs = band_tab(c, LSQT_BAND_FS(n, LSQT_NBP, b, li)), fo = band_tab(c, LSQT_BAND_FO(n, LSQT_NBP, b, li));
     return fs + fo > R(0.0) ? fs / (fs + fo) : R(0.5);
 }
@@ -168,7 +168,7 @@ LSQT_INLINE int band_side_sample(const walk_ctx *c, __global const lsqt_dev_laye
     /* The hero's side, wo's with probability fs / (fs + fo) (1/2 where its band has
      * neither); every band's weight by its own factor over the bands' mixture. */
     const real u0 = rng_uniform(rng), u1 = rng_uniform(rng), u2 = rng_uniform(rng);
-    const int same = u0 < side_probability(c, c->hero, li);
+    const int same = u0 < side_probability(c, c->band.hero, li);
     real3 v = sample_cosine_hemisphere(u1, u2);
     v.z *= (-d.z >= R(0.0)) == same ? R(1.0) : R(-1.0);
     /* the unit model over its cosine sampler's density (1 for Lambertian) */
@@ -200,12 +200,12 @@ LSQT_INLINE int flight_weights(const walk_ctx *c, int mi, real t, int collided, 
 {
     if (LSQT_NB == 1) { /* the band's own density: its albedo at a collision */
         if (!collided) return 1;
-        wb[0] *= (real)c->media[mi].mus / (real)c->media[mi].mut;
+        wb[0] *= (real)c->in.media[mi].mus / (real)c->in.media[mi].mut;
         return wb[0] > R(0.0);
     }
-    const int n = c->scene->n_layers;
-    __global const real *mts = c->bw + LSQT_BAND_MUT(n, LSQT_NBP, 0, mi), *muss = c->bw + LSQT_BAND_MUS(n, LSQT_NBP, 0, mi);
-    const real mt_h = mts[c->hero];
+    const int n = c->in.scene->n_layers;
+    __global const real *mts = c->in.bw + LSQT_BAND_MUT(n, LSQT_NBP, 0, mi), *muss = c->in.bw + LSQT_BAND_MUS(n, LSQT_NBP, 0, mi);
+    const real mt_h = mts[c->band.hero];
     /* One extinction in every band: every band's density is the hero's (rb stays), and a
      * collision weighs each band by its albedo. */
     int alike = 1;

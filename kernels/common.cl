@@ -26,12 +26,12 @@
 #define vstorev LSQT_CAT(vstore, LSQT_VW)
 typedef LSQT_CAT(ulong, LSQT_VW) ulongv;
 typedef LSQT_CAT(uint, LSQT_VW) uintv;
-/* The block of LSQT_VW values at p + k (k a multiple of LSQT_VW) of the CPU path's
+/* The vector of LSQT_VW values at p + k (k a multiple of LSQT_VW) of the CPU path's
  * direction sums (local memory declared as vectors, so aligned: one vector load or
  * store). Through vloadv/vstorev, PoCL stores 16 lanes as four 4-lane pieces, and the
- * next load of the block waits for them (a store-forwarding stall on every next-event
- * block). */
-#define VBLOCK(type, p, k) (*(__local type *)((p) + (k)))
+ * next load of the vector waits for them (a store-forwarding stall on every next-event
+ * vector). */
+#define VEC_AT(type, p, k) (*(__local type *)((p) + (k)))
 #define as_ulongv LSQT_CAT(as_ulong, LSQT_VW)
 #define as_uintv LSQT_CAT(as_uint, LSQT_VW)
 #define as_floatv LSQT_CAT(as_float, LSQT_VW)
@@ -183,9 +183,9 @@ LSQT_INLINE realv safe_sqrtv(realv x) { return sqrt(fmax(x, (realv)(R(0.0)))); }
 #define LSQT_NWI 1
 #endif
 #define LSQT_NWI_PAD LSQT_PAD(LSQT_NWI, LSQT_VW)
-/* The directions of one block of a grouped session (the RRSS pilot: one walk serves the
- * scene->slice_group candidate blocks of a slice, each LSQT_GROUP_PAD long within the
- * LSQT_NWI = slice_group x LSQT_GROUP_PAD directions); a plain session is one block. */
+/* The directions of one candidate set of a grouped session (the RRSS pilot: one walk serves the
+ * scene->slice_group candidate sets of a slice, each LSQT_GROUP_PAD long within the
+ * LSQT_NWI = slice_group x LSQT_GROUP_PAD directions); a plain session is one set. */
 #ifndef LSQT_GROUP_NWI
 #define LSQT_GROUP_NWI LSQT_NWI
 #endif

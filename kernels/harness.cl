@@ -73,7 +73,7 @@ __kernel void harness_eval(__global const lsqt_dev_layer *layers,
     out[2 * i + 1] = (float)(use_phase ? phase_pdf(media, wo, d) : bsdf_pdf(layers, wo, d));
 }
 
-/* The conversion of one block of LSQT_VW path sums, as the end of a path makes it
+/* The conversion of one vector of LSQT_VW path sums, as the end of a path makes it
  * (to_fixedv): work-item i converts v[i VW .. (i + 1) VW) into out (lo, hi per value),
  * with its own flags word. */
 __kernel void harness_tally_block(__global const float *v, __global ulong *out, volatile __global uint *flags)

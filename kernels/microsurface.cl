@@ -35,10 +35,10 @@ LSQT_INLINE dirv load_dirv(__global const real *wi, int k)
     return d;
 }
 
-/* The terms w * T * EXPR of the block of LSQT_VW directions at b, into v; u (this
+/* The terms w * T * EXPR of the vector of LSQT_VW directions at b, into v; u (this
  * side's frame), lam and lg are in scope for EXPR. Lanes with T = 0 (t) add nothing even
  * where EXPR is not finite (the zero vectors that pad the directions). */
-#define MS_NEE_BLOCK(EXPR)                                                       \
+#define MS_NEE_VEC(EXPR)                                                       \
     {                                                                            \
         dirv u = load_dirv(wi, b);                                               \
         u.z *= side;                                                             \
@@ -48,15 +48,15 @@ LSQT_INLINE dirv load_dirv(__global const real *wi, int k)
         v = select((realv)(R(0.0)), (w * t) * (EXPR), t > R(0.0));               \
     }
 
-/* sum += the terms over every block that light may leave by. */
+/* sum += the terms over every vector of directions that light may leave by. */
 #define MS_NEE_LOOP(EXPR)                                                        \
     if (k->count) (*k->count)++;                                                 \
     for (int b = 0; b < LSQT_NWI_PAD; b += LSQT_VW) {                            \
         __global const real *wi = k->wi, *tab = k->tab;                          \
         realv t = vloadv(0, tab + b), v;                                         \
         if (!anyv(t > R(0.0))) continue;                                         \
-        MS_NEE_BLOCK(EXPR)                                                       \
-        VBLOCK(realv, k->sum, b) += v;                                           \
+        MS_NEE_VEC(EXPR)                                                       \
+        VEC_AT(realv, k->sum, b) += v;                                           \
     }
 
 /* A walk model's terms (its file's functions, model_list.h), one text for both code
@@ -91,18 +91,18 @@ LSQT_INLINE void ms_nee_first(__global const lsqt_dev_layer *l, const ms_vtx *x,
     ms_record(k, NEE_MS_FIRST, x, side, w);
 }
 
-/* A record's terms for the block of directions at b (the layer's table tab). */
-LSQT_INLINE realv ms_nee_block(__global const lsqt_dev_layer *l, int kind, const ms_vtx *x, real side, real w,
+/* A record's terms for the vector of directions at b (the layer's table tab). */
+LSQT_INLINE realv ms_nee_vec(__global const lsqt_dev_layer *l, int kind, const ms_vtx *x, real side, real w,
                                  __global const real *wi, __global const real *tab, int b)
 {
     realv t = vloadv(0, tab + b), v = (realv)(R(0.0));
     if (!anyv(t > R(0.0))) return v;
     if (kind == NEE_MS_VERTEX) {
-#define MS_STMT(p) MS_NEE_BLOCK(MS_VERTEX_TERMS(p))
+#define MS_STMT(p) MS_NEE_VEC(MS_VERTEX_TERMS(p))
         LSQT_BSDFS(MS_DISPATCH_)
 #undef MS_STMT
     } else {
-#define MS_STMT(p) MS_NEE_BLOCK(MS_FIRST_TERMS(p))
+#define MS_STMT(p) MS_NEE_VEC(MS_FIRST_TERMS(p))
         LSQT_BSDFS(MS_DISPATCH_)
 #undef MS_STMT
     }

@@ -1,5 +1,5 @@
 /* What a walk carries (walk_ctx) and where its next-event estimates go: the direction
- * tables' layout, the blocks of LSQT_VW directions' terms, and one set of sink functions
+ * tables' layout, the vectors of LSQT_VW directions' terms, and one set of sink functions
  * per code path (the CPU's sums per path, the GPU's records, nee_records.cl). Uses
  * common.cl, tally.cl, models.cl and microsurface.cl; bands.cl and walk.cl use it. */
 /* Work-group accumulators of the tallies (tally.cl's acc_word, 128-bit sums): the
@@ -35,34 +35,51 @@
 #define WORK_NEE (LSQT_T_NEE_VERTICES - LSQT_T_LAYER_EVENTS)
 #define WORK_N (LSQT_T_COUNT - LSQT_T_LAYER_EVENTS)
 
+/* What a walk reads: the stack's tables, a band block's, and the slice's (the same for
+ * every path of a launch). */
 typedef struct {
     __constant lsqt_dev_scene *scene;
     __global const lsqt_dev_medium *media;
     __global const lsqt_dev_layer *layers;
+    __global const real *bw;           /* a band block's table (LSQT_BAND_AT), else unused */
     __global const real *wi;           /* this slice's directions: x[pad], y[pad], z[pad] */
     __global const real *tab;          /* this slice's direction tables (lsqt_prepare) */
+} walk_in;
+
+/* Where a walk's tallies go: the code path's sink of next-event terms and the counters. */
+typedef struct {
     __local real *sum;                 /* the current vertex's point estimates (CPU path; one
                                           band's: its path's, bsum) */
     __local real *bsum;                /* each band's path sums, LSQT_NWI_PAD apart */
-    __global const real *bw;           /* a band block's table (LSQT_BAND_AT), else unused */
     __local ulong *nee;                /* this work-item's point-estimate sums, low words (CPU path;
                                           a band block's: each band's, LSQT_NWI_PAD apart) */
-    work_t *work;                      /* the work counters (LSQT_T_LAYER_EVENTS ...; work_t) */
-    volatile __local acc_word *acc;    /* the work-group's scalar tallies, LSQT_ACC_WORDS each */
     __global ulong *nee_g;             /* the tallies of the chunk's batch (nee_word) */
     uint v;                            /* the first state slice of this walk */
     int batch;
+    work_t *work;                      /* the work counters (LSQT_T_LAYER_EVENTS ...; work_t) */
+    volatile __local acc_word *acc;    /* the work-group's scalar tallies, LSQT_ACC_WORDS each */
     volatile __global uint *flags;
-    int nee_on;                        /* 0: no point estimates (the RRSS candidate walks) */
-    int hero;                          /* a band block's: the band whose flights the path draws */
-    uint *touched;                     /* a band block's: the bands the path has added to (bits) */
-    __global real *exit_dir;           /* non-0: the path only writes its exit direction here */
     nee_out *out;                      /* the path's next-event records (GPU path) */
     int count_only;                    /* 1: count the records, tally nothing (GPU path) */
+} walk_sink;
+
+/* The walk's context: what it reads, where it adds, what kind of walk it is, and its
+ * path's band state. */
+typedef struct {
+    walk_in in;
+    walk_sink sink;
+    struct {
+        int nee_on;                    /* 0: no point estimates (the RRSS candidate walks) */
+        __global real *exit_dir;       /* non-0: the path only writes its exit direction here */
+    } mode;
+    struct {
+        int hero;                      /* the band whose flights the path draws (0: one band) */
+        uint *touched;                 /* the bands the path has added to (bits) */
+    } band;
 } walk_ctx;
 
 /* Direction k's tally of the walk's batch (state slice v + k / LSQT_GROUP_PAD), or 0 for
- * the padding between a grouped session's blocks. */
+ * the padding between a grouped session's candidate sets. */
 LSQT_INLINE __global ulong *nee_word(__global ulong *nee, uint v, int batch, int k)
 {
     const uint b = (uint)k / LSQT_GROUP_PAD, j = (uint)k % LSQT_GROUP_PAD;
@@ -74,8 +91,8 @@ LSQT_INLINE __global ulong *nee_word(__global ulong *nee, uint v, int batch, int
 LSQT_INLINE void acc_add_band(const walk_ctx *c, int b, int k, real v)
 {
     if (v != R(0.0)) {
-        fix1 q = to_fixed(v, c->flags);
-        local_add128(c->acc + LSQT_ACC_WORDS * (b * LSQT_T_COUNT + k), q.lo, q.hi, c->flags);
+        fix1 q = to_fixed(v, c->sink.flags);
+        local_add128(c->sink.acc + LSQT_ACC_WORDS * (b * LSQT_T_COUNT + k), q.lo, q.hi, c->sink.flags);
     }
 }
 
@@ -117,12 +134,12 @@ LSQT_INLINE realv nee_transmittancev(realv z, realv inv_az, real tau_up, real ta
 }
 
 
-/* The next-event terms of one vertex for the block of LSQT_VW directions at b, the same
+/* The next-event terms of one vertex for the vector of LSQT_VW directions at b, the same
  * text for both code paths (the CPU's sums per path, the GPU's records). Lanes with
  * t = 0 add nothing, even where the model is not finite (the zero vectors that pad the
  * directions). A layer's closed-form BSDF (tab: its table, T first; microsurfaces take
  * ms_vertex_walks): */
-LSQT_INLINE realv nee_layer_block(__global const lsqt_dev_layer *l, real3 wo, real w, __global const real *dirs,
+LSQT_INLINE realv nee_layer_vec(__global const lsqt_dev_layer *l, real3 wo, real w, __global const real *dirs,
                                     __global const real *tab, int b)
 {
     const realv t = vloadv(0, tab + b);
@@ -131,7 +148,7 @@ LSQT_INLINE realv nee_layer_block(__global const lsqt_dev_layer *l, real3 wo, re
 
 /* A medium's phase function at optical depths tu above and td below the vertex (a_up,
  * a_down: the slice's media rows). */
-LSQT_INLINE realv nee_medium_block(__global const lsqt_dev_medium *m, const phase_vtx *pv, real3 wo, real w, real tu,
+LSQT_INLINE realv nee_medium_vec(__global const lsqt_dev_medium *m, const phase_vtx *pv, real3 wo, real w, real tu,
                                      real td, __global const real *dirs, __global const real *a_up,
                                      __global const real *a_down, int b)
 {
@@ -139,20 +156,20 @@ LSQT_INLINE realv nee_medium_block(__global const lsqt_dev_medium *m, const phas
     return select((realv)(R(0.0)), (w * phase_evalv(m, pv, wo, load_dirv(dirs, b))) * t, t > R(0.0));
 }
 
-/* Converts one path's sums of the block at k to fixed point, adds them to lo, the low
+/* Converts one path's sums of the vector at k to fixed point, adds them to lo, the low
  * 64-bit words of the block's tallies, and returns the new low words. A high word (a sum
  * above 2^63 units, 8e6, or a carry out of the low word) is rare and goes straight to the
  * batch's 128-bit sum in global memory (nee_word of nee, state slice vs, batch), where it counts the same.
- * The common case by one test per block: every lane in [0, 2^15) is below 2^55 units,
+ * The common case by one test per vector: every lane in [0, 2^15) is below 2^55 units,
  * and at most LSQT_CHUNK (2^8) paths' sums go to the low words before they go to the
  * batch's, so no carry can leave them; the general conversion of such lanes is the same
- * (to_fixedv). A block of zeros takes it too: testing for one cost as much as converting
+ * (to_fixedv). A vector of zeros takes it too: testing for one cost as much as converting
  * it. */
 #define LSQT_FLUSH_FAST_MAX R(32768.0)
 #if LSQT_CHUNK > 256
-#error "nee_flush_block's carry-free case assumes at most 256 paths per chunk"
+#error "nee_flush_vec's carry-free case assumes at most 256 paths per chunk"
 #endif
-LSQT_INLINE ulongv nee_flush_block(realv v, ulongv lo, __global ulong *nee, uint vs, int batch, int k,
+LSQT_INLINE ulongv nee_flush_vec(realv v, ulongv lo, __global ulong *nee, uint vs, int batch, int k,
                                      volatile __global uint *flags)
 {
     if (allv((v >= R(0.0)) & (v < LSQT_FLUSH_FAST_MAX)))
@@ -187,7 +204,7 @@ LSQT_INLINE void nee_layer_terms(const walk_ctx *c, __global const lsqt_dev_laye
 {
     (void)li;
     for (int k = 0; k < LSQT_NWI_PAD; k += LSQT_VW)
-        VBLOCK(realv, c->sum, k) += nee_layer_block(l, wo, w, c->wi, tab, k);
+        VEC_AT(realv, c->sink.sum, k) += nee_layer_vec(l, wo, w, c->in.wi, tab, k);
 }
 
 LSQT_INLINE void nee_medium_terms(const walk_ctx *c, __global const lsqt_dev_medium *m, int mi, real3 wo, real w,
@@ -195,17 +212,17 @@ LSQT_INLINE void nee_medium_terms(const walk_ctx *c, __global const lsqt_dev_med
 {
     /* The pointers in locals: on a CPU, PoCL's local, private and global memory are one
      * address space, so the compiler cannot tell the sums' stores from the context's
-     * fields and would load them again at every block. */
-    __global const real *dirs = c->wi, *a_up = c->tab, *a_down = c->tab + LSQT_NWI_PAD;
-    __local real *sum = c->sum;
+     * fields and would load them again at every vector. */
+    __global const real *dirs = c->in.wi, *a_up = c->in.tab, *a_down = c->in.tab + LSQT_NWI_PAD;
+    __local real *sum = c->sink.sum;
     (void)mi;
     for (int k = 0; k < LSQT_NWI_PAD; k += LSQT_VW)
-        VBLOCK(realv, sum, k) += nee_medium_block(m, pv, wo, w, tu, td, dirs, a_up, a_down, k);
+        VEC_AT(realv, sum, k) += nee_medium_vec(m, pv, wo, w, tu, td, dirs, a_up, a_down, k);
 }
 
 LSQT_INLINE void nee_ms_sink(const walk_ctx *c, __global const real *tab, int li, ms_sink *k)
 {
-    k->sum = c->sum, k->wi = c->wi, k->tab = tab, k->count = c->work + WORK_NEE, k->out = 0, k->layer = li;
+    k->sum = c->sink.sum, k->wi = c->in.wi, k->tab = tab, k->count = c->sink.work + WORK_NEE, k->out = 0, k->layer = li;
 }
 
 LSQT_INLINE int nee_counting(const walk_ctx *c)
@@ -218,17 +235,17 @@ LSQT_INLINE int nee_counting(const walk_ctx *c)
  * (a block's bands without a term on the path have sums of 0, and are skipped). */
 LSQT_INLINE void nee_flush(const walk_ctx *c)
 {
-    const uint on = LSQT_NB > 1 ? *c->touched : 1u;
-    if (LSQT_NB > 1) *c->touched = 0;
+    const uint on = LSQT_NB > 1 ? *c->band.touched : 1u;
+    if (LSQT_NB > 1) *c->band.touched = 0;
     for (int b = 0; b < LSQT_NB; b++) {
         if (!(on >> b & 1u)) continue;
-        __local real *sum = c->bsum + b * LSQT_NWI_PAD;
-        __local ulong *lo = c->nee + b * LSQT_NWI_PAD;
-        __global ulong *g = c->nee_g + (size_t)b * c->scene->band_nee_words;
+        __local real *sum = c->sink.bsum + b * LSQT_NWI_PAD;
+        __local ulong *lo = c->sink.nee + b * LSQT_NWI_PAD;
+        __global ulong *g = c->sink.nee_g + (size_t)b * c->in.scene->band_nee_words;
         for (int k = 0; k < LSQT_NWI_PAD; k += LSQT_VW) {
-            realv v = VBLOCK(realv, sum, k);
-            VBLOCK(realv, sum, k) = (realv)(R(0.0));
-            VBLOCK(ulongv, lo, k) = nee_flush_block(v, VBLOCK(ulongv, lo, k), g, c->v, c->batch, k, c->flags);
+            realv v = VEC_AT(realv, sum, k);
+            VEC_AT(realv, sum, k) = (realv)(R(0.0));
+            VEC_AT(ulongv, lo, k) = nee_flush_vec(v, VEC_AT(ulongv, lo, k), g, c->sink.v, c->sink.batch, k, c->sink.flags);
         }
     }
 }
@@ -240,7 +257,7 @@ LSQT_INLINE void nee_put(const walk_ctx *c, int kind, int index, real3 wo, real 
     ms_vtx x;
     x.v = wo, x.m = m, x.inv_area = R(0.0), x.lam_v = tu, x.lg_v = td;
     x.log_c = x.log_cbar = x.e = R(0.0);
-    nee_write(c->out, kind, index, w, R(0.0), &x);
+    nee_write(c->sink.out, kind, index, w, R(0.0), &x);
 }
 
 LSQT_INLINE void nee_layer_terms(const walk_ctx *c, __global const lsqt_dev_layer *l, int li, real3 wo, real w,
@@ -259,8 +276,8 @@ LSQT_INLINE void nee_medium_terms(const walk_ctx *c, __global const lsqt_dev_med
 
 LSQT_INLINE void nee_ms_sink(const walk_ctx *c, __global const real *tab, int li, ms_sink *k)
 {
-    k->sum = 0, k->wi = c->wi, k->tab = tab, k->count = c->work + WORK_NEE, k->out = c->out, k->layer = li;
+    k->sum = 0, k->wi = c->in.wi, k->tab = tab, k->count = c->sink.work + WORK_NEE, k->out = c->sink.out, k->layer = li;
 }
 
-LSQT_INLINE int nee_counting(const walk_ctx *c) { return c->count_only; }
+LSQT_INLINE int nee_counting(const walk_ctx *c) { return c->sink.count_only; }
 #endif

@@ -6,7 +6,7 @@
  * vertex and writes no record. These types are part of walk_ctx and ms_sink on both paths;
  * only the GPU path calls nee_write and nee_ms_vtx. */
 
-/* A record's kind (LSQT_NEE_KIND); its fields are read as nee_rec_block (walk.cl) says. */
+/* A record's kind (LSQT_NEE_KIND); its fields are read as nee_rec_vec (walk.cl) says. */
 #define NEE_LAYER 0     /* a layer's BSDF: v = wo */
 #define NEE_MEDIUM 1    /* a medium's phase: v = wo, m, the optical depths in lam_v, lg_v */
 #define NEE_MS_VERTEX 2 /* a microsurface walk's vertex (ms_vtx) */
@@ -47,7 +47,7 @@ LSQT_INLINE void nee_write(nee_out *out, int kind, int index, real w, real side,
 
 /* A microsurface record's vertex, as nee_write took it (its kind, index, weight and side
  * are LSQT_NEE_KIND ...; a layer's or a medium's record is read field by field,
- * nee_rec_block). */
+ * nee_rec_vec). */
 LSQT_INLINE ms_vtx nee_ms_vtx(const lsqt_nee_rec *r)
 {
     ms_vtx x;

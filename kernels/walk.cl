@@ -39,23 +39,23 @@ __kernel void lsqt_prepare(__constant lsqt_dev_scene *scene, __global const lsqt
  * weighed each band itself, 0 where the path ends) and sets *wi. */
 LSQT_INLINE real layer_vertex(const walk_ctx *c, int li, real3 d, real *wb, real *rb, rng_t *rng, real3 *wi)
 {
-    const int n = c->scene->n_layers;
-    const int up = li == c->scene->top_nonnull, down = li == c->scene->bottom_nonnull;
-    __global const lsqt_dev_layer *l = &c->layers[li];
+    const int n = c->in.scene->n_layers;
+    const int up = li == c->in.scene->top_nonnull, down = li == c->in.scene->bottom_nonnull;
+    __global const lsqt_dev_layer *l = &c->in.layers[li];
     if (LSQT_NB > 1 && !up && layer_bands_index(l)) {
         /* under another layer: no term leaves it, and each band's index weighs its walk
          * (light reaches it from above only) */
-        c->work[WORK_LAYER]++;
+        c->sink.work[WORK_LAYER]++;
         if (!(d.z < R(0.0))) return R(0.0);
-        ms_bands mb = {c->bw + LSQT_BAND_ETA(n, LSQT_NBP, 0, li), c->bw + LSQT_BAND_KAPPA(n, LSQT_NBP, 0, li), wb};
+        ms_bands mb = {c->in.bw + LSQT_BAND_ETA(n, LSQT_NBP, 0, li), c->in.bw + LSQT_BAND_KAPPA(n, LSQT_NBP, 0, li), wb};
         ms_sink none = {0, 0, 0};
         return ms_vertex_walks(l, d, rng, R(0.0), 0, &none, &mb, wi);
     }
-    __global const lsqt_dev_medium *above = &c->media[li], *below = &c->media[li + 1];
+    __global const lsqt_dev_medium *above = &c->in.media[li], *below = &c->in.media[li + 1];
     const real tau_up = above->tau_above + above->mut * above->thickness;
     const real tau_down = below->tau_below + below->mut * below->thickness;
-    const int visible = c->nee_on && nee_visible(tau_up, tau_down, up, down);
-    __global const real *tab = c->tab + LSQT_LAYER_TAB(li);
+    const int visible = c->mode.nee_on && nee_visible(tau_up, tau_down, up, down);
+    __global const real *tab = c->in.tab + LSQT_LAYER_TAB(li);
     real cs[LSQT_NB], co[LSQT_NB], dtu[LSQT_NB], dtd[LSQT_NB];
     if (LSQT_NB > 1)
         for (int b = 0; b < LSQT_NB; b++) {
@@ -64,7 +64,7 @@ LSQT_INLINE real layer_vertex(const walk_ctx *c, int li, real3 d, real *wb, real
             band_depths(c, b, -1, R(0.0), li, tau_up, tau_down, &dtu[b], &dtd[b]);
         }
     const real vw = LSQT_NB > 1 ? R(1.0) : wb[0];
-    c->work[WORK_LAYER]++;
+    c->sink.work[WORK_LAYER]++;
     if (ms_layer(l)) { /* constant 0, and the walk dead code, in a scene without one */
         ms_sink k;
         nee_ms_sink(c, tab, li, &k);
@@ -73,7 +73,7 @@ LSQT_INLINE real layer_vertex(const walk_ctx *c, int li, real3 d, real *wb, real
         return f;
     }
     if (visible) {
-        c->work[WORK_NEE]++;
+        c->sink.work[WORK_NEE]++;
         nee_layer_terms(c, l, li, -d, vw, tab);
         band_spread(c, -d.z, cs, co, dtu, dtd);
     }
@@ -87,13 +87,13 @@ LSQT_INLINE real layer_vertex(const walk_ctx *c, int li, real3 d, real *wb, real
 LSQT_NOINLINE_CPU void nee_medium(const walk_ctx *c, int mi, real h, real3 d, real w, const real *wb,
                                   const phase_vtx *pv)
 {
-    __global const lsqt_dev_medium *m = &c->media[mi];
-    const int top = c->scene->top_nonnull, bottom = c->scene->bottom_nonnull;
+    __global const lsqt_dev_medium *m = &c->in.media[mi];
+    const int top = c->in.scene->top_nonnull, bottom = c->in.scene->bottom_nonnull;
     const int up = top < 0 || mi <= top, down = bottom < 0 || mi > bottom;
     const real tau_up = m->tau_above + m->mut * (m->thickness - h);
     const real tau_down = m->tau_below + m->mut * h;
-    if (!c->nee_on || !nee_visible(tau_up, tau_down, up, down)) return;
-    c->work[WORK_NEE]++;
+    if (!c->mode.nee_on || !nee_visible(tau_up, tau_down, up, down)) return;
+    c->sink.work[WORK_NEE]++;
     /* A side light may not leave by, or too deep to count, is as good as infinitely deep
      * (2^-huge is 0; 1e30 times a 0 of the tables is still 0, never NaN). */
     const real tu = up && tau_up < LSQT_NEE_TAU_MAX ? tau_up : R(1e30);
@@ -152,12 +152,12 @@ LSQT_INLINE void tally_exit(const walk_ctx *c, int b, real3 d, int up, int scatt
     if (nee_counting(c)) return;
     if (scattered) {
         /* one histogram a simulated slice: a grouped session's blocks are the same paths */
-        fix1 q = to_fixed(w, c->flags);
+        fix1 q = to_fixed(w, c->sink.flags);
         const int bin = hist_bin(d, up);
         /* A block's bands are the innermost index: one exit's adds share cache lines (one
          * band's histograms after another's were a sixth of a 32-band run, in misses). */
         if (LSQT_NB == 1 || q.lo || q.hi) /* a block's bands without weight add nothing */
-            global_add128(hist + 2 * ((size_t)bin * LSQT_NB + b), q.lo, q.hi, c->flags);
+            global_add128(hist + 2 * ((size_t)bin * LSQT_NB + b), q.lo, q.hi, c->sink.flags);
     } else {
         acc_add_band(c, b, LSQT_T_DELTA_T, w);
     }
@@ -168,7 +168,7 @@ LSQT_INLINE void tally_exit(const walk_ctx *c, int b, real3 d, int up, int scatt
  * width 1, where the mixture is the band itself. */
 LSQT_INLINE void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulong *hist)
 {
-    const int n = c->scene->n_layers;
+    const int n = c->in.scene->n_layers;
     real3 d = -wo;
     real h = R(0.0);
     real wb[LSQT_NBW], rb[LSQT_NBW];
@@ -176,11 +176,11 @@ LSQT_INLINE void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulon
     int scattered = 0, at_layer = 1, layer = 0, medium = 0;
     for (int events = 0;; events++) {
         if (events >= LSQT_MAX_EVENTS) {
-            for (int b = 0; b < LSQT_NB; b++) local_add128(c->acc + LSQT_ACC_WORDS * (b * LSQT_T_COUNT + LSQT_T_CUT), 1, 0, c->flags);
+            for (int b = 0; b < LSQT_NB; b++) local_add128(c->sink.acc + LSQT_ACC_WORDS * (b * LSQT_T_COUNT + LSQT_T_CUT), 1, 0, c->sink.flags);
             return;
         }
         if (at_layer) {
-            __global const lsqt_dev_layer *l = &c->layers[layer];
+            __global const lsqt_dev_layer *l = &c->in.layers[layer];
             const int bounced = l->kind != LSQT_BSDF_NULL;
             if (bounced) {
                 real3 wi;
@@ -191,7 +191,7 @@ LSQT_INLINE void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulon
             at_layer = 0;
             if (d.z < R(0.0)) {
                 medium = layer + 1;
-                h = c->media[medium].thickness;
+                h = c->in.media[medium].thickness;
             } else {
                 medium = layer;
                 h = R(0.0);
@@ -201,8 +201,8 @@ LSQT_INLINE void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulon
              * moves consistently and leaves). */
             if (medium == 0 || medium == n) {
                 int up = medium == 0;
-                if (c->exit_dir) { /* a candidate walk: its scattered exit, (0, 0, 0) if none */
-                    vstore4(scattered ? (real4)(d.x, d.y, d.z, R(1.0)) : (real4)(R(0.0)), 0, c->exit_dir);
+                if (c->mode.exit_dir) { /* a candidate walk: its scattered exit, (0, 0, 0) if none */
+                    vstore4(scattered ? (real4)(d.x, d.y, d.z, R(1.0)) : (real4)(R(0.0)), 0, c->mode.exit_dir);
                     return;
                 }
                 for (int b = 0; b < LSQT_NB; b++) tally_exit(c, b, d, up, scattered, wb[b], hist);
@@ -215,7 +215,7 @@ LSQT_INLINE void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulon
         }
         /* Inside interior medium `medium` at height h, travelling along d: the hero band's
          * free flight (bands.cl), unless the medium is clear in every band. */
-        __global const lsqt_dev_medium *m = &c->media[medium];
+        __global const lsqt_dev_medium *m = &c->in.media[medium];
         if (band_most_mut(c, medium) > R(0.0)) {
             const real mt_h = band_hero_mut(c, medium);
             const real s = mt_h > R(0.0) ? neg_log_unit(R(1.0) - rng_uniform(rng)) / mt_h : (real)INFINITY;
@@ -228,7 +228,7 @@ LSQT_INLINE void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulon
                  * band, mus = 0: no scattering event) */
                 if (!flight_weights(c, medium, s, 1, wb, rb)) return;
                 scattered = 1;
-                c->work[WORK_MEDIUM]++;
+                c->sink.work[WORK_MEDIUM]++;
                 phase_vtx pv = phase_vertex(m, -d, rng);
                 nee_medium(c, medium, h, d, wb[0], LSQT_NB > 1 ? wb : 0, &pv);
                 real3 wi;
@@ -264,16 +264,16 @@ __kernel void lsqt_exits(__constant lsqt_dev_scene *scene, __global const lsqt_d
      * of 256 at the pilot's 4 x 300 directions is 3.7 MB) */
     work_t work[WORK_N] = {0, 0, 0};
     walk_ctx c;
-    c.scene = scene, c.media = media, c.layers = layers, c.wi = wi_dirs + 3 * LSQT_NWI_PAD * slice;
-    c.tab = tab + (size_t)slice * LSQT_SLICE_TAB(scene->n_layers);
-    c.sum = 0, c.bsum = 0, c.bw = bandw, c.nee = 0, c.work = work, c.acc = acc, c.nee_g = 0, c.v = 0, c.batch = 0;
-    c.flags = flags, c.nee_on = 0, c.exit_dir = out + 4 * ((size_t)slice * n + i), c.out = 0, c.count_only = 0;
+    c.in.scene = scene, c.in.media = media, c.in.layers = layers, c.in.wi = wi_dirs + 3 * LSQT_NWI_PAD * slice;
+    c.in.tab = tab + (size_t)slice * LSQT_SLICE_TAB(scene->n_layers);
+    c.sink.sum = 0, c.sink.bsum = 0, c.in.bw = bandw, c.sink.nee = 0, c.sink.work = work, c.sink.acc = acc, c.sink.nee_g = 0, c.sink.v = 0, c.sink.batch = 0;
+    c.sink.flags = flags, c.mode.nee_on = 0, c.mode.exit_dir = out + 4 * ((size_t)slice * n + i), c.sink.out = 0, c.sink.count_only = 0;
     uint touched = 0;
-    c.hero = (int)((path_begin + i) % LSQT_NB), c.touched = &touched;
+    c.band.hero = (int)((path_begin + i) % LSQT_NB), c.band.touched = &touched;
     if (i >= n) return;
     real3 wo = make_real3(wo_dirs[4 * v], wo_dirs[4 * v + 1], wo_dirs[4 * v + 2]);
     rng_t rng = rng_init(scene->seed_lo, scene->seed_hi, slice, path_begin + i, RNG_PURPOSE_CANDIDATES | scene->rng_side);
-    vstore4((real4)(R(0.0)), 0, c.exit_dir);
+    vstore4((real4)(R(0.0)), 0, c.mode.exit_dir);
     run_path(&c, wo, &rng, 0);
 }
 
@@ -332,10 +332,10 @@ LSQT_INLINE chunk_span path_span(ulong chunk_first, ulong path_begin, ulong path
 
 /* The paths: a work-group runs those of its chunk (chunk_span; on the GPU path a part of
  * a chunk, a path each, path_span) and adds its tallies once to the batch's. In a grouped
- * session (the RRSS pilot) one walk serves every block of the slice: block b's directions
+ * session (the RRSS pilot) one walk serves every candidate set of the slice: set b's directions
  * are [b LSQT_GROUP_PAD, + LSQT_GROUP_NWI), and its tallies are state slice
  * slice * slice_group + b, whose R and T and work are the walk's; the histogram is one a
- * simulated slice (the host gives it to every block). The CPU path sums the next-event
+ * simulated slice (the host gives it to every set). The CPU path sums the next-event
  * estimates in local memory and ignores rec,
  * rec_off and count_only. The GPU path (LSQT_NEE_RECORDS) makes none: path p's records
  * go to rec from rec_off[slice * (path_end - path_begin) + p - path_begin] on, and
@@ -364,12 +364,12 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
     work_t work[WORK_N] = {0, 0, 0};
     const uint g = (uint)max(scene->slice_group, 1), v = s.slice * g; /* v: the first state slice */
     walk_ctx c;
-    c.scene = scene, c.media = media, c.layers = layers, c.wi = wi_dirs + 3 * LSQT_NWI_PAD * s.slice;
-    c.tab = tab + (size_t)s.slice * LSQT_SLICE_TAB(scene->n_layers);
-    c.work = work, c.acc = acc, c.nee_g = nee, c.v = v, c.batch = s.batch, c.flags = flags;
+    c.in.scene = scene, c.in.media = media, c.in.layers = layers, c.in.wi = wi_dirs + 3 * LSQT_NWI_PAD * s.slice;
+    c.in.tab = tab + (size_t)s.slice * LSQT_SLICE_TAB(scene->n_layers);
+    c.sink.work = work, c.sink.acc = acc, c.sink.nee_g = nee, c.sink.v = v, c.sink.batch = s.batch, c.sink.flags = flags;
     uint touched = 0;
-    c.nee_on = 1, c.exit_dir = 0, c.hero = 0, c.touched = &touched;
-    c.sum = 0, c.bsum = 0, c.nee = 0, c.bw = bandw;
+    c.mode.nee_on = 1, c.mode.exit_dir = 0, c.band.hero = 0, c.band.touched = &touched;
+    c.sink.sum = 0, c.sink.bsum = 0, c.sink.nee = 0, c.in.bw = bandw;
     real3 wo = make_real3(wo_dirs[4 * v], wo_dirs[4 * v + 1], wo_dirs[4 * v + 2]);
     __global ulong *hist_b = hist + 2 * ((ulong)s.slice * LSQT_BATCHES + (ulong)s.batch) * LSQT_HIST_BINS * LSQT_NB;
     /* The paths, one body per code path. The CPU path's local memory can only be declared
@@ -378,7 +378,7 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
      * more on gfx90a). */
 #ifdef LSQT_NEE_RECORDS
     nee_out out;
-    c.out = &out, c.count_only = count_only;
+    c.sink.out = &out, c.sink.count_only = count_only;
     if (s.begin < s.end) {
         const ulong p = s.begin, at = (ulong)s.slice * (path_end - path_begin) + (p - path_begin);
         out.rec = count_only ? 0 : rec + rec_off[at];
@@ -394,7 +394,7 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
     const int lid = s.lid, lsz = s.lsz;
     __local acc_word acc_t[LSQT_ACC_WORDS * LSQT_ACC_TILE];
     /* The directions' sums of each of the group's LSQT_ITEMS work-items (declared as
-     * vectors, for aligned blocks: VBLOCK): LSQT_NB rows of low words, LSQT_SUM_ROWS of
+     * vectors, for aligned blocks: VEC_AT): LSQT_NB rows of low words, LSQT_SUM_ROWS of
      * sums. */
     __local ulongv nee_v[LSQT_ITEMS * LSQT_NB * (LSQT_NWI_PAD / LSQT_VW)];
     __local realv sum_v[LSQT_ITEMS * LSQT_SUM_ROWS * (LSQT_NWI_PAD / LSQT_VW)];
@@ -402,14 +402,14 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
     __local real *path_sum = (__local real *)(sum_v + lid * LSQT_SUM_ROWS * (LSQT_NWI_PAD / LSQT_VW));
     for (int k = 0; k < LSQT_NB * LSQT_NWI_PAD; k++) nee_priv[k] = 0;
     for (int k = 0; k < LSQT_SUM_ROWS * LSQT_NWI_PAD; k++) path_sum[k] = R(0.0);
-    c.sum = path_sum, c.nee = nee_priv, c.out = 0, c.count_only = 0;
-    c.bsum = LSQT_NB > 1 ? path_sum + LSQT_NWI_PAD : path_sum; /* one band's: the vertex's row */
+    c.sink.sum = path_sum, c.sink.nee = nee_priv, c.sink.out = 0, c.sink.count_only = 0;
+    c.sink.bsum = LSQT_NB > 1 ? path_sum + LSQT_NWI_PAD : path_sum; /* one band's: the vertex's row */
 #ifdef LSQT_RNG_WIDE
     rng_t ahead; /* the next path's stream, made with this one's (rng_init_pair) */
     int have_ahead = 0;
 #endif
     for (ulong p = s.begin + (ulong)lid; p < s.end; p += (ulong)lsz) {
-        c.hero = (int)(p % LSQT_NB); /* every band leads as many paths */
+        c.band.hero = (int)(p % LSQT_NB); /* every band leads as many paths */
         const uint purpose = RNG_PURPOSE_WALK | scene->rng_side;
         rng_t rng;
 #ifdef LSQT_RNG_WIDE
@@ -460,28 +460,28 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
 }
 
 #ifdef LSQT_NEE_RECORDS
-/* A record's terms for the block of directions at b (dirs, st: the slice's directions
+/* A record's terms for the vector of directions at b (dirs, st: the slice's directions
  * and tables). */
-LSQT_INLINE realv nee_rec_block(__global const lsqt_nee_rec *r, __global const lsqt_dev_medium *media,
+LSQT_INLINE realv nee_rec_vec(__global const lsqt_nee_rec *r, __global const lsqt_dev_medium *media,
                                   __global const lsqt_dev_layer *layers, __global const real *dirs,
                                   __global const real *st, int b)
 {
     const lsqt_nee_rec q = *r;
     const int kind = (int)LSQT_NEE_KIND(q), i = (int)LSQT_NEE_INDEX(q);
     const real w = LSQT_NEE_W(q);
-    if (kind == NEE_LAYER) return nee_layer_block(&layers[i], LSQT_NEE_V(q), w, dirs, st + LSQT_LAYER_TAB(i), b);
+    if (kind == NEE_LAYER) return nee_layer_vec(&layers[i], LSQT_NEE_V(q), w, dirs, st + LSQT_LAYER_TAB(i), b);
     if (kind == NEE_MEDIUM) {
         phase_vtx pv = {LSQT_NEE_M(q)};
-        return nee_medium_block(&media[i], &pv, LSQT_NEE_V(q), w, LSQT_NEE_TAU_UP(q), LSQT_NEE_TAU_DOWN(q), dirs, st,
+        return nee_medium_vec(&media[i], &pv, LSQT_NEE_V(q), w, LSQT_NEE_TAU_UP(q), LSQT_NEE_TAU_DOWN(q), dirs, st,
                                 st + LSQT_NWI_PAD, b);
     }
     ms_vtx x = nee_ms_vtx(&q);
-    return ms_nee_block(&layers[i], kind, &x, LSQT_NEE_SIDE(q), w, dirs, st + LSQT_LAYER_TAB(i), b);
+    return ms_nee_vec(&layers[i], kind, &x, LSQT_NEE_SIDE(q), w, dirs, st + LSQT_LAYER_TAB(i), b);
 }
 
 /* The GPU path's next-event estimates: one work-group per (chunk, simulated slice), as
- * lsqt_walk's, sharing the slice's directions: work-item i owns the blocks of LSQT_VW
- * directions at i LSQT_VW, (i + size) LSQT_VW, ... For each block it sums every path's
+ * lsqt_walk's, sharing the slice's directions: work-item i owns the vectors of LSQT_VW
+ * directions at i LSQT_VW, (i + size) LSQT_VW, ... For each vector it sums every path's
  * records in the path's order (the CPU path's order, so the same sums), converts each
  * path's sum to fixed point and adds it to the block's tallies: a sum and a 64-bit word
  * per lane in registers, whatever the direction count. Every work-item reads the same
@@ -502,8 +502,8 @@ __kernel void lsqt_estimate(__constant lsqt_dev_scene *scene, __global const lsq
         for (ulong p = s.begin; p < s.end; p++) {
             realv sum = (realv)(R(0.0));
             const ulong r1 = rec_off[first + p + 1];
-            for (ulong r = rec_off[first + p]; r < r1; r++) sum += nee_rec_block(rec + r, media, layers, dirs, st, b);
-            lo = nee_flush_block(sum, lo, nee, v, s.batch, b, flags);
+            for (ulong r = rec_off[first + p]; r < r1; r++) sum += nee_rec_vec(rec + r, media, layers, dirs, st, b);
+            lo = nee_flush_vec(sum, lo, nee, v, s.batch, b, flags);
         }
         ulong ls[LSQT_VW];
         vstorev(lo, 0, ls);

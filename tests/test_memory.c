@@ -31,7 +31,7 @@ static void check_tallies(int nb, int ns, int nw, int rx)
     CHECK(lsqt_memory_tallies(nb, ns, nw, ns, 0) == state_bytes(&st), "%d bands x %d slices x %d: %llu, state %llu", nb,
           ns, nw, (unsigned long long)lsqt_memory_tallies(nb, ns, nw, ns, 0), (unsigned long long)state_bytes(&st));
     lsqt_state_free(&st);
-    /* a pilot: rx candidate blocks a slice, one histogram a slice (rrss.c) */
+    /* a pilot: rx candidate sets a slice, one histogram a slice (rrss.c) */
     CHECK(lsqt_state_init(&st, "x", 1, 2, ns * rx, nw, 0, nb, NULL) == 0 && lsqt_state_group_hist(&st, rx) == 0,
           "pilot state");
     CHECK(lsqt_memory_tallies(nb, ns * rx, nw, ns, 0) == state_bytes(&st), "pilot of %d bands, rx %d: %llu, state %llu",

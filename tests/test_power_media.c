@@ -24,7 +24,7 @@
  * Checks of exact identities (float or double rounding only) are not in the family.
  * `test_power_media SECTION N` adds N to every seed (to check that the tolerances hold).
  *
- * Detectable effects (planted in the kernels, tools/mutate/new-h1.txt): double: free
+ * Detectable effects (planted in the kernels, tools/mutate/mutations.txt): double: free
  * flights 0.5 % too long, uniforms scaled by 0.998, HG values +-0.25 %, the medium's
  * next-event exponent 1 % high (0.5 % is missed); grazing: a medium next-event error of
  * 0.66 % at 89.9 degrees (0.16 % is missed), any change of the layers' next-event

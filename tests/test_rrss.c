@@ -9,7 +9,7 @@
  *  - on the device: two RRSS runs, and two work-group sizes, give byte-identical states;
  *    the kept directions' tallies are bit for bit those of a plain run of the pilot's
  *    paths with those directions (so "they keep their pilot tallies" holds exactly), and
- *    continuing both by the same paths keeps them equal; every candidate block of the
+ *    continuing both by the same paths keeps them equal; every candidate set of the
  *    pilot state holds the R, T, work and histogram of a plain run of the same paths, also
  *    when the pilot is continued from a state that holds each block's histogram;
  *  - placement: for a smooth dielectric (alpha 0.05) the share of kept directions within
@@ -292,7 +292,7 @@ static void test_device(void)
     }
 }
 
-/* The pilot state itself: one walk serves a slice's rx candidate blocks, so every block
+/* The pilot state itself: one walk serves a slice's rx candidate sets, so every block
  * holds the same R, T, work counters and histogram, and those are a plain run's of the
  * same paths (its directions do not change them). */
 static void test_pilot_blocks(void)

@@ -179,7 +179,8 @@ static void test_slab(void)
     CHECK(st.transmits, "a null slab transmits");
     for (int s = 0; s < 3; s++) {
         double sig = sqrt(e[s].R.err * e[s].R.err + e[s].T.err * e[s].T.err);
-        /* iadpython adding-doubling at normal incidence (tools/validate/iad_slab.py). */
+        /* iadpython adding-doubling at normal incidence (tools/validate/refs_closed.py, the
+         * isotropic slab mus=1 d=1). */
         if (s == 0) CHECK_Z(e[s].R.mean, 0.3413287, e[s].R.err, 3.0);
         CHECK(fabs(e[s].R.mean + e[s].T.mean - 1.0) <= 3 * sig + 1e-9, "slice %d: R + T = %.9g", s,
               e[s].R.mean + e[s].T.mean);

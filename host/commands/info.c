@@ -180,7 +180,7 @@ static void print_text(FILE *f, const char *path, const lsqt_state *st, const ls
         fprintf(f, "directions: RGL tensor nodes (--rgl-grid: NU %u)\n", st->grid_ni);
     else fprintf(f, "directions: %s\n", st->dir_method == LSQT_DIRS_FILE ? "from a file (--wi-file)" : "even spread");
     if (st->stage == LSQT_STAGE_PILOT)
-        fprintf(f, "stage: RRSS pilot (%d slices x %u candidate blocks of %d; %llu of its %llu paths; the run: %llu)\n",
+        fprintf(f, "stage: RRSS pilot (%d slices x %u candidate sets of %d; %llu of its %llu paths; the run: %llu)\n",
                 st->n_slices / (int)st->rx, st->rx, st->n_wi, (unsigned long long)st->paths,
                 (unsigned long long)st->pilot_paths, (unsigned long long)st->span_end);
     else fprintf(f, "stage: run\n");

@@ -174,7 +174,7 @@ static int interrupted(const lsqt_cli *c, const lsqt_sim_stats *stats, int rc)
     return rc;
 }
 
-/* A pilot shard holds candidate blocks, not a BSDF yet: its LSS is all there is. */
+/* A pilot shard holds candidate sets, not a BSDF yet: its LSS is all there is. */
 static int report_pilot_shard(const lsqt_cli *c, const outputs *out, const lsqt_state *st, const lsqt_stages *sg,
                               FILE *info)
 {

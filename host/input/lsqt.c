@@ -88,6 +88,24 @@ const lsqt_model *lsqt_model_of_kind(const lsqt_line_desc *d, int kind)
     return NULL;
 }
 
+/* Whether a BSDF takes the medium below it as its complex index eta + i*mua (the model
+ * list's BANDS INDEX: a metal, which neither scatters nor is clear), and the name of the
+ * first such model, for messages. */
+static int index_below(int kind)
+{
+#define INDEX_BELOW(ID, num, name, alias, prefix, sampler, mirror, transmits, bands, ...) \
+    LSQT_IF_INDEX_##bands(|| kind == LSQT_BSDF_##ID)
+    return 0 LSQT_BSDFS(INDEX_BELOW);
+#undef INDEX_BELOW
+}
+
+static const char *index_below_name(void)
+{
+    for (size_t i = 0; i < COUNT(bsdf_models); i++)
+        if (index_below(bsdf_models[i].kind)) return bsdf_models[i].name;
+    return "a metal's BSDF";
+}
+
 /* ---- Tokens ---------------------------------------------------------------------- */
 
 typedef struct span {
@@ -815,14 +833,16 @@ static int finish_medium(parser *P, line_state *ls, lsqt_medium *m)
     lsqt_sb sb;
     lsqt_sb_init(&sb, buf, sizeof buf);
 
-    if (above && above->kind == LSQT_BSDF_MS_CONDUCTIVE) {
-        if (m->mus > 0)
-            return fail(P, P->line, mus_tok, "the metal below a MicrosurfaceConductiveBrdf scatters",
-                        "mus=0 (the metal's eta + i*mua is the complex index)");
+    if (above && index_below(above->kind)) {
+        if (m->mus > 0) {
+            char what[96];
+            snprintf(what, sizeof what, "the metal below a %s scatters",
+                     lsqt_model_of_kind(&lsqt_layer_line, above->kind)->name);
+            return fail(P, P->line, mus_tok, what, "mus=0 (the metal's eta + i*mua is the complex index)");
+        }
     } else if (m->eta < 1) {
-        return fail(P, P->line, eta_tok, "eta below 1",
-                    "eta >= 1 (eta < 1 is allowed only for the metal below a "
-                    "MicrosurfaceConductiveBrdf)");
+        return fail(P, P->line, eta_tok, "eta below 1", "eta >= 1 (eta < 1 is allowed only for the metal below a %s)",
+                    index_below_name());
     }
     if (m->mus > 0 && m->phase.kind == LSQT_PHASE_NONE) {
         list_models(&lsqt_medium_line, &sb);
@@ -942,7 +962,7 @@ static void prune(parser *P)
     const char *name = lsqt_model_of_kind(&lsqt_layer_line, stop->kind)->name; /* a parsed kind: always there */
     medium_rec *below = &P->media[p + 1];
     int last_line = P->media[P->n_media - 1].m.line;
-    int metal = stop->kind == LSQT_BSDF_MS_CONDUCTIVE;
+    int metal = index_below(stop->kind);
     /* the metal stays, so pruning starts at the next layer */
     int first_line = metal && p + 1 < P->n_layers ? P->layers[p + 1].line : below->m.line;
     P->n_pruned = P->n_layers - (p + 1);
@@ -996,7 +1016,7 @@ static int finish_assembly(parser *P)
     if (P->survey)
         return 0;
     prune(P);
-    if (P->layers[P->n_layers - 1].kind != LSQT_BSDF_MS_CONDUCTIVE &&
+    if (!index_below(P->layers[P->n_layers - 1].kind) &&
         require_clear(P, &P->media[P->n_media - 1], "bottom"))
         return 2;
     note_null_layers(P);

@@ -91,7 +91,7 @@ lsqt_memory lsqt_memory_estimate(const lsqt_memory_shape *m)
     r.extra = (m->sides > 1 ? r.state : 0) + nb * ns * (sizeof(lsqt_slice_est) + (uint64_t)m->n_wi * sizeof(lsqt_est));
     r.runtime = RUNTIME_BYTES;
     uint64_t top = r.state + r.device + r.extra;
-    if (m->pilot_rx > 0) { /* a slice's rx candidate blocks share one histogram (rrss.c) */
+    if (m->pilot_rx > 0) { /* a slice's rx candidate sets share one histogram (rrss.c) */
         const int ps = m->n_slices * m->pilot_rx;
         uint64_t p_tallies, p_device;
         state_and_device(m, ps, m->n_slices, &p_tallies, &p_device);

@@ -369,7 +369,7 @@ int lsqt_rrss_pilot(lsqt_context *cx, const lsqt_assembly *a, const lsqt_state *
     memset(info, 0, sizeof *info);
     const int n = st->n_wi, m = rx * n, ns = st->n_slices;
     info->candidates = m;
-    /* slice s's candidate block j is launch slice s * rx + j */
+    /* slice s's candidate set j is launch slice s * rx + j */
     if (lsqt_state_init(ps, st->canonical, st->hash, st->seed, ns * rx, n, st->transmits, st->n_bands,
                               st->wavelengths)) {
         snprintf(err, errcap, "out of memory");
@@ -429,7 +429,7 @@ int lsqt_rrss_pilot_continue(lsqt_context *cx, const lsqt_assembly *a, lsqt_stat
     return rc;
 }
 
-/* The choice; with USED (PS itself, to be freed next) each slice's candidate blocks are
+/* The choice; with USED (PS itself, to be freed next) each slice's candidate sets are
  * dropped (lsqt_tallies_drop) once their tallies are copied, so the pilot's pages go back
  * as the chosen state's are written (a 32-band run held both: 447 MB of its 469 MB peak). */
 static int choose(const lsqt_state *ps, lsqt_state *used, lsqt_state *st, lsqt_rrss_info *info, char *err,

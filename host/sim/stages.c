@@ -32,7 +32,7 @@ static lsqt_work work_before(const lsqt_state *st, int pilot_base, int shard)
 {
     lsqt_work before = lsqt_work_totals(st);
     if (pilot_base) {
-        /* each candidate block holds the same walks' work: one block's work is the pilot's */
+        /* each candidate set holds the same walks' work: one block's work is the pilot's */
         before.paths /= st->rx, before.layer_events /= st->rx, before.medium_events /= st->rx;
         before.nee_evaluations /= st->rx;
     }

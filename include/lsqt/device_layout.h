@@ -115,7 +115,7 @@ typedef struct lsqt_dev_scene {
     lsqt_i32 bottom_nonnull;  /* index of the bottommost non-null layer, -1 if none */
     lsqt_u32 seed_lo, seed_hi;
     lsqt_i32 slice_group;     /* state slices per simulated slice (the RRSS pilot: one walk
-                                 serves a slice's candidate blocks, one state slice each) */
+                                 serves a slice's candidate sets, one state slice each) */
     lsqt_u32 rng_side;        /* OR'ed into every RNG purpose: 0, or LSQT_RNG_BELOW for a state
                                  of light entering from below, so its paths are not those of
                                  the slices from above */
@@ -153,7 +153,7 @@ typedef struct lsqt_dev_scene {
  * which the kernels move whole. Every kind keeps a microsurface vertex's fields (ms_vtx);
  * a layer's record uses v only, a medium's also m (its phase_vtx's normal) and the
  * optical depths above and below the vertex in lam_v and lg_v. The kernels write
- * (kernels/nee_records.cl: nee_write) and read (walk.cl: nee_rec_block) records through
+ * (kernels/nee_records.cl: nee_write) and read (walk.cl: nee_rec_vec) records through
  * the field macros below; the host sizes their buffer with lsqt_nee_rec. */
 #define LSQT_NEE_REC_VECS 4
 #define LSQT_NEE_RECORD(T4, SUFFIX)              \

@@ -38,7 +38,7 @@ int lsqt_rrss(lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, int rx, 
               const lsqt_sim_opts *o, lsqt_rrss_info *info, char *err, size_t errcap);
 
 /* lsqt_rrss in parts, for a sharded or resumed pilot (LSQT_STAGE_PILOT states):
- *  - lsqt_rrss_pilot makes PS (fresh; free it): ST's slices times rx candidate blocks, the
+ *  - lsqt_rrss_pilot makes PS (fresh; free it): ST's slices times rx candidate sets, the
  *    candidates (a pure function of seed and slice, so every shard has the same), and
  *    paths [begin, begin + n_paths) of the pilot of pilot_total paths run on them (PS's
  *    span_end: run_paths, the run's -p; o->checkpoint, if set, gets PS);

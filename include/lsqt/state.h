@@ -57,7 +57,7 @@ typedef struct lsqt_hist_pack {
 } lsqt_hist_pack;
 
 enum { LSQT_DIRS_SPREAD = 0, LSQT_DIRS_RRSS = 1, LSQT_DIRS_FILE = 2, LSQT_DIRS_GRID = 3, LSQT_DIRS_RGL = 4 };
-/* LSQT_STAGE_PILOT: the RRSS pilot of a sharded run (slices are candidate blocks: slice
+/* LSQT_STAGE_PILOT: the RRSS pilot of a sharded run (slices are candidate sets: slice
  * s * rx + j is slice s's j-th block of n_wi candidates; pilot_paths its length, span_end
  * the first run's -p). Merging all of its shards chooses the directions. */
 enum { LSQT_STAGE_RUN = 0, LSQT_STAGE_PILOT = 1 };
