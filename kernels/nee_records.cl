@@ -19,8 +19,10 @@
  * three 64-bit counters live through the walk cost some 20 VGPRs on gfx90a. */
 #ifdef LSQT_NEE_RECORDS
 typedef uint work_t;
+#define LSQT_RECORDS 1 /* the code path, for a C test where both paths compile */
 #else
 typedef ulong work_t;
+#define LSQT_RECORDS 0
 #endif
 
 /* Where a path's records go: rec[0 ...] (rec 0: only counted). */

@@ -291,18 +291,15 @@ typedef struct {
 LSQT_INLINE chunk_span chunk_of(ulong chunk_first, ulong path_begin, ulong path_end)
 {
     chunk_span s;
-#ifdef LSQT_NEE_RECORDS
-    const ulong chunk = chunk_first + get_group_id(0);
-#else
     /* A CPU runs the groups in the order of their index, so the index goes batch by batch
      * (chunk_first + r, r + 32, r + 64, ... for r = 0, 1, ...): consecutive groups add to
      * one batch's histogram, which stays in cache (a chunk's exits spread over its batch's
      * 16 KB of bins, a new batch's every time: a tenth of a Lambertian run went to those
-     * misses). Which group runs a chunk changes no tally. */
+     * misses). Which group runs a chunk changes no tally; a GPU's groups take the chunks
+     * in order. */
     const ulong g = get_group_id(0), n = get_num_groups(0), q = n / LSQT_BATCHES, big = (n % LSQT_BATCHES) * (q + 1);
     const ulong r = g < big ? g / (q + 1) : n % LSQT_BATCHES + (g - big) / q;
-    const ulong chunk = chunk_first + r + LSQT_BATCHES * (g < big ? g % (q + 1) : (g - big) % q);
-#endif
+    const ulong chunk = LSQT_RECORDS ? chunk_first + g : chunk_first + r + LSQT_BATCHES * (g < big ? g % (q + 1) : (g - big) % q);
     s.lid = (int)get_local_id(0), s.lsz = (int)get_local_size(0);
     s.slice = (uint)get_global_id(1);
     s.begin = max(chunk * LSQT_CHUNK, path_begin);
@@ -311,7 +308,6 @@ LSQT_INLINE chunk_span chunk_of(ulong chunk_first, ulong path_begin, ulong path_
     return s;
 }
 
-#ifdef LSQT_NEE_RECORDS
 /* The GPU path's walk: a path per work-item, LSQT_CHUNK work-items per chunk, in groups
  * that divide it (the host sees to it), so that a group's paths are of one chunk and one
  * batch; begin = the work-item's path and end = begin + 1, or end = begin where it falls
@@ -328,7 +324,6 @@ LSQT_INLINE chunk_span path_span(ulong chunk_first, ulong path_begin, ulong path
     s.batch = (int)(p / LSQT_CHUNK % LSQT_BATCHES);
     return s;
 }
-#endif
 
 /* The paths: a work-group runs those of its chunk (chunk_span; on the GPU path a part of
  * a chunk, a path each, path_span) and adds its tallies once to the batch's. In a grouped
@@ -352,11 +347,8 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
                         int count_only, __global const real *bandw)
 {
     __local acc_word acc[LSQT_ACC_WORDS * LSQT_T_COUNT * LSQT_NB];
-#ifdef LSQT_NEE_RECORDS
-    const chunk_span s = path_span(chunk_first, path_begin, path_end);
-#else
-    const chunk_span s = chunk_of(chunk_first, path_begin, path_end);
-#endif
+    const chunk_span s = LSQT_RECORDS ? path_span(chunk_first, path_begin, path_end)
+                                      : chunk_of(chunk_first, path_begin, path_end);
 
     for (int k = s.lid; k < LSQT_ACC_WORDS * LSQT_T_COUNT * LSQT_NB; k += s.lsz) acc[k] = 0;
     barrier(CLK_LOCAL_MEM_FENCE);
