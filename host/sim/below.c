@@ -9,17 +9,9 @@
 #include "lsqt/tally.h"
 #include "lsqt/util.h"
 
-/* A model's mirror image is itself when it treats light from either side alike (MIRROR in
- * include/lsqt/model_list.h, which says why for each):
- *  - Null, Lambertian (fR back to the side light came from, fT through, either side);
- *  - the microsurfaces: their walks run in the frame of the ray's side (microsurface.cl
- *    ms_walk flips z, and the uniform heights with c -> 1 - c), GGX slopes are symmetric,
- *    and the dielectric takes the relative index seen from that side, which the device
- *    tables make from the media on each side, so reversing the media mirrors it too;
- *  - phase functions of the scattering angle alone (HG, HG2, Rayleigh, Draine), and SGGX,
- *    whose S = diag(Apara^2, Apara^2, Aperp^2) has no xz or yz terms.
- * The conductor and Oren-Nayar never transmit (a stack with them sends nothing down), so
- * light from below never meets them from above: no mirror is needed nor offered. */
+/* A model's mirror image is itself when it treats light from either side alike: the
+ * model list's MIRROR column (include/lsqt/model_list.h says why for each). A model that
+ * never transmits is never met from above by light from below: no mirror is needed. */
 static int layer_self_mirror(int kind)
 {
 #define MIRRORS(ID, num, name, alias, prefix, sampler, mirror, ...) || (kind == LSQT_BSDF_##ID && mirror)

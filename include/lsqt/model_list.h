@@ -12,8 +12,15 @@
  * MIRROR). Kernel prefix p: kernels/phase_*.cl defines p_phase_evalv(m, v, wo, wi) and
  * p_phase_sample(m, v, wo, u1, u2, rng, wi) (the weight p / pdf); SAMPLER is EXACT (draws
  * exactly the phase function: its pdf is its value) or VERTEX (p_phase_vertex fixes a
- * random state per vertex and p_phase_pdf gives the density). MIRROR is 1 when the phase
- * function is its own mirror image under z -> -z (light from below, host/sim/below.c).
+ * random state per vertex and p_phase_pdf gives the density). MIRROR is 1 when the model
+ * is its own mirror image under z -> -z (light from below, host/sim/below.c): so are the
+ * phase functions of the scattering angle alone, and SGGX, whose S = diag(Apara^2,
+ * Apara^2, Aperp^2) has no xz or yz terms; Null and Lambertian (fR back to the side light
+ * came from, fT through, either side); the microsurfaces, whose walks run in the frame of
+ * the ray's side (ms_walk flips z, and the uniform heights with c -> 1 - c), whose GGX
+ * slopes are symmetric, and whose dielectric takes the relative index seen from that
+ * side, which the device tables make from the media on each side. The conductor and
+ * Oren-Nayar never transmit, so light from below never meets them from above.
  *
  * A model may carry one table: a key of TYPE TABLE (KEY=@FILE, a file of rows cos theta,
  * value: a phase function's p(cos theta), read by host/input/bands.c, normalised, the same
