@@ -55,6 +55,15 @@ expect 2 "would replace the table './t2.raw'" -- "$BIN" --wavelengths 550 "${R[@
 expect 2 "would replace the table './t2.raw'" -- "$BIN" --wavelengths 450,550 "${R[@]}" t.lsqt --json t2.raw
 nothing_new "a table as an output"
 [ "$(cat t2.raw)" = "$(printf '400 0.5\n700 0.7')" ] && ok || bad "the table was changed"
+# a phase function's table (cos theta, value) is an input too, one band or several
+printf -- '-1 1\n1 1\n' >ph.raw
+printf 'Medium\nLayer z=1 NullBsdf\nMedium mus=1 TabulatedPhase table=@ph.raw\nLayer z=0 NullBsdf\nMedium\n' >p.lsqt
+snapshot
+expect 2 "would replace the phase table './ph.raw'" -- "$BIN" "${R[@]}" p.lsqt -o ph.raw
+expect 2 "would replace the phase table './ph.raw'" -- "$BIN" --wavelengths 450,550 "${R[@]}" p.lsqt --json ph.raw
+nothing_new "a phase table as an output"
+[ "$(cat ph.raw)" = "$(printf -- '-1 1\n1 1')" ] && ok || bad "the phase table was changed"
+rm ph.raw
 printf '0 0 1\n0.6 0 0.8\n' >dirs.txt
 snapshot
 expect 2 "would replace the --wi-file 'dirs.txt'" -- "$BIN" "${W[@]}" -p 500 -wo 4 --wi-file dirs.txt x.lsqt --json dirs.txt

@@ -116,7 +116,8 @@ static int plan_outputs(const lsqt_cli *c, int from_stdin, const lsqt_assembly *
         return 2;
     }
     /* the files the run reads, which no output may replace */
-    lsqt_input_file *in = calloc((size_t)a->n_tables + 3, sizeof *in);
+    const lsqt_assembly *a0 = lsqt_assembly_band(a, 0); /* its phase tables are every band's */
+    lsqt_input_file *in = calloc((size_t)a->n_tables + (size_t)a0->n_phase_tables + 3, sizeof *in);
     if (!in) {
         snprintf(err, errcap, "out of memory");
         return 1;
@@ -126,6 +127,8 @@ static int plan_outputs(const lsqt_cli *c, int from_stdin, const lsqt_assembly *
     if (c->wi_file) in[n_in++] = (lsqt_input_file){c->wi_file, "the --wi-file"};
     if (o->base && o->base != o->f.path[LSQT_OUT_LSS]) in[n_in++] = (lsqt_input_file){o->base, "the state this shard continues"};
     for (int t = 0; t < a->n_tables; t++) in[n_in++] = (lsqt_input_file){a->tables[t], "the table"};
+    for (int t = 0; t < a0->n_phase_tables; t++)
+        if (a0->phase_tables[t].path) in[n_in++] = (lsqt_input_file){a0->phase_tables[t].path, "the phase table"};
     int rc = lsqt_outputs_plan(&o->f, in, n_in,
                                ", or --no-raw to write no RAW (the LSS, --json and lsqt-cl export hold every band)", err,
                                errcap);

@@ -256,7 +256,7 @@ void lsqt_band_path(const char *path, const char *label, char *dst, size_t cap)
 
 void lsqt_phase_table_free(lsqt_phase_table *t)
 {
-    free(t->mu), free(t->p), free(t->cdf);
+    free(t->mu), free(t->p), free(t->cdf), free(t->path);
     memset(t, 0, sizeof *t);
 }
 

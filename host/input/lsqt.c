@@ -660,7 +660,8 @@ static int phase_table(parser *P, const lsqt_key *k, span tok, span text, double
         return fail(P, P->line, &tok, "unreadable phase table", "%s: %s", buf, err);
     }
     free(t_text);
-    lsqt_phase_table *all = realloc(P->ptabs, (size_t)(P->n_ptabs + 1) * sizeof *all);
+    t.path = strdup(path);
+    lsqt_phase_table *all = t.path ? realloc(P->ptabs, (size_t)(P->n_ptabs + 1) * sizeof *all) : NULL;
     if (!all) {
         lsqt_phase_table_free(&t);
         return out_of_memory(P);

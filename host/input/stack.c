@@ -35,8 +35,9 @@ int lsqt_phase_tables_copy(const lsqt_assembly *from, lsqt_assembly *to)
         const size_t bytes = (size_t)f->n * sizeof(double);
         c->n = f->n, c->hash = f->hash;
         c->mu = malloc(bytes), c->p = malloc(bytes), c->cdf = malloc(bytes);
+        c->path = f->path ? strdup(f->path) : NULL;
         to->n_phase_tables = t + 1; /* freed with it whatever happens */
-        if (!c->mu || !c->p || !c->cdf) return 2;
+        if (!c->mu || !c->p || !c->cdf || (f->path && !c->path)) return 2;
         memcpy(c->mu, f->mu, bytes), memcpy(c->p, f->p, bytes), memcpy(c->cdf, f->cdf, bytes);
     }
     return 0;

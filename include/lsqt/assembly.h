@@ -31,6 +31,7 @@ typedef struct lsqt_phase_table {
     int n;
     double *mu, *p, *cdf;
     uint64_t hash;
+    char *path; /* the file as opened, so that no output of the run lands on it (or NULL) */
 } lsqt_phase_table;
 
 /* Reads TEXT (rows "cos_theta value", '#' comments, either order in cos theta) into *t.
