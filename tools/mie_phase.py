@@ -1,6 +1,9 @@
 #!/usr/bin/env python3
 """mie_phase.py: a phase table for TabulatedPhase (docs/formats.md, "Phase tables") from
-Mie theory, with miepython (pip install miepython; https://github.com/scottprahl/miepython).
+Mie theory, with miepython (https://github.com/scottprahl/miepython), installed in a virtual
+environment so that it leaves Debian's numpy (which xarray needs) alone:
+    python3 -m venv /tmp/mie && /tmp/mie/bin/pip install miepython
+    /tmp/mie/bin/python tools/mie_phase.py OUT
 
     tools/mie_phase.py [--m 1.33] [--radius-um 1.0] [--wavelength-nm 550] [--rows 2001] OUT
 
@@ -29,7 +32,8 @@ def main():
         import miepython
         import numpy as np
     except ImportError:
-        sys.exit("mie_phase.py: needs miepython and numpy: pip install miepython")
+        sys.exit("mie_phase.py: needs miepython and numpy: python3 -m venv /tmp/mie && /tmp/mie/bin/pip install "
+                 "miepython, then run it with /tmp/mie/bin/python (not pip --user: its numpy breaks Debian's xarray)")
     if a.rows < 2:
         sys.exit("mie_phase.py: --rows must be at least 2")
     m = "%g%+gj" % (a.m.real, a.m.imag)
