@@ -23,11 +23,33 @@
  * A block's paths are its own (the hero and the per-band roulette draw numbers a one-band
  * walk does not), so a band of a block agrees with its one-band run within the error
  * bars, not bit for bit. */
-#if defined(LSQT_NEE_RECORDS) && LSQT_NB > 1
-#error "band blocks run on the CPU code path only"
-#endif
-
 LSQT_INLINE real band_tab(const walk_ctx *c, int at) { return c->in.bw[at]; }
+
+/* A path's per-band state, a row of LSQT_NBW each (BAND_MEM, common.cl): each band's
+ * weight wb and density ratio rb, a flight's densities lv (flight_weights), and on the
+ * CPU path a vertex's factors cs, co and extra optical depths dtu, dtd (band_spread). A
+ * GPU keeps the rows in the group's local memory, 13 reals a work-item at 4 bands (3.3 KB
+ * a group of 64), within the 16 KB a SIMD may have for 4 waves of 64 on gfx90a. */
+#define BAND_WB 0
+#define BAND_RB 1
+#define BAND_LV 2  /* flight_weights' densities */
+#define BAND_CS 3  /* the CPU path's (band_spread) */
+#define BAND_CO 4
+#define BAND_DTU 5
+#define BAND_DTD 6
+#define BAND_ROWS (LSQT_RECORDS ? 3 : 7)
+LSQT_INLINE BAND_MEM real *band_row(const walk_ctx *c, int row) { return c->band.rows + row * LSQT_NBW; }
+
+/* The band whose flights path p draws, its hero: path index mod LSQT_NB, so that every
+ * band leads as many paths (0 for one band). It is kept after the rows, with them, not in
+ * a register through the walk. */
+#define BAND_STATE (BAND_ROWS * LSQT_NBW + 1) /* a kernel's BAND_ARRAY(real, rows, BAND_STATE) */
+LSQT_INLINE void band_set_hero(const walk_ctx *c, ulong p)
+{
+    if (LSQT_NB > 1) c->band.rows[BAND_ROWS * LSQT_NBW] = (real)(int)(p % LSQT_NB);
+}
+
+LSQT_INLINE int band_hero(const walk_ctx *c) { return LSQT_NB > 1 ? (int)c->band.rows[BAND_ROWS * LSQT_NBW] : 0; }
 
 /* Whether layer l's bands differ by factors of a unit model, or by the index of its
  * facets (the model list's BANDS column). */
@@ -54,7 +76,7 @@ LSQT_INLINE int layer_bands_index(__global const lsqt_dev_layer *l)
 LSQT_INLINE real band_hero_mut(const walk_ctx *c, int mi)
 {
     if (LSQT_NB == 1) return c->in.media[mi].mut;
-    return band_tab(c, LSQT_BAND_MUT(c->in.scene->n_layers, LSQT_NBP, c->band.hero, mi));
+    return band_tab(c, LSQT_BAND_MUT(c->in.scene->n_layers, LSQT_NBP, band_hero(c), mi));
 }
 
 LSQT_INLINE real band_most_mut(const walk_ctx *c, int mi)
@@ -66,7 +88,7 @@ LSQT_INLINE real band_most_mut(const walk_ctx *c, int mi)
  * is below LSQT_RR_WEIGHT goes on with that weight or stops (0), so a band that absorbs
  * costs no more than on its own paths (band_spread and nee_flush skip it). Returns
  * whether any band goes on. */
-LSQT_INLINE int roulette(real *wb, rng_t *rng)
+LSQT_INLINE int roulette(BAND_MEM real *wb, rng_t *rng)
 {
     if (LSQT_NB == 1) {
         if (wb[0] >= LSQT_RR_WEIGHT) return 1;
@@ -75,6 +97,7 @@ LSQT_INLINE int roulette(real *wb, rng_t *rng)
         return 1;
     }
     int live = 0;
+    BAND_LOOP
     for (int b = 0; b < LSQT_NB; b++) {
         if (wb[b] > R(0.0) && wb[b] < LSQT_RR_WEIGHT)
             wb[b] = rng_uniform(rng) * LSQT_RR_WEIGHT < wb[b] ? LSQT_RR_WEIGHT : R(0.0);
@@ -85,50 +108,30 @@ LSQT_INLINE int roulette(real *wb, rng_t *rng)
 
 /* wb *= f; whether any band still carries weight. (One band's in the one-band walk's
  * words: a loop over one band, even unrolled, costs it 7 VGPRs on gfx90a.) */
-LSQT_INLINE int band_scale(real *wb, real f)
+LSQT_INLINE int band_scale(BAND_MEM real *wb, real f)
 {
     if (LSQT_NB == 1) {
         wb[0] *= f;
         return wb[0] > R(0.0);
     }
     int live = 0;
+    BAND_LOOP
     for (int b = 0; b < LSQT_NB; b++) wb[b] *= f, live |= wb[b] > R(0.0);
     return live;
 }
 
-/* Spreads the scratch sums of one vertex (c->sink.sum, weight 1, the unit model at the least
- * depths) into each band's sums: lanes on wo's side (z * woz > 0) times cs[b], the others
- * co[b], and each times 2^-(dtu[b] a_up + dtd[b] a_down), the band's transmittance beyond
- * the least depths (skipped where no band has any). Clears the scratch sums. One band's
- * terms are its path's sums already. */
-LSQT_INLINE void band_spread(const walk_ctx *c, real woz, const real *cs, const real *co, const real *dtu,
-                             const real *dtd)
+/* A band's sums s for a vector of directions plus its share of a vertex's terms v (the
+ * unit model at the least depths, weight 1): on wo's side (same) times cs, the others co,
+ * and where some band of the block is deeper (deeper) times 2^-(dtu a_up + dtd a_down),
+ * the band's transmittance beyond the least depths (float's 2^-0 is a hair above 1). One
+ * expression, s + f v, so that every compiler fuses it alike. The walk's sums
+ * (band_spread) and lsqt_estimate's (walk.cl) take it alike. */
+LSQT_INLINE realv band_add(realv s, realv v, maskv same, real cs, real co, real dtu, real dtd, int deeper, realv au,
+                           realv ad)
 {
-    if (LSQT_NB == 1) return;
-    int deeper = 0;
-    for (int b = 0; b < LSQT_NB; b++) deeper |= dtu[b] != R(0.0) || dtd[b] != R(0.0);
-    __global const real *zs = c->in.wi + 2 * LSQT_NWI_PAD, *a_up = c->in.tab, *a_down = c->in.tab + LSQT_NWI_PAD;
-    __local real *u = c->sink.sum, *bs = c->sink.bsum;
-    uint on = 0; /* the bands with a term here (the others' weights are 0) */
-    for (int b = 0; b < LSQT_NB; b++) on |= (cs[b] != R(0.0) || co[b] != R(0.0)) ? 1u << b : 0u;
-    *c->band.touched |= on;
-    for (int k = 0; k < LSQT_NWI_PAD; k += LSQT_VW) {
-        const realv v = VEC_AT(realv, u, k);
-        if (!anyv(v != R(0.0))) continue;
-        VEC_AT(realv, u, k) = (realv)(R(0.0));
-        const maskv same = vloadv(0, zs + k) * woz > R(0.0);
-        if (deeper) {
-            const realv au = vloadv(0, a_up + k), ad = vloadv(0, a_down + k);
-            for (int b = 0; b < LSQT_NB; b++) {
-                if (!(on >> b & 1u)) continue;
-                const realv t = exp2_negv(-(dtu[b] * au + dtd[b] * ad));
-                VEC_AT(realv, bs + b * LSQT_NWI_PAD, k) += select((realv)(co[b]), (realv)(cs[b]), same) * t * v;
-            }
-        } else {
-            for (int b = 0; b < LSQT_NB; b++)
-                if (on >> b & 1u) VEC_AT(realv, bs + b * LSQT_NWI_PAD, k) += select((realv)(co[b]), (realv)(cs[b]), same) * v;
-        }
-    }
+    realv f = select((realv)(co), (realv)(cs), same);
+    if (deeper) f *= exp2_negv(-(dtu * au + dtd * ad));
+    return s + f * v;
 }
 
 /* Each band's optical depth beyond the block's least, above (tu) and below (td) a point
@@ -150,6 +153,105 @@ LSQT_INLINE void band_depths(const walk_ctx *c, int b, int mi, real h, int li, r
     *dtu = fmax(*dtu, R(0.0)), *dtd = fmax(*dtd, R(0.0));
 }
 
+/* The optical depths of the media above layer li (tu) and below it (td), at the block's
+ * least extinction (one band's own). */
+LSQT_INLINE void layer_depths(const walk_ctx *c, int li, real *tu, real *td)
+{
+    __global const lsqt_dev_medium *above = &c->in.media[li], *below = &c->in.media[li + 1];
+    *tu = above->tau_above + above->mut * above->thickness;
+    *td = below->tau_below + below->mut * below->thickness;
+}
+
+/* The optical depths above (tu) and below (td) a point at height h of interior medium m,
+ * at the block's least extinction. */
+LSQT_INLINE void medium_depths(__global const lsqt_dev_medium *m, real h, real *tu, real *td)
+{
+    *tu = m->tau_above + m->mut * (m->thickness - h);
+    *td = m->tau_below + m->mut * h;
+}
+
+/* A next-event vertex, for its bands' factors: on layer li (mi < 0), or at height h in
+ * interior medium mi. */
+typedef struct {
+    int li, mi;
+    real h;
+} band_vertex;
+
+/* Band b's factors at vertex x (tu, td: the least depths there), as (cs, co, dtu, dtd):
+ * its weight times its fs on wo's side and its fo on the other (a medium's: its weight on
+ * both), and its optical depths beyond the least. */
+LSQT_INLINE real4 band_factors(const walk_ctx *c, const band_vertex *x, int b, const BAND_MEM real *wb, real tu,
+                               real td)
+{
+    const int n = c->in.scene->n_layers;
+    real dtu, dtd;
+    band_depths(c, b, x->mi, x->h, x->li, tu, td, &dtu, &dtd);
+    if (x->mi >= 0) return (real4)(wb[b], wb[b], dtu, dtd);
+    return (real4)(wb[b] * band_tab(c, LSQT_BAND_FS(n, LSQT_NBP, b, x->li)),
+                   wb[b] * band_tab(c, LSQT_BAND_FO(n, LSQT_NBP, b, x->li)), dtu, dtd);
+}
+
+/* Spreads the terms of vertex x (wo.z = woz), made at weight 1 for the unit model at the
+ * least depths, to each band with its factors (band_factors): on the CPU path from the
+ * scratch sums (c->sink.sum, then cleared) into each band's path sums at once, on the GPU
+ * path as spread records after the vertex's (nee_records.cl), which lsqt_estimate spreads
+ * the same way (walk.cl). A band without a term here (cs = co = 0: its weight is 0) is
+ * skipped. One band's terms are its path's sums already. The factors are made here, where
+ * they are used: made before a microsurface's walk, they cost the GPU path's walk
+ * registers through it. */
+LSQT_INLINE void band_spread(const walk_ctx *c, real woz, const band_vertex *x, const BAND_MEM real *wb)
+{
+    if (LSQT_NB == 1) return;
+    real tu, td;
+    if (x->mi >= 0)
+        medium_depths(&c->in.media[x->mi], x->h, &tu, &td);
+    else
+        layer_depths(c, x->li, &tu, &td);
+    if (LSQT_RECORDS) {
+        BAND_LOOP
+        for (int j = 0; j < NEE_SPREAD_RECORDS; j++) {
+            nee_out *out = c->sink.out;
+            if (out->rec) {
+                __global lsqt_nee_rec *r = out->rec + out->n;
+                for (int i = 0; i < LSQT_NEE_SPREAD_BANDS; i++) {
+                    const int b = j * LSQT_NEE_SPREAD_BANDS + i;
+                    LSQT_NEE_SPREAD(*r, i) = b < LSQT_NB ? band_factors(c, x, b, wb, tu, td) : (real4)(R(0.0));
+                }
+                LSQT_NEE_WOZ(*r) = woz, LSQT_NEE_KIND(*r) = (real)NEE_SPREAD;
+            }
+            out->n++;
+        }
+        return;
+    }
+    BAND_MEM real *cs = band_row(c, BAND_CS), *co = band_row(c, BAND_CO);
+    BAND_MEM real *dtu = band_row(c, BAND_DTU), *dtd = band_row(c, BAND_DTD);
+    uint on = 0; /* the bands with a term here */
+    int deeper = 0;
+    BAND_LOOP
+    for (int b = 0; b < LSQT_NB; b++) {
+        const real4 f = band_factors(c, x, b, wb, tu, td);
+        cs[b] = f.x, co[b] = f.y, dtu[b] = f.z, dtd[b] = f.w;
+        on |= (f.x != R(0.0) || f.y != R(0.0)) ? 1u << b : 0u;
+        deeper |= f.z != R(0.0) || f.w != R(0.0);
+    }
+    *c->band.touched |= on;
+    __global const real *zs = c->in.wi + 2 * LSQT_NWI_PAD, *a_up = c->in.tab, *a_down = c->in.tab + LSQT_NWI_PAD;
+    __local real *u = c->sink.sum, *bs = c->sink.bsum;
+    for (int k = 0; k < LSQT_NWI_PAD; k += LSQT_VW) {
+        const realv v = VEC_AT(realv, u, k);
+        if (!anyv(v != R(0.0))) continue;
+        VEC_AT(realv, u, k) = (realv)(R(0.0));
+        const maskv same = vloadv(0, zs + k) * woz > R(0.0);
+        const realv au = vloadv(0, a_up + k), ad = vloadv(0, a_down + k);
+        BAND_LOOP
+        for (int b = 0; b < LSQT_NB; b++)
+            if (on >> b & 1u) {
+                __local real *s = bs + b * LSQT_NWI_PAD;
+                VEC_AT(realv, s, k) = band_add(VEC_AT(realv, s, k), v, same, cs[b], co[b], dtu[b], dtd[b], deeper, au, ad);
+            }
+    }
+}
+
 /* The probability that band b's sampler leaves layer li on wo's side. */
 LSQT_INLINE real side_probability(const walk_ctx *c, int b, int li)
 {
@@ -160,29 +262,33 @@ LSQT_INLINE real side_probability(const walk_ctx *c, int b, int li)
 
 /* A factored layer's sample for a block (the list's BANDS FACTORS): the hero's side, then
  * the unit model's cosine sample there, weighed by spectral MIS as flights are
- * (flight_weights); cs, co: each band's weight times its factors. Returns whether any band
- * still carries weight. */
-LSQT_INLINE int band_side_sample(const walk_ctx *c, __global const lsqt_dev_layer *l, int li, real3 d, const real *cs,
-                                 const real *co, real *wb, real *rb, rng_t *rng, real3 *wi)
+ * (flight_weights): each band's weight times its factor on the side taken. Returns
+ * whether any band still carries weight. */
+LSQT_INLINE int band_side_sample(const walk_ctx *c, __global const lsqt_dev_layer *l, int li, real3 d,
+                                 BAND_MEM real *wb, BAND_MEM real *rb, rng_t *rng, real3 *wi)
 {
     /* The hero's side, wo's with probability fs / (fs + fo) (1/2 where its band has
      * neither); every band's weight by its own factor over the bands' mixture. */
     const real u0 = rng_uniform(rng), u1 = rng_uniform(rng), u2 = rng_uniform(rng);
-    const int same = u0 < side_probability(c, c->band.hero, li);
+    const int same = u0 < side_probability(c, band_hero(c), li);
     real3 v = sample_cosine_hemisphere(u1, u2);
     v.z *= (-d.z >= R(0.0)) == same ? R(1.0) : R(-1.0);
     /* the unit model over its cosine sampler's density (1 for Lambertian) */
     const real az = fabs(v.z), unit = az > R(0.0) ? bsdf_eval(l, -d, v) * LSQT_PI / az : R(0.0);
     real sum = R(0.0);
+    BAND_LOOP
     for (int j = 0; j < LSQT_NB; j++) {
         const real p = side_probability(c, j, li);
         rb[j] *= same ? p : R(1.0) - p, sum += rb[j];
     }
     if (!(sum > R(0.0))) return 0;
     const real inv = (real)LSQT_NB / sum;
+    const int n = c->in.scene->n_layers;
+    __global const real *f = c->in.bw + (same ? LSQT_BAND_FS(n, LSQT_NBP, 0, li) : LSQT_BAND_FO(n, LSQT_NBP, 0, li));
     int live = 0;
+    BAND_LOOP
     for (int b = 0; b < LSQT_NB; b++) {
-        wb[b] = (same ? cs[b] : co[b]) * unit * inv, rb[b] *= inv;
+        wb[b] = (wb[b] * f[b]) * unit * inv, rb[b] *= inv;
         live |= wb[b] > R(0.0);
     }
     *wi = v;
@@ -196,7 +302,7 @@ LSQT_INLINE int band_side_sample(const walk_ctx *c, __global const lsqt_dev_laye
  * over the mixture's, mean 1). A band's density of this flight is mut e^-(mut t) for a
  * collision and e^-(mut t) for a boundary; its weight keeps its ratio to rb (its weight
  * on its own paths), times its albedo at a collision. LSQT_VW bands at a time. */
-LSQT_INLINE int flight_weights(const walk_ctx *c, int mi, real t, int collided, real *wb, real *rb)
+LSQT_INLINE int flight_weights(const walk_ctx *c, int mi, real t, int collided, BAND_MEM real *wb, BAND_MEM real *rb)
 {
     if (LSQT_NB == 1) { /* the band's own density: its albedo at a collision */
         if (!collided) return 1;
@@ -205,7 +311,7 @@ LSQT_INLINE int flight_weights(const walk_ctx *c, int mi, real t, int collided, 
     }
     const int n = c->in.scene->n_layers;
     __global const real *mts = c->in.bw + LSQT_BAND_MUT(n, LSQT_NBP, 0, mi), *muss = c->in.bw + LSQT_BAND_MUS(n, LSQT_NBP, 0, mi);
-    const real mt_h = mts[c->band.hero];
+    const real mt_h = mts[band_hero(c)];
     /* One extinction in every band: every band's density is the hero's (rb stays), and a
      * collision weighs each band by its albedo. */
     int alike = 1;
@@ -220,7 +326,7 @@ LSQT_INLINE int flight_weights(const walk_ctx *c, int mi, real t, int collided, 
     /* The densities relative to the least extinct band's e^-(mut t): each factor at most
      * 1, so no overflow; the padding lanes (mut 0, rb 0) stay 0. */
     const real et = -t * LSQT_LOG2E;
-    real lv[LSQT_NBW];
+    BAND_MEM real *lv = band_row(c, BAND_LV);
     realv acc = (realv)(R(0.0));
     for (int j = 0; j < LSQT_NBV; j += LSQT_VW) {
         const realv mt = vloadv(0, mts + j), r = vloadv(0, rb + j);
@@ -236,31 +342,24 @@ LSQT_INLINE int flight_weights(const walk_ctx *c, int mi, real t, int collided, 
      * the same as at 1e4). */
     if (!(sum > R(1e-30))) {
         real top = -INFINITY;
-        for (int j = 0; j < LSQT_NBV; j += LSQT_VW) {
-            const realv mt = vloadv(0, mts + j), dm = mt - mt_h;
-            realv v = select(clamp(dm * et, R(-1e4), R(1e4)), (realv)(R(0.0)), dm == R(0.0));
-            v += log2(vloadv(0, rb + j));
-            if (collided) v += log2(mt);
-            vstorev(v, 0, lv + j);
+        for (int j = 0; j < LSQT_NB; j++) {
+            const real dm = mts[j] - mt_h;
+            real v = (dm == R(0.0) ? R(0.0) : clamp(dm * et, R(-1e4), R(1e4))) + log2(rb[j]);
+            if (collided) v += log2(mts[j]);
+            lv[j] = v, top = fmax(top, v);
         }
-        for (int j = 0; j < LSQT_NB; j++) top = fmax(top, lv[j]);
         if (!(top > -INFINITY)) return 0;
-        for (int j = 0; j < LSQT_NBV; j += LSQT_VW) vstorev(exp2(vloadv(0, lv + j) - top), 0, lv + j);
         sum = R(0.0);
-        for (int j = 0; j < LSQT_NB; j++) sum += lv[j];
-    }
-    for (int j = 0; j < LSQT_NBV; j += LSQT_VW) {
-        const realv p = vloadv(0, lv + j), r = vloadv(0, rb + j), mt = vloadv(0, mts + j);
-        realv own = select((realv)(R(0.0)), vloadv(0, wb + j) / r, r > R(0.0));
-        if (collided) own *= select((realv)(R(0.0)), vloadv(0, muss + j) / mt, mt > R(0.0));
-        vstorev(p, 0, rb + j);
-        vstorev(own * p, 0, wb + j);
+        for (int j = 0; j < LSQT_NB; j++) lv[j] = exp2(lv[j] - top), sum += lv[j];
     }
     const real inv = (real)LSQT_NB / sum;
     maskv live = (maskv)(0);
     for (int j = 0; j < LSQT_NBV; j += LSQT_VW) {
-        const realv w = vloadv(0, wb + j) * inv;
-        vstorev(vloadv(0, rb + j) * inv, 0, rb + j);
+        const realv p = vloadv(0, lv + j), r = vloadv(0, rb + j), mt = vloadv(0, mts + j);
+        realv own = select((realv)(R(0.0)), vloadv(0, wb + j) / r, r > R(0.0));
+        if (collided) own *= select((realv)(R(0.0)), vloadv(0, muss + j) / mt, mt > R(0.0));
+        const realv w = (own * p) * inv;
+        vstorev(p * inv, 0, rb + j);
         vstorev(w, 0, wb + j);
         live |= w > R(0.0);
     }

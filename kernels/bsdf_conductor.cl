@@ -55,10 +55,11 @@ LSQT_INLINE real3 conductor_reflect(const ms_vtx *x, real *vm)
  * Fresnel factor at the vertex's facet, from its n and k (rows n, k of the block's table),
  * weighs its weight wb, LSQT_VW bands at a time; bands without weight (and the padding,
  * n = k = 0) stay 0. Returns 0 where the ray meets the facet from behind (lost). */
-LSQT_INLINE int conductor_albedo_bands(const ms_vtx *x, __global const real *n, __global const real *k, real *wb)
+LSQT_INLINE int conductor_albedo_bands(const ms_vtx *x, __global const real *n, __global const real *k, BAND_MEM real *wb)
 {
     const real vm = dot(x->v, x->m);
     if (!(vm > R(0.0))) return 0;
+    BAND_LOOP
     for (int j = 0; j < LSQT_NBV; j += LSQT_VW) {
         const realv w = vloadv(0, wb + j);
         const realv f = fresnel_conductor_lanes(vloadv(0, n + j), vloadv(0, k + j), (realv)(vm));

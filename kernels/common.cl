@@ -203,6 +203,38 @@ LSQT_INLINE realv safe_sqrtv(realv x) { return sqrt(fmax(x, (realv)(R(0.0)))); }
 #define LSQT_NBW (LSQT_NB > 1 ? LSQT_NBP : 1)
 #define LSQT_NBV (LSQT_NB > 1 ? LSQT_NBP : 0)
 
+/* Where a path's per-band state lives (bands.cl: each band's weight, its density ratio, a
+ * vertex's factors; lsqt_estimate's sums): a block's in the work-group's local memory,
+ * so that it takes no registers (in registers, 4 bands took the GPU path's walk from 82
+ * to 132 VGPRs on gfx90a); one band's in private memory, registers. BAND_ARRAY declares
+ * a work-item's n elements of type T there, at a kernel's outermost scope (local memory
+ * is declared nowhere else), for groups of at most LSQT_GROUP_MAX work-items (nee.cl). */
+#if LSQT_NB > 1
+#define BAND_MEM __local
+#define BAND_ARRAY(T, name, n) \
+    __local T name##_all[LSQT_GROUP_MAX * (n)]; \
+    __local T *name = name##_all + get_local_id(0) * (n)
+#else
+#define BAND_MEM
+#define BAND_ARRAY(T, name, n) T name[n]
+#endif
+/* Before a loop over a block's bands: on the GPU path, not unrolled (unrolled, every
+ * band's loads and terms are in flight at once and the walk needs more than 128 VGPRs on
+ * gfx90a, test_gpu_build; the CPU path's loops are the compiler's to unroll). */
+#if LSQT_NB > 1 && defined(LSQT_NEE_RECORDS)
+#define BAND_LOOP _Pragma("unroll 1")
+#else
+#define BAND_LOOP
+#endif
+/* The GPU path's occupancy target on AMD: 4 waves per SIMD, at most 128 VGPRs on gfx90a
+ * (without it the compiler settles on 3 waves for a band block's walk, whose registers
+ * then grow to some 140). Other devices choose their own. */
+#if defined(__AMDGCN__) && defined(LSQT_NEE_RECORDS)
+#define LSQT_GPU_KERNEL __kernel __attribute__((amdgpu_waves_per_eu(4)))
+#else
+#define LSQT_GPU_KERNEL __kernel
+#endif
+
 /* lgamma(x) for x >= 1 without the library's general lgamma (scalar on PoCL, some 40
  * VGPRs on gfx90a): the Stirling series to 1/x^7 for x >= 8, error below 3e-11, after
  * lgamma(x) = lgamma(x + 6) - log(x (x+1) ... (x+5)) for smaller x. One text for the

@@ -165,7 +165,7 @@ LSQT_INLINE real ms_alpha(__global const lsqt_dev_layer *l) { return l->p[0]; }
  * the block's table). Null in every other walk. */
 typedef struct {
     __global const real *n, *k;
-    real *wb;
+    BAND_MEM real *wb;
 } ms_bands;
 
 #define MS_INDEX_(ID, num, name, alias, p, sampler, mirror, transmits, bands, b0, b1, alpha) \

@@ -22,6 +22,9 @@
 #ifndef LSQT_ITEMS
 #define LSQT_ITEMS 1
 #endif
+/* The most work-items in a group: the CPU path's LSQT_ITEMS, the GPU path's
+ * LSQT_GPU_ITEMS (device_layout.h; the host launches no wider groups). */
+#define LSQT_GROUP_MAX (LSQT_RECORDS ? LSQT_GPU_ITEMS : LSQT_ITEMS)
 
 
 /* A band block's work-item keeps per band its path's sums and its low words, and one
@@ -73,8 +76,8 @@ typedef struct {
         __global real *exit_dir;       /* non-0: the path only writes its exit direction here */
     } mode;
     struct {
-        int hero;                      /* the band whose flights the path draws (0: one band) */
         uint *touched;                 /* the bands the path has added to (bits) */
+        BAND_MEM real *rows;           /* the path's rows of per-band state and its hero (bands.cl) */
     } band;
 } walk_ctx;
 
@@ -237,6 +240,7 @@ LSQT_INLINE void nee_flush(const walk_ctx *c)
 {
     const uint on = LSQT_NB > 1 ? *c->band.touched : 1u;
     if (LSQT_NB > 1) *c->band.touched = 0;
+    BAND_LOOP
     for (int b = 0; b < LSQT_NB; b++) {
         if (!(on >> b & 1u)) continue;
         __local real *sum = c->sink.bsum + b * LSQT_NWI_PAD;

@@ -12,6 +12,11 @@
 #define NEE_MS_VERTEX 2 /* a microsurface walk's vertex (ms_vtx) */
 #define NEE_MS_FIRST 3  /* a microsurface's first record: its closed-form single scattering
                          * (SINGLE_WALK) or its walk's first vertex (WALK) */
+#define NEE_SPREAD 4    /* a band block's: the factors that spread the vertex's terms, at
+                         * weight 1 in the records before it, to each band (bands.cl) */
+
+/* The records of one spread: LSQT_NEE_SPREAD_BANDS bands each. */
+#define NEE_SPREAD_RECORDS ((LSQT_NB + LSQT_NEE_SPREAD_BANDS - 1) / LSQT_NEE_SPREAD_BANDS)
 
 /* A work counter (walk.cl's LSQT_T_LAYER_EVENTS ...): on the CPU path the work-item's,
  * 64-bit; on the GPU path its one path's, 32-bit (a path has at most LSQT_MAX_EVENTS
@@ -25,7 +30,10 @@ typedef ulong work_t;
 #define LSQT_RECORDS 0
 #endif
 
-/* Where a path's records go: rec[0 ...] (rec 0: only counted). */
+/* Where a path's records go: rec[n ...], the launch's buffer (the same for every
+ * work-item: no per-path pointer held through the walk) from the path's first record on;
+ * rec 0: only counted, from n = 0. The host keeps a launch's records below 2^31
+ * (session.c record_budget). */
 typedef struct {
     __global lsqt_nee_rec *rec;
     uint n;

@@ -37,7 +37,8 @@ __kernel void lsqt_prepare(__constant lsqt_dev_scene *scene, __global const lsqt
  * carry its weight; a block's are evaluated at weight 1 and spread to each band with its
  * factors (band_spread). Returns the factor of every band's weight (1 where the sample
  * weighed each band itself, 0 where the path ends) and sets *wi. */
-LSQT_INLINE real layer_vertex(const walk_ctx *c, int li, real3 d, real *wb, real *rb, rng_t *rng, real3 *wi)
+LSQT_INLINE real layer_vertex(const walk_ctx *c, int li, real3 d, BAND_MEM real *wb, BAND_MEM real *rb, rng_t *rng,
+                              real3 *wi)
 {
     const int n = c->in.scene->n_layers;
     const int up = li == c->in.scene->top_nonnull, down = li == c->in.scene->bottom_nonnull;
@@ -51,47 +52,40 @@ LSQT_INLINE real layer_vertex(const walk_ctx *c, int li, real3 d, real *wb, real
         ms_sink none = {0, 0, 0};
         return ms_vertex_walks(l, d, rng, R(0.0), 0, &none, &mb, wi);
     }
-    __global const lsqt_dev_medium *above = &c->in.media[li], *below = &c->in.media[li + 1];
-    const real tau_up = above->tau_above + above->mut * above->thickness;
-    const real tau_down = below->tau_below + below->mut * below->thickness;
+    real tau_up, tau_down;
+    layer_depths(c, li, &tau_up, &tau_down);
     const int visible = c->mode.nee_on && nee_visible(tau_up, tau_down, up, down);
     __global const real *tab = c->in.tab + LSQT_LAYER_TAB(li);
-    real cs[LSQT_NB], co[LSQT_NB], dtu[LSQT_NB], dtd[LSQT_NB];
-    if (LSQT_NB > 1)
-        for (int b = 0; b < LSQT_NB; b++) {
-            cs[b] = wb[b] * band_tab(c, LSQT_BAND_FS(n, LSQT_NBP, b, li));
-            co[b] = wb[b] * band_tab(c, LSQT_BAND_FO(n, LSQT_NBP, b, li));
-            band_depths(c, b, -1, R(0.0), li, tau_up, tau_down, &dtu[b], &dtd[b]);
-        }
+    const band_vertex bx = {li, -1, R(0.0)};
     const real vw = LSQT_NB > 1 ? R(1.0) : wb[0];
     c->sink.work[WORK_LAYER]++;
     if (ms_layer(l)) { /* constant 0, and the walk dead code, in a scene without one */
         ms_sink k;
         nee_ms_sink(c, tab, li, &k);
         const real f = ms_vertex_walks(l, d, rng, vw, visible, &k, 0, wi);
-        if (visible) band_spread(c, -d.z, cs, co, dtu, dtd);
+        if (visible) band_spread(c, -d.z, &bx, wb);
         return f;
     }
     if (visible) {
         c->sink.work[WORK_NEE]++;
         nee_layer_terms(c, l, li, -d, vw, tab);
-        band_spread(c, -d.z, cs, co, dtu, dtd);
+        band_spread(c, -d.z, &bx, wb);
     }
     if (LSQT_NB == 1 || !layer_bands_factored(l)) return bsdf_sample(l, -d, rng, wi);
-    return band_side_sample(c, l, li, d, cs, co, wb, rb, rng, wi) ? R(1.0) : R(0.0);
+    return band_side_sample(c, l, li, d, wb, rb, rng, wi) ? R(1.0) : R(0.0);
 }
 
 /* Next-event estimates from a scattering vertex at height h in interior medium mi: one
  * band's with its weight w, a block's (wb) at weight 1, spread to each band with its
  * extra transmittance where its medium is deeper. */
-LSQT_NOINLINE_CPU void nee_medium(const walk_ctx *c, int mi, real h, real3 d, real w, const real *wb,
+LSQT_NOINLINE_CPU void nee_medium(const walk_ctx *c, int mi, real h, real3 d, real w, const BAND_MEM real *wb,
                                   const phase_vtx *pv)
 {
     __global const lsqt_dev_medium *m = &c->in.media[mi];
     const int top = c->in.scene->top_nonnull, bottom = c->in.scene->bottom_nonnull;
     const int up = top < 0 || mi <= top, down = bottom < 0 || mi > bottom;
-    const real tau_up = m->tau_above + m->mut * (m->thickness - h);
-    const real tau_down = m->tau_below + m->mut * h;
+    real tau_up, tau_down;
+    medium_depths(m, h, &tau_up, &tau_down);
     if (!c->mode.nee_on || !nee_visible(tau_up, tau_down, up, down)) return;
     c->sink.work[WORK_NEE]++;
     /* A side light may not leave by, or too deep to count, is as good as infinitely deep
@@ -99,11 +93,8 @@ LSQT_NOINLINE_CPU void nee_medium(const walk_ctx *c, int mi, real h, real3 d, re
     const real tu = up && tau_up < LSQT_NEE_TAU_MAX ? tau_up : R(1e30);
     const real td = down && tau_down < LSQT_NEE_TAU_MAX ? tau_down : R(1e30);
     nee_medium_terms(c, m, mi, -d, LSQT_NB > 1 ? R(1.0) : w, pv, tu, td);
-    if (LSQT_NB > 1) {
-        real dtu[LSQT_NB], dtd[LSQT_NB];
-        for (int b = 0; b < LSQT_NB; b++) band_depths(c, b, mi, h, -1, tau_up, tau_down, &dtu[b], &dtd[b]);
-        band_spread(c, -d.z, wb, wb, dtu, dtd);
-    }
+    const band_vertex bx = {-1, mi, h};
+    band_spread(c, -d.z, &bx, wb);
 }
 
 /* The phi bin of (x, |y|), phi = atan2(|y|, x) in [0, pi], without atan2 (a tenth of a
@@ -143,23 +134,29 @@ LSQT_INLINE int hist_bin(real3 d, int up)
     return ((up ? 0 : 1) * LSQT_HIST_NMU + bm) * LSQT_HIST_NPHI + bp;
 }
 
-/* A path's exit: R or T, the unscattered part of T, and the exit histogram, each of
- * band b (0 in a one-band program) with weight w. */
-LSQT_INLINE void tally_exit(const walk_ctx *c, int b, real3 d, int up, int scattered, real w, __global ulong *hist)
+/* A path's exit along d: each band's R or T, the unscattered part of T, and the exit
+ * histogram, with the band's weight wb (one bin for all of them). */
+LSQT_INLINE void tally_exit(const walk_ctx *c, real3 d, int up, int scattered, const BAND_MEM real *wb,
+                            __global ulong *hist)
 {
-    if (LSQT_NB > 1 && w == R(0.0)) return; /* a block's band that stopped earlier */
-    acc_add_band(c, b, up ? LSQT_T_R : LSQT_T_T, w);
-    if (nee_counting(c)) return;
-    if (scattered) {
-        /* one histogram a simulated slice: a grouped session's blocks are the same paths */
-        fix1 q = to_fixed(w, c->sink.flags);
-        const int bin = hist_bin(d, up);
-        /* A block's bands are the innermost index: one exit's adds share cache lines (one
-         * band's histograms after another's were a sixth of a 32-band run, in misses). */
-        if (LSQT_NB == 1 || q.lo || q.hi) /* a block's bands without weight add nothing */
-            global_add128(hist + 2 * ((size_t)bin * LSQT_NB + b), q.lo, q.hi, c->sink.flags);
-    } else {
-        acc_add_band(c, b, LSQT_T_DELTA_T, w);
+    /* one histogram a simulated slice: a grouped session's blocks are the same paths */
+    const int bin = scattered ? hist_bin(d, up) : 0;
+    BAND_LOOP
+    for (int b = 0; b < LSQT_NB; b++) {
+        const real w = wb[b];
+        if (LSQT_NB > 1 && w == R(0.0)) continue; /* a block's band that stopped earlier */
+        acc_add_band(c, b, up ? LSQT_T_R : LSQT_T_T, w);
+        if (nee_counting(c)) continue;
+        if (scattered) {
+            fix1 q = to_fixed(w, c->sink.flags);
+            /* A block's bands are the innermost index: one exit's adds share cache lines
+             * (one band's histograms after another's were a sixth of a 32-band run, in
+             * misses). A block's bands without weight add nothing. */
+            if (LSQT_NB == 1 || q.lo || q.hi)
+                global_add128(hist + 2 * ((size_t)bin * LSQT_NB + b), q.lo, q.hi, c->sink.flags);
+        } else {
+            acc_add_band(c, b, LSQT_T_DELTA_T, w);
+        }
     }
 }
 
@@ -171,11 +168,12 @@ LSQT_INLINE void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulon
     const int n = c->in.scene->n_layers;
     real3 d = -wo;
     real h = R(0.0);
-    real wb[LSQT_NBW], rb[LSQT_NBW];
+    BAND_MEM real *wb = band_row(c, BAND_WB), *rb = band_row(c, BAND_RB);
     for (int b = 0; b < LSQT_NBW; b++) wb[b] = rb[b] = b < LSQT_NB ? R(1.0) : R(0.0);
     int scattered = 0, at_layer = 1, layer = 0, medium = 0;
     for (int events = 0;; events++) {
         if (events >= LSQT_MAX_EVENTS) {
+            BAND_LOOP
             for (int b = 0; b < LSQT_NB; b++) local_add128(c->sink.acc + LSQT_ACC_WORDS * (b * LSQT_T_COUNT + LSQT_T_CUT), 1, 0, c->sink.flags);
             return;
         }
@@ -205,7 +203,7 @@ LSQT_INLINE void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulon
                     vstore4(scattered ? (real4)(d.x, d.y, d.z, R(1.0)) : (real4)(R(0.0)), 0, c->mode.exit_dir);
                     return;
                 }
-                for (int b = 0; b < LSQT_NB; b++) tally_exit(c, b, d, up, scattered, wb[b], hist);
+                tally_exit(c, d, up, scattered, wb, hist);
                 return;
             }
             /* Roulette only for paths that go on inside the stack: on one that leaves it
@@ -252,12 +250,13 @@ LSQT_INLINE void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulon
  * direction of its scattered exit, w = 1, or all 0 (absorbed, unscattered, cut). Global
  * size (n rounded up, simulated slices); simulated slice s is the state's slices
  * s * slice_group ... (their outgoing direction is the same). */
-__kernel void lsqt_exits(__constant lsqt_dev_scene *scene, __global const lsqt_dev_medium *media,
+LSQT_GPU_KERNEL void lsqt_exits(__constant lsqt_dev_scene *scene, __global const lsqt_dev_medium *media,
                          __global const lsqt_dev_layer *layers, __global const real *wo_dirs,
                          __global const real *wi_dirs, __global const real *tab, ulong path_begin, uint n,
                          __global real *out, volatile __global uint *flags, __global const real *bandw)
 {
     __local acc_word acc[LSQT_ACC_WORDS * LSQT_T_COUNT * LSQT_NB]; /* the safety cap's count, unused */
+    BAND_ARRAY(real, rows, BAND_STATE);
     const uint i = (uint)get_global_id(0), slice = (uint)get_global_id(1);
     const uint v = slice * (uint)max(scene->slice_group, 1);
     /* no point estimates, so no sums (they would fill a CPU worker's stack: a work-group
@@ -269,7 +268,8 @@ __kernel void lsqt_exits(__constant lsqt_dev_scene *scene, __global const lsqt_d
     c.sink.sum = 0, c.sink.bsum = 0, c.in.bw = bandw, c.sink.nee = 0, c.sink.work = work, c.sink.acc = acc, c.sink.nee_g = 0, c.sink.v = 0, c.sink.batch = 0;
     c.sink.flags = flags, c.mode.nee_on = 0, c.mode.exit_dir = out + 4 * ((size_t)slice * n + i), c.sink.out = 0, c.sink.count_only = 0;
     uint touched = 0;
-    c.band.hero = (int)((path_begin + i) % LSQT_NB), c.band.touched = &touched;
+    c.band.touched = &touched, c.band.rows = rows;
+    band_set_hero(&c, path_begin + i);
     if (i >= n) return;
     real3 wo = make_real3(wo_dirs[4 * v], wo_dirs[4 * v + 1], wo_dirs[4 * v + 2]);
     rng_t rng = rng_init(scene->seed_lo, scene->seed_hi, slice, path_begin + i, RNG_PURPOSE_CANDIDATES | scene->rng_side);
@@ -312,16 +312,19 @@ LSQT_INLINE chunk_span chunk_of(ulong chunk_first, ulong path_begin, ulong path_
  * that divide it (the host sees to it), so that a group's paths are of one chunk and one
  * batch; begin = the work-item's path and end = begin + 1, or end = begin where it falls
  * outside [path_begin, path_end). A loop over several paths kept the state of a path's
- * start and end live through the walk: some 10 VGPRs on gfx90a. */
+ * start and end live through the walk: some 10 VGPRs on gfx90a. The slice and the batch
+ * are the group's (a group is of one chunk, and one slice: local size 1 in dimension 1),
+ * taken from its index so that the compiler sees them the same in every work-item: the
+ * pointers made from them take no VGPRs (3 to 4 fewer on gfx90a). */
 LSQT_INLINE chunk_span path_span(ulong chunk_first, ulong path_begin, ulong path_end)
 {
     chunk_span s;
     const ulong p = chunk_first * LSQT_CHUNK + get_global_id(0);
     s.lid = (int)get_local_id(0), s.lsz = (int)get_local_size(0);
-    s.slice = (uint)get_global_id(1);
+    s.slice = (uint)get_group_id(1);
     s.begin = p;
     s.end = p >= path_begin && p < path_end ? p + 1 : p;
-    s.batch = (int)(p / LSQT_CHUNK % LSQT_BATCHES);
+    s.batch = (int)((chunk_first + get_group_id(0) * get_local_size(0) / LSQT_CHUNK) % LSQT_BATCHES);
     return s;
 }
 
@@ -336,7 +339,7 @@ LSQT_INLINE chunk_span path_span(ulong chunk_first, ulong path_begin, ulong path
  * go to rec from rec_off[slice * (path_end - path_begin) + p - path_begin] on, and
  * lsqt_estimate evaluates them; with count_only it only writes each path's record count
  * there (the host turns the counts into offsets) and tallies nothing. */
-__kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
+LSQT_GPU_KERNEL void lsqt_walk(__constant lsqt_dev_scene *scene,
                         __global const lsqt_dev_medium *media,
                         __global const lsqt_dev_layer *layers,
                         __global const real *wo_dirs,
@@ -347,6 +350,7 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
                         int count_only, __global const real *bandw)
 {
     __local acc_word acc[LSQT_ACC_WORDS * LSQT_T_COUNT * LSQT_NB];
+    BAND_ARRAY(real, rows, BAND_STATE);
     const chunk_span s = LSQT_RECORDS ? path_span(chunk_first, path_begin, path_end)
                                       : chunk_of(chunk_first, path_begin, path_end);
 
@@ -360,7 +364,7 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
     c.in.tab = tab + (size_t)s.slice * LSQT_SLICE_TAB(scene->n_layers);
     c.sink.work = work, c.sink.acc = acc, c.sink.nee_g = nee, c.sink.v = v, c.sink.batch = s.batch, c.sink.flags = flags;
     uint touched = 0;
-    c.mode.nee_on = 1, c.mode.exit_dir = 0, c.band.hero = 0, c.band.touched = &touched;
+    c.mode.nee_on = 1, c.mode.exit_dir = 0, c.band.touched = &touched, c.band.rows = rows;
     c.sink.sum = 0, c.sink.bsum = 0, c.sink.nee = 0, c.in.bw = bandw;
     real3 wo = make_real3(wo_dirs[4 * v], wo_dirs[4 * v + 1], wo_dirs[4 * v + 2]);
     __global ulong *hist_b = hist + 2 * ((ulong)s.slice * LSQT_BATCHES + (ulong)s.batch) * LSQT_HIST_BINS * LSQT_NB;
@@ -373,8 +377,9 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
     c.sink.out = &out, c.sink.count_only = count_only;
     if (s.begin < s.end) {
         const ulong p = s.begin, at = (ulong)s.slice * (path_end - path_begin) + (p - path_begin);
-        out.rec = count_only ? 0 : rec + rec_off[at];
-        out.n = 0;
+        out.rec = count_only ? 0 : rec;
+        out.n = count_only ? 0 : (uint)rec_off[at];
+        band_set_hero(&c, p);
         rng_t rng = rng_init(scene->seed_lo, scene->seed_hi, s.slice, p, RNG_PURPOSE_WALK | scene->rng_side);
         run_path(&c, wo, &rng, hist_b);
         if (count_only) rec_off[at] = out.n;
@@ -401,7 +406,7 @@ __kernel void lsqt_walk(__constant lsqt_dev_scene *scene,
     int have_ahead = 0;
 #endif
     for (ulong p = s.begin + (ulong)lid; p < s.end; p += (ulong)lsz) {
-        c.band.hero = (int)(p % LSQT_NB); /* every band leads as many paths */
+        band_set_hero(&c, p);
         const uint purpose = RNG_PURPOSE_WALK | scene->rng_side;
         rng_t rng;
 #ifdef LSQT_RNG_WIDE
@@ -471,14 +476,34 @@ LSQT_INLINE realv nee_rec_vec(__global const lsqt_nee_rec *r, __global const lsq
     return ms_nee_vec(&layers[i], kind, &x, LSQT_NEE_SIDE(q), w, dirs, st + LSQT_LAYER_TAB(i), b);
 }
 
+/* A spread of a path's records (NEE_SPREAD_RECORDS from r, bands.cl band_spread) for
+ * the vector of directions at b: the vertex's terms u to each band's path sums bs. */
+LSQT_INLINE void nee_rec_spread(__global const lsqt_nee_rec *r, realv u, __global const real *dirs,
+                                __global const real *st, int b, realv *bs)
+{
+    const maskv same = vloadv(0, dirs + 2 * LSQT_NWI_PAD + b) * LSQT_NEE_WOZ(*r) > R(0.0);
+    const realv au = vloadv(0, st + b), ad = vloadv(0, st + LSQT_NWI_PAD + b);
+    int deeper = 0;
+    for (int j = 0; j < LSQT_NB; j++) {
+        const real4 f = LSQT_NEE_SPREAD(r[j / LSQT_NEE_SPREAD_BANDS], j % LSQT_NEE_SPREAD_BANDS);
+        deeper |= f.z != R(0.0) || f.w != R(0.0);
+    }
+    for (int j = 0; j < LSQT_NB; j++) {
+        const real4 f = LSQT_NEE_SPREAD(r[j / LSQT_NEE_SPREAD_BANDS], j % LSQT_NEE_SPREAD_BANDS);
+        if (f.x != R(0.0) || f.y != R(0.0)) bs[j] = band_add(bs[j], u, same, f.x, f.y, f.z, f.w, deeper, au, ad);
+    }
+}
+
 /* The GPU path's next-event estimates: one work-group per (chunk, simulated slice), as
  * lsqt_walk's, sharing the slice's directions: work-item i owns the vectors of LSQT_VW
  * directions at i LSQT_VW, (i + size) LSQT_VW, ... For each vector it sums every path's
  * records in the path's order (the CPU path's order, so the same sums), converts each
  * path's sum to fixed point and adds it to the block's tallies: a sum and a 64-bit word
- * per lane in registers, whatever the direction count. Every work-item reads the same
- * record at once. */
-__kernel void lsqt_estimate(__constant lsqt_dev_scene *scene, __global const lsqt_dev_medium *media,
+ * per lane and band in registers, whatever the direction count. A band block's records
+ * are at weight 1 and each vertex's are followed by its spread records, which add them to
+ * each band's sums (as the CPU path's band_spread). Every work-item reads the same record
+ * at once. */
+LSQT_GPU_KERNEL void lsqt_estimate(__constant lsqt_dev_scene *scene, __global const lsqt_dev_medium *media,
                             __global const lsqt_dev_layer *layers, __global const real *wi_dirs,
                             __global const real *tab, ulong path_begin, ulong path_end, ulong chunk_first,
                             __global const lsqt_nee_rec *rec, __global const ulong *rec_off, __global ulong *nee,
@@ -489,19 +514,34 @@ __kernel void lsqt_estimate(__constant lsqt_dev_scene *scene, __global const lsq
     __global const real *dirs = wi_dirs + 3 * LSQT_NWI_PAD * s.slice;
     __global const real *st = tab + (size_t)s.slice * LSQT_SLICE_TAB(scene->n_layers);
     const ulong first = (ulong)s.slice * (path_end - path_begin) - path_begin;
+    const size_t band_words = scene->band_nee_words;
+    /* A block's low words in local memory (LSQT_NB x 16 bytes a work-item: 4 KB a group of
+     * 64 at 4 bands), its path sums in registers (these loops over the bands are unrolled):
+     * both in registers took more than 128 VGPRs on gfx90a at 4 bands. */
+    BAND_ARRAY(ulongv, lo, LSQT_NB);
     for (int b = s.lid * LSQT_VW; b < LSQT_NWI_PAD; b += s.lsz * LSQT_VW) {
-        ulongv lo = (ulongv)(0);
+        for (int j = 0; j < LSQT_NB; j++) lo[j] = (ulongv)(0);
         for (ulong p = s.begin; p < s.end; p++) {
-            realv sum = (realv)(R(0.0));
+            realv u = (realv)(R(0.0)), bs[LSQT_NB];
+            for (int j = 0; j < LSQT_NB; j++) bs[j] = (realv)(R(0.0));
             const ulong r1 = rec_off[first + p + 1];
-            for (ulong r = rec_off[first + p]; r < r1; r++) sum += nee_rec_vec(rec + r, media, layers, dirs, st, b);
-            lo = nee_flush_vec(sum, lo, nee, v, s.batch, b, flags);
+            for (ulong r = rec_off[first + p]; r < r1; r++) {
+                if (LSQT_NB > 1 && (int)LSQT_NEE_KIND(rec[r]) == NEE_SPREAD) {
+                    nee_rec_spread(rec + r, u, dirs, st, b, bs);
+                    u = (realv)(R(0.0)), r += NEE_SPREAD_RECORDS - 1;
+                } else
+                    u += nee_rec_vec(rec + r, media, layers, dirs, st, b);
+            }
+            if (LSQT_NB == 1) bs[0] = u; /* one band's terms carry its weight */
+            for (int j = 0; j < LSQT_NB; j++) lo[j] = nee_flush_vec(bs[j], lo[j], nee + j * band_words, v, s.batch, b, flags);
         }
-        ulong ls[LSQT_VW];
-        vstorev(lo, 0, ls);
-        for (int i = 0; i < LSQT_VW; i++) {
-            __global ulong *p = ls[i] ? nee_word(nee, v, s.batch, b + i) : 0;
-            if (p) global_add128(p, ls[i], 0, flags);
+        for (int j = 0; j < LSQT_NB; j++) {
+            ulong ls[LSQT_VW];
+            vstorev(lo[j], 0, ls);
+            for (int i = 0; i < LSQT_VW; i++) {
+                __global ulong *p = ls[i] ? nee_word(nee + j * band_words, v, s.batch, b + i) : 0;
+                if (p) global_add128(p, ls[i], 0, flags);
+            }
         }
     }
 }

@@ -11,16 +11,19 @@ with libclc (PTX; ptxas reports registers when the CUDA toolkit is present). Con
 the main program at -wi 16 and 1024, the RRSS pilot at -rx 8 -wi 1024 (8192 directions),
 double at -wi 300 (gfx90a); gfx1100 at -wi 300; nvptx64 at -wi 16 and the pilot; gfx90a
 at -O0 too (a program
-that links only because the optimiser inlined every call fails there).
+that links only because the optimiser inlined every call fails there); and every band
+block width the GPU code path uses (2 ... LSQT_GPU_BAND_BLOCK_MAX, include/lsqt/
+band_blocks.h) at -wi 1024 on gfx90a.
 
 Fails on: a compile or link error (an undefined symbol; a PTX `.extern .func`); local
 memory (LDS, `.shared`) above 32 KB in any kernel; scratch (AMD) or `.local` memory (PTX)
 that grows with the direction count (gfx90a, nvptx64), unless listed in KNOWN with the
 reason; any scratch of a float kernel on gfx90a at -O3; a kernel above its VGPR ceiling
 in CEILINGS (the ceilings hold what has been reached, so it cannot slip back; every
-float kernel is at or below 128 on gfx90a, 4 waves per SIMD, and must stay there); a KNOWN
-defect that is gone (remove it from KNOWN, so the test holds the gain). Prints the table
-of every compile.
+float kernel is at or below 128 on gfx90a, 4 waves per SIMD, and must stay there; a band
+block's too, with no scratch, and fewer than 4 waves per SIMD for its local memory fails
+as well); a KNOWN defect that is gone (remove it from KNOWN, so the test holds the gain).
+Prints the table of every compile.
 Exit 77 (skipped) when clang-15, ld.lld or the device libraries are missing."""
 import concurrent.futures
 import os
@@ -180,7 +183,8 @@ def main():
     # warning fails here, in each precision and atomics variant, with every model built.
     every = " ".join("-DLSQT_HAS_%s=1" % m for m in sorted(model_names()))
     for extra in ("", "-DLSQT_DOUBLE=1", "-DLSQT_NO_INT64_ATOMICS=1", "-DLSQT_NEE_RECORDS=1 -DLSQT_VW=2",
-                  "-DLSQT_NB=4", "-DLSQT_NB=16 -DLSQT_DOUBLE=1 -DLSQT_ITEMS=2"):
+                  "-DLSQT_NEE_RECORDS=1 -DLSQT_VW=2 -DLSQT_NB=3", "-DLSQT_NB=4",
+                  "-DLSQT_NB=16 -DLSQT_DOUBLE=1 -DLSQT_ITEMS=2"):
         p = subprocess.run(["clang-15", "-x", "cl", "-cl-std=CL1.2", "-Xclang", "-finclude-default-header",
                             "-fsyntax-only", "-pedantic", "-Werror", "-DLSQT_NWI=16", *every.split(), *extra.split(),
                             src], capture_output=True, text=True)
@@ -201,9 +205,14 @@ def main():
               % ", ".join(missing))
         return 1
 
-    # (family, config label, target, olevel, nwi, group, double)
+    # (family, config label, target, olevel, nwi, group, double); a band block's label is
+    # "bands N" and its options get -DLSQT_NB=N.
+    gpu_band_max = int(re.search(r"#define LSQT_GPU_BAND_BLOCK_MAX (\d+)", open(os.path.join(
+        os.path.dirname(os.path.abspath(__file__)), "..", "include", "lsqt", "band_blocks.h")).read()).group(1))
     jobs_list = []
     for fam, name in FAMILIES:
+        for nb in range(2, gpu_band_max + 1):
+            jobs_list.append((name, fam, "bands %d" % nb, "gfx90a", "-O3", 1024, 1, 0))
         for label, nwi, group, dbl in (("wi 16", 16, 1, 0), ("wi 1024", 1024, 1, 0), ("pilot 8x1024", 1024, 8, 0),
                                        ("double wi 300", 300, 1, 1)):
             jobs_list.append((name, fam, label, "gfx90a", "-O3", nwi, group, dbl))
@@ -215,6 +224,8 @@ def main():
     def run(j):
         name, fam, label, target, olevel, nwi, group, dbl = j
         opts = options(fam, nwi, group, dbl)
+        if label.startswith("bands "):
+            opts += " -DLSQT_NB=" + label.split()[1]
         out = os.path.join(tmp, "%s-%s-%s%s" % (name, target, label.replace(" ", "_"), ".ptx" if target == "nvptx64" else ".co"))
         if target == "nvptx64":
             return j, ptx_compile(src, opts, out)
@@ -246,7 +257,12 @@ def main():
                     name, label, target, k, r["VGPRs"], r["SGPRs"], r["ScratchSize"], r["LDS Size"],
                     r["Occupancy"], r["VGPRs Spill"]))
                 lds, scr = r["LDS Size"], r["ScratchSize"]
-                if target == "gfx90a" and olevel == "-O3" and not dbl:
+                if label.startswith("bands "):
+                    if r["VGPRs"] > TARGET or scr or r["Occupancy"] < 4:
+                        failures.append("%s: %s uses %d VGPRs, %d bytes of scratch, %d waves per SIMD (a band block "
+                                        "must stay within %d, none and 4)" % (where, k, r["VGPRs"], scr, r["Occupancy"],
+                                                                             TARGET))
+                elif target == "gfx90a" and olevel == "-O3" and not dbl:
                     if scr:
                         failures.append("%s: %s uses %d bytes of scratch per lane (float on gfx90a must use none)"
                                         % (where, k, scr))

@@ -10,7 +10,7 @@
 # any slip in a record's packing, a lost or repeated vertex, or a path cut short shows
 # here. Substr runs again with a record budget of 30 (LSQT_NEE_RECORD_CAP), which cuts
 # every launch into parts and grows the buffer for a path with more; so does a run with
-# bands (gold), whose bands share one record buffer.
+# bands (gold). Band blocks (their spread records, below) are compared the same way.
 # (Between vector widths the bytes may differ: PoCL's double exp2 at 16 and 4 lanes
 # differs in a last bit at some arguments, which can move a path's sum by one unit.)
 # usage: test_gpu_path.sh LSQT_CL EXAMPLES_DIR
@@ -55,8 +55,21 @@ same Tabulated "$EX/mie-fog.lsqt" -p 300 -wo 4 -wi 24 --wi-spread
 same MCX mcx.lsqt -p 300 -wo 4 -wi 24 --wi-spread
 same two two.lsqt -p 300 -wo 4 -wi 24 --wi-spread --from-below
 LSQT_NEE_RECORD_CAP=30 same Substr-parts "$EX/tutorial/Substr.lsqt" -p 300 -wo 4 -wi 24 --wi-spread
-# Bands: one sub-session per band, lending each other one record buffer; RRSS on their sum
-# (the GPU code path has no band blocks, so the CPU's runs each band on its own paths too).
-LSQT_BAND_BLOCK=1 same RGB "$EX/paint-rgb.lsqt" -p 300 -wo 4 -wi 24
-LSQT_BAND_BLOCK=1 LSQT_NEE_RECORD_CAP=30 same Gold "$EX/gold-coat.lsqt" -p 300 -wo 4 -wi 24 --wi-spread --wavelengths 450:650:100
+# Bands sharing their paths (the GPU path's spread records, evaluated by lsqt_estimate):
+# three in one block (RGB; its RRSS on their sum); gold's hidden conductor, whose n and k
+# change by band, with a record budget of 30; six bands whose extinction, albedo and
+# Lambertian factors all differ, from both sides, in two blocks of 3 (LSQT_BAND_BLOCK=4 on
+# both paths: the GPU's blocks are at most 4 wide, the CPU's 16). Then one band per
+# block, the blocks lending each other one record buffer.
+same RGB "$EX/paint-rgb.lsqt" -p 300 -wo 4 -wi 24
+LSQT_NEE_RECORD_CAP=30 same Gold "$EX/gold-coat.lsqt" -p 300 -wo 4 -wi 24 --wi-spread --wavelengths 450:650:100
+printf '400 2.0\n700 0.3\n' > mus.txt
+printf '400 0.01\n700 0.6\n' > mua.txt
+printf '400 0.1\n700 0.6\n' > fr.txt
+printf '400 0.5\n700 0.2\n' > ft.txt
+printf 'Medium\nLayer z=1 LambertianBsdf fR=@fr.txt fT=@ft.txt\nMedium mus=@mus.txt mua=@mua.txt HenyeyGreensteinPhase g=0.5\nLayer z=0 LambertianBsdf fR=0.2 fT=@ft.txt\nMedium\n' > six.lsqt
+LSQT_BAND_BLOCK=4 same Six six.lsqt -p 300 -wo 4 -wi 24 --wi-spread --from-below --wavelengths 400:650:50
+LSQT_BAND_BLOCK=1 same RGB-apart "$EX/paint-rgb.lsqt" -p 300 -wo 4 -wi 24
+# The GPU path's blocks, as -v says: three bands in one.
+if LSQT_GPU_PATH=1 "$BIN" -v -R "$EX/paint-rgb.lsqt" -p 64 -wo 4 -wi 16 -o v.raw --lss v.lss 2>&1 | grep -q "3 bands in 1 block of up to 3"; then ok; else bad "the GPU path does not run 3 bands in one block"; fi
 finish test_gpu_path

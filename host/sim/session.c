@@ -456,7 +456,8 @@ static int open_block(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a,
      * (12 % less with 8 than with 64); a GPU wants wide groups. The CPU path's items keep
      * their direction sums in the group's local memory, sized for the group (walk.cl's
      * LSQT_ITEMS). */
-    size_t ls = local_size ? local_size : gpu ? 64 : 1, kmax = 0;
+    size_t ls = local_size ? local_size : gpu ? LSQT_GPU_ITEMS : 1, kmax = 0;
+    if (gpu && ls > LSQT_GPU_ITEMS) ls = LSQT_GPU_ITEMS; /* the kernels' local memory is sized for it */
     if (!gpu && ls > 1 && strlen(opt) + 32 < sizeof opt)
         snprintf(opt + strlen(opt), sizeof opt - strlen(opt), " -DLSQT_ITEMS=%zu", ls);
     if (s->nb > 1 && strlen(opt) + 32 < sizeof opt)
@@ -499,14 +500,15 @@ static int open_block(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a,
 
 /* The widest band block this device and direction count allow: the CPU path keeps per
  * band, per work-item and per direction a sum and a low word (12 bytes in float, 16 in
- * double) in local memory (walk.cl). The GPU path runs one band per program. */
+ * double) in local memory (walk.cl); the GPU path's blocks are at most
+ * LSQT_GPU_BAND_BLOCK_MAX wide. */
 static int block_width(lsqt_context *cx, const lsqt_state *st, int slice_group, size_t local_size, char *err,
                        size_t errcap)
 {
     int width = lsqt_band_block_width(err, errcap);
     const int gpu = gpu_path(cx, err, errcap);
     if (!width || gpu < 0) return 0;
-    if (gpu) return 1;
+    if (gpu) return width < LSQT_GPU_BAND_BLOCK_MAX ? width : LSQT_GPU_BAND_BLOCK_MAX;
     const int vw = vector_width(gpu, err, errcap);
     if (!vw) return 0;
     size_t nwi = slice_group > 1 ? (size_t)slice_group * LSQT_PAD((size_t)st->n_wi, (size_t)vw) : (size_t)st->n_wi;
@@ -705,11 +707,12 @@ static cl_int ensure_buffer(lsqt_session *s, cl_mem *m, size_t *cap, size_t n, s
 }
 
 /* The records' budget: LSQT_NEE_RECORD_CAP records (the tests make it small to split
- * launches), else a quarter of the device's largest buffer, at most 512 MB. */
+ * launches), else a quarter of the device's largest buffer, at most 512 MB; below 2^31
+ * records either way (the walk counts a launch's records in 32 bits, nee_records.cl). */
 static size_t record_budget(const lsqt_session *s)
 {
     const char *env = getenv("LSQT_NEE_RECORD_CAP");
-    if (env && *env && atol(env) > 0) return (size_t)atol(env);
+    if (env && *env && atol(env) > 0) return atol(env) < INT32_MAX ? (size_t)atol(env) : (size_t)INT32_MAX;
     cl_ulong max_alloc = 0;
     clGetDeviceInfo(s->cx->dev.id, CL_DEVICE_MAX_MEM_ALLOC_SIZE, sizeof max_alloc, &max_alloc, NULL);
     size_t bytes = max_alloc ? (size_t)(max_alloc / 4) : (size_t)64 << 20;
@@ -1013,8 +1016,9 @@ static int lane_exits(lsqt_session *s, uint64_t begin, uint32_t n, float *out, c
         e |= clSetKernelArg(s->exits, 8, sizeof(cl_mem), &buf);
         e |= clSetKernelArg(s->exits, 9, sizeof(cl_mem), &s->flags);
         e |= clSetKernelArg(s->exits, 10, sizeof(cl_mem), &s->bandw);
-        size_t global[2] = {n, n_sim};
-        if (e == CL_SUCCESS) e = clEnqueueNDRangeKernel(s->cx->queue, s->exits, 2, NULL, global, NULL, 0, NULL, NULL);
+        /* groups of the session's size, for which the kernels' local memory is sized */
+        size_t global[2] = {LSQT_PAD((size_t)n, s->local_size), n_sim}, local[2] = {s->local_size, 1};
+        if (e == CL_SUCCESS) e = clEnqueueNDRangeKernel(s->cx->queue, s->exits, 2, NULL, global, local, 0, NULL, NULL);
         if (e == CL_SUCCESS) e = clEnqueueReadBuffer(s->cx->queue, buf, CL_TRUE, 0, count * sz, host, 0, NULL, NULL);
     }
     int rc = 0;

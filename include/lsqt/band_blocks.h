@@ -15,6 +15,12 @@ extern "C" {
  * walks its own paths, as a one-band run). */
 #define LSQT_BAND_BLOCK_MAX 16
 
+/* The widest block on the GPU code path: its walk keeps a block's state in the group's
+ * local memory and lsqt_estimate a path's band sums in registers, which at 4 bands stay
+ * within 128 VGPRs and 16 KB of local memory a SIMD on gfx90a (4 waves of 64;
+ * tests/test_gpu_build.py builds every width up to it). */
+#define LSQT_GPU_BAND_BLOCK_MAX 4
+
 /* A block: its width nb (the program's LSQT_NB) and the run's band in each of its slots,
  * -1 for a slot that only pads the block (it repeats the block's last band; its tallies are dropped). */
 typedef struct lsqt_band_block {

@@ -22,6 +22,10 @@ typedef uint32_t lsqt_u32;
 #define LSQT_CHUNK 256
 #define LSQT_BATCHES 32
 
+/* The GPU code path's work-group size, at most (the kernels size their local memory for
+ * it, walk.cl; the host launches no wider groups, session.c). */
+#define LSQT_GPU_ITEMS 64
+
 /* Incident directions go to the device as three coordinate arrays (x, y, z) per slice,
  * each padded to a multiple of 4 with zero vectors, which contribute nothing. */
 #define LSQT_PAD(n, w) (((n) + (w) - 1) / (w) * (w))
@@ -181,6 +185,12 @@ LSQT_NEE_RECORD(float4, )
 #define LSQT_NEE_SIDE(r) (r).q[3].y       /* a microsurface's side (+-1), else 0 */
 #define LSQT_NEE_KIND(r) (r).q[3].z       /* NEE_LAYER ... (nee_records.cl) */
 #define LSQT_NEE_INDEX(r) (r).q[3].w      /* the layer's or the medium's index */
+/* A band block's spread record (NEE_SPREAD) after a vertex's records: bands j ... j + 2
+ * of the block, band j + i's (cs, co, dtu, dtd) in q[i] (bands.cl band_spread), and the
+ * vertex's wo.z; kind in LSQT_NEE_KIND. */
+#define LSQT_NEE_SPREAD_BANDS 3
+#define LSQT_NEE_SPREAD(r, i) (r).q[i]
+#define LSQT_NEE_WOZ(r) (r).q[3].x
 #else
 typedef float lsqt_nee_float4[4];
 typedef double lsqt_nee_double4[4];
