@@ -70,13 +70,14 @@ static inline lsqt_slice_est *band_block_run(const char *who, const char *text, 
     return e;
 }
 
-/* Whether this run takes the GPU code path, which walks every band alone (one band a
- * program): nothing shares there, so a band-block test has nothing to test (it says so). */
+/* Whether this run takes the GPU code path, whose blocks are at most 4 wide (band_blocks.h):
+ * a band-block test's blocks of up to 16 are not made there (it says so; test_gpu_path
+ * compares the GPU path's blocks with the CPU path's). */
 static inline int band_blocks_absent(void)
 {
     const char *gp = getenv("LSQT_GPU_PATH");
     if (gp && *gp ? strcmp(gp, "0") != 0 : !fixture_cx.dev.is_cpu) {
-        printf("the GPU path walks every band alone: skipped\n");
+        printf("the GPU path's blocks are at most 4 wide: skipped\n");
         return 1;
     }
     return 0;

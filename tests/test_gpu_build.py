@@ -63,16 +63,16 @@ KNOWN = {}
 # TARGET (4 waves per SIMD) must stay there, and every one is.
 TARGET = 128
 CEILINGS = {
-    "slab": {"lsqt_walk": 78, "lsqt_estimate": 76, "lsqt_exits": 60, "lsqt_prepare": 26},
-    "Dust": {"lsqt_walk": 82, "lsqt_estimate": 76, "lsqt_exits": 64, "lsqt_prepare": 26},
-    "Rough": {"lsqt_walk": 124, "lsqt_estimate": 106, "lsqt_exits": 86, "lsqt_prepare": 26},
-    "Substr": {"lsqt_walk": 122, "lsqt_estimate": 116, "lsqt_exits": 89, "lsqt_prepare": 26},
-    "Dusty": {"lsqt_walk": 127, "lsqt_estimate": 116, "lsqt_exits": 94, "lsqt_prepare": 26},
-    "Silver": {"lsqt_walk": 120, "lsqt_estimate": 93, "lsqt_exits": 81, "lsqt_prepare": 26},
-    "SGGX": {"lsqt_walk": 80, "lsqt_estimate": 95, "lsqt_exits": 64, "lsqt_prepare": 26},
+    "slab": {"lsqt_walk": 70, "lsqt_estimate": 76, "lsqt_exits": 56, "lsqt_prepare": 26},
+    "Dust": {"lsqt_walk": 72, "lsqt_estimate": 76, "lsqt_exits": 62, "lsqt_prepare": 26},
+    "Rough": {"lsqt_walk": 118, "lsqt_estimate": 106, "lsqt_exits": 86, "lsqt_prepare": 26},
+    "Substr": {"lsqt_walk": 118, "lsqt_estimate": 116, "lsqt_exits": 89, "lsqt_prepare": 26},
+    "Dusty": {"lsqt_walk": 123, "lsqt_estimate": 116, "lsqt_exits": 94, "lsqt_prepare": 26},
+    "Silver": {"lsqt_walk": 116, "lsqt_estimate": 93, "lsqt_exits": 81, "lsqt_prepare": 26},
+    "SGGX": {"lsqt_walk": 78, "lsqt_estimate": 95, "lsqt_exits": 63, "lsqt_prepare": 26},
     "Rayleigh-ON": {"lsqt_walk": 88, "lsqt_estimate": 79, "lsqt_exits": 74, "lsqt_prepare": 26},
-    "Draine-HG2": {"lsqt_walk": 82, "lsqt_estimate": 90, "lsqt_exits": 64, "lsqt_prepare": 26},
-    "Tabulated": {"lsqt_walk": 76, "lsqt_estimate": 80, "lsqt_exits": 64, "lsqt_prepare": 26},
+    "Draine-HG2": {"lsqt_walk": 71, "lsqt_estimate": 90, "lsqt_exits": 63, "lsqt_prepare": 26},
+    "Tabulated": {"lsqt_walk": 67, "lsqt_estimate": 80, "lsqt_exits": 62, "lsqt_prepare": 26},
 }
 
 

@@ -6,7 +6,8 @@
 # to one local or global location, atomics excepted) and its API checks (--check-api).
 # Small runs of a slab, Rough and Substr (with their RRSS pilot: the candidate-walk
 # kernel), a two-sided transmitting stack (--from-below), and Substr again with the
-# next-event records' budget so small that launches are cut into parts (walk.cl); then
+# next-event records' budget so small that launches are cut into parts (walk.cl), and three
+# bands in one block (paint-rgb, double: byte-identical to PoCL's CPU path); then
 # the CPU code path's slab, and its refusal on a device with too little local memory:
 #   - oclgrind reports nothing (any "Invalid ...", "data race" or error line fails);
 #   - in double the RAW is byte-identical to PoCL's CPU code path at the same vector
@@ -93,6 +94,22 @@ run two two.lsqt -p 256 -wo 4 -wi 16 --wi-spread --from-below
 # A record budget of 40 parts every launch (and grows the buffer for a path with more):
 # the same bytes.
 LSQT_NEE_RECORD_CAP=40 run Substr-parts Substr.lsqt -p 256 -wo 4 -wi 16 --wi-spread
+
+# A band block on the GPU path (its per-band state in local memory, a slot a work-item;
+# its spread records): nothing reported, and in double PoCL's CPU path's bytes in every band.
+if LSQT_GPU_PATH=1 timeout -k 5 600 oclgrind --data-races --check-api "$BIN" -R -q "$EX/paint-rgb.lsqt" -p 256 -wo 4 \
+    -wi 16 --wi-spread --double -o rgb.og.raw --lss rgb.og.lss > rgb.log 2>&1 &&
+  LSQT_GPU_PATH=0 LSQT_VECTOR_WIDTH=2 "$BIN" -R -q "$EX/paint-rgb.lsqt" -p 256 -wo 4 -wi 16 --wi-spread --double \
+    -o rgb.pocl.raw --lss rgb.pocl.lss; then
+  if grep -q -E -i 'invalid|data race|uninitiali|error|warning' rgb.log; then
+    bad "bands: oclgrind reports: $(grep -m 5 -E -i 'invalid|data race|uninitiali|error|warning' rgb.log)"
+  else ok; fi
+  for b in R G B; do
+    if cmp -s "rgb.og.$b.raw" "rgb.pocl.$b.raw"; then ok; else bad "bands double: band $b's RAW differs from PoCL's CPU path"; fi
+  done
+else
+  bad "bands: a run failed: $(tail -3 rgb.log)"
+fi
 
 # The CPU code path keeps each work-item's direction sums in the work-group's local
 # memory (walk.cl's LSQT_ITEMS): under oclgrind's checks it reports nothing and gives
