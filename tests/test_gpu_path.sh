@@ -58,7 +58,8 @@ LSQT_NEE_RECORD_CAP=30 same Substr-parts "$EX/tutorial/Substr.lsqt" -p 300 -wo 4
 # Bands sharing their paths (the GPU path's spread records, evaluated by lsqt_estimate):
 # three in one block (RGB; its RRSS on their sum); gold's hidden conductor, whose n and k
 # change by band, with a record budget of 30; six bands whose extinction, albedo and
-# Lambertian factors all differ, from both sides, in two blocks of 3 (LSQT_BAND_BLOCK=4 on
+# Lambertian factors all differ (the layer's transmitted terms cross the medium below it,
+# deeper in some bands), from both sides, in two blocks of 3 (LSQT_BAND_BLOCK=4 on
 # both paths: the GPU's blocks are at most 4 wide, the CPU's 16). Then one band per
 # block, the blocks lending each other one record buffer.
 same RGB "$EX/paint-rgb.lsqt" -p 300 -wo 4 -wi 24
@@ -67,7 +68,7 @@ printf '400 2.0\n700 0.3\n' > mus.txt
 printf '400 0.01\n700 0.6\n' > mua.txt
 printf '400 0.1\n700 0.6\n' > fr.txt
 printf '400 0.5\n700 0.2\n' > ft.txt
-printf 'Medium\nLayer z=1 LambertianBsdf fR=@fr.txt fT=@ft.txt\nMedium mus=@mus.txt mua=@mua.txt HenyeyGreensteinPhase g=0.5\nLayer z=0 LambertianBsdf fR=0.2 fT=@ft.txt\nMedium\n' > six.lsqt
+printf 'Medium\nLayer z=1 LambertianBsdf fR=@fr.txt fT=@ft.txt\nMedium mus=@mus.txt mua=@mua.txt HenyeyGreensteinPhase g=0.5\nLayer z=0 NullBsdf\nMedium\n' > six.lsqt
 LSQT_BAND_BLOCK=4 same Six six.lsqt -p 300 -wo 4 -wi 24 --wi-spread --from-below --wavelengths 400:650:50
 LSQT_BAND_BLOCK=1 same RGB-apart "$EX/paint-rgb.lsqt" -p 300 -wo 4 -wi 24
 # The GPU path's blocks, as -v says: three bands in one.
