@@ -26,18 +26,13 @@
 LSQT_INLINE real band_tab(const walk_ctx *c, int at) { return c->in.bw[at]; }
 
 /* A path's per-band state, a row of LSQT_NBW each (BAND_MEM, common.cl): each band's
- * weight wb and density ratio rb, a flight's densities lv (flight_weights), and on the
- * CPU path a vertex's factors cs, co and extra optical depths dtu, dtd (band_spread). A
- * GPU keeps the rows in the group's local memory, 13 reals a work-item at 4 bands (3.3 KB
- * a group of 64), within the 16 KB a SIMD may have for 4 waves of 64 on gfx90a. */
+ * weight wb and density ratio rb, and a flight's densities lv (flight_weights). A GPU
+ * keeps the rows in the group's local memory, 13 reals a work-item at 4 bands (3.3 KB a
+ * group of 64), within the 16 KB a SIMD may have for 4 waves of 64 on gfx90a. */
 #define BAND_WB 0
 #define BAND_RB 1
-#define BAND_LV 2  /* flight_weights' densities */
-#define BAND_CS 3  /* the CPU path's (band_spread) */
-#define BAND_CO 4
-#define BAND_DTU 5
-#define BAND_DTD 6
-#define BAND_ROWS (LSQT_RECORDS ? 3 : 7)
+#define BAND_LV 2
+#define BAND_ROWS 3
 LSQT_INLINE BAND_MEM real *band_row(const walk_ctx *c, int row) { return c->band.rows + row * LSQT_NBW; }
 
 /* The band whose flights path p draws, its hero: path index mod LSQT_NB, so that every
@@ -223,8 +218,9 @@ LSQT_INLINE void band_spread(const walk_ctx *c, real woz, const band_vertex *x, 
         }
         return;
     }
-    BAND_MEM real *cs = band_row(c, BAND_CS), *co = band_row(c, BAND_CO);
-    BAND_MEM real *dtu = band_row(c, BAND_DTU), *dtd = band_row(c, BAND_DTD);
+    /* In private memory: in local memory, beside the sums the loop below writes, the
+     * compiler would load them again at every vector (5 % of a 32-band run). */
+    real cs[LSQT_NBW], co[LSQT_NBW], dtu[LSQT_NBW], dtd[LSQT_NBW];
     uint on = 0; /* the bands with a term here */
     int deeper = 0;
     BAND_LOOP

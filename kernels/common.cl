@@ -203,13 +203,14 @@ LSQT_INLINE realv safe_sqrtv(realv x) { return sqrt(fmax(x, (realv)(R(0.0)))); }
 #define LSQT_NBW (LSQT_NB > 1 ? LSQT_NBP : 1)
 #define LSQT_NBV (LSQT_NB > 1 ? LSQT_NBP : 0)
 
-/* Where a path's per-band state lives (bands.cl: each band's weight, its density ratio, a
- * vertex's factors; lsqt_estimate's sums): a block's in the work-group's local memory,
- * so that it takes no registers (in registers, 4 bands took the GPU path's walk from 82
- * to 132 VGPRs on gfx90a); one band's in private memory, registers. BAND_ARRAY declares
- * a work-item's n elements of type T there, at a kernel's outermost scope (local memory
- * is declared nowhere else), for groups of at most LSQT_GROUP_MAX work-items (nee.cl). */
-#if LSQT_NB > 1
+/* Where a path's per-band state lives (bands.cl: each band's weight, its density ratio;
+ * lsqt_estimate's low words): on the GPU path a block's in the work-group's local memory,
+ * so that it takes no registers (in registers, 4 bands took the walk from 82 to 132
+ * VGPRs on gfx90a); otherwise in private memory (on a CPU, in local memory beside the
+ * path's sums, it cost a 32-band run 2 %). BAND_ARRAY declares a work-item's n elements
+ * of type T there, at a kernel's outermost scope (local memory is declared nowhere else),
+ * for groups of at most LSQT_GROUP_MAX work-items (nee.cl). */
+#if LSQT_NB > 1 && defined(LSQT_NEE_RECORDS)
 #define BAND_MEM __local
 #define BAND_ARRAY(T, name, n) \
     __local T name##_all[LSQT_GROUP_MAX * (n)]; \
