@@ -79,6 +79,20 @@ LSQT_INLINE real band_most_mut(const walk_ctx *c, int mi)
     return LSQT_NB == 1 ? c->in.media[mi].mut : band_tab(c, mi);
 }
 
+/* Band b's own medium mi (its phase function, extinction and depths), after the block's
+ * reference media in their buffer (device_layout.h), and whether medium mi's phase
+ * functions differ between the block's bands. */
+LSQT_INLINE __global const lsqt_dev_medium *band_medium(const walk_ctx *c, int b, int mi)
+{
+    const int n = c->in.scene->n_layers;
+    return c->in.media + (1 + b) * (n + 1) + mi;
+}
+
+LSQT_INLINE int band_phases_differ(const walk_ctx *c, int mi)
+{
+    return LSQT_NB > 1 && band_tab(c, LSQT_BAND_PHASES(c->in.scene->n_layers, LSQT_NBP, 0, mi)) != R(0.0);
+}
+
 /* Russian roulette per band, as each band's own walk would play it: a band whose weight
  * is below LSQT_RR_WEIGHT goes on with that weight or stops (0), so a band that absorbs
  * costs no more than on its own paths (band_spread and nee_flush skip it). Returns
@@ -166,10 +180,12 @@ LSQT_INLINE void medium_depths(__global const lsqt_dev_medium *m, real h, real *
 }
 
 /* A next-event vertex, for its bands' factors: on layer li (mi < 0), or at height h in
- * interior medium mi. */
+ * interior medium mi; with only >= 0, terms of band `only`'s own phase function at its
+ * own depths (nee_medium), which go to that band alone. */
 typedef struct {
     int li, mi;
     real h;
+    int only;
 } band_vertex;
 
 /* Band b's factors at vertex x (tu, td: the least depths there), as (cs, co, dtu, dtd):
@@ -179,6 +195,7 @@ LSQT_INLINE real4 band_factors(const walk_ctx *c, const band_vertex *x, int b, c
                                real td)
 {
     const int n = c->in.scene->n_layers;
+    if (x->only >= 0) return b == x->only ? (real4)(wb[b], wb[b], R(0.0), R(0.0)) : (real4)(R(0.0));
     real dtu, dtd;
     band_depths(c, b, x->mi, x->h, x->li, tu, td, &dtu, &dtd);
     if (x->mi >= 0) return (real4)(wb[b], wb[b], dtu, dtd);
@@ -288,6 +305,33 @@ LSQT_INLINE int band_side_sample(const walk_ctx *c, __global const lsqt_dev_laye
         live |= wb[b] > R(0.0);
     }
     *wi = v;
+    return live;
+}
+
+/* A collision's direction in medium mi where the bands' phase functions differ: the
+ * hero's sample (exact: its density is its phase function), and each band's weight
+ * times its own phase function over the bands' mixture of densities, as flights are
+ * (flight_weights). pv: the vertex's (phase_vertex; nothing for the exact samplers).
+ * Returns whether any band still carries weight. */
+LSQT_INLINE int band_phase_sample(const walk_ctx *c, int mi, const phase_vtx *pv, real3 wo, BAND_MEM real *wb,
+                                  BAND_MEM real *rb, rng_t *rng, real3 *wi)
+{
+    if (!(phase_sample(band_medium(c, band_hero(c), mi), pv, wo, rng, wi) > R(0.0))) return 0;
+    BAND_MEM real *lv = band_row(c, BAND_LV);
+    real sum = R(0.0);
+    BAND_LOOP
+    for (int j = 0; j < LSQT_NB; j++) {
+        lv[j] = phase_eval(band_medium(c, j, mi), pv, wo, *wi);
+        rb[j] *= lv[j], sum += rb[j];
+    }
+    if (!(sum > R(0.0))) return 0;
+    const real inv = (real)LSQT_NB / sum;
+    int live = 0;
+    BAND_LOOP
+    for (int b = 0; b < LSQT_NB; b++) {
+        wb[b] = (wb[b] * lv[b]) * inv, rb[b] *= inv;
+        live |= wb[b] > R(0.0);
+    }
     return live;
 }
 

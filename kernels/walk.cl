@@ -56,7 +56,7 @@ LSQT_INLINE real layer_vertex(const walk_ctx *c, int li, real3 d, BAND_MEM real 
     layer_depths(c, li, &tau_up, &tau_down);
     const int visible = c->mode.nee_on && nee_visible(tau_up, tau_down, up, down);
     __global const real *tab = c->in.tab + LSQT_LAYER_TAB(li);
-    const band_vertex bx = {li, -1, R(0.0)};
+    const band_vertex bx = {li, -1, R(0.0), -1};
     const real vw = LSQT_NB > 1 ? R(1.0) : wb[0];
     c->sink.work[WORK_LAYER]++;
     if (ms_layer(l)) { /* constant 0, and the walk dead code, in a scene without one */
@@ -90,10 +90,26 @@ LSQT_NOINLINE_CPU void nee_medium(const walk_ctx *c, int mi, real h, real3 d, re
     c->sink.work[WORK_NEE]++;
     /* A side light may not leave by, or too deep to count, is as good as infinitely deep
      * (2^-huge is 0; 1e30 times a 0 of the tables is still 0, never NaN). */
+    if (band_phases_differ(c, mi)) {
+        /* each band's own phase function at its own depths, to that band alone */
+        BAND_LOOP
+        for (int b = 0; b < LSQT_NB; b++) {
+            if (!(wb[b] > R(0.0))) continue;
+            __global const lsqt_dev_medium *bm = band_medium(c, b, mi);
+            medium_depths(bm, h, &tau_up, &tau_down);
+            if (!nee_visible(tau_up, tau_down, up, down)) continue;
+            nee_medium_terms(c, bm, (int)(bm - c->in.media), -d, R(1.0), pv,
+                             up && tau_up < LSQT_NEE_TAU_MAX ? tau_up : R(1e30),
+                             down && tau_down < LSQT_NEE_TAU_MAX ? tau_down : R(1e30));
+            const band_vertex bx = {-1, mi, h, b};
+            band_spread(c, -d.z, &bx, wb);
+        }
+        return;
+    }
     const real tu = up && tau_up < LSQT_NEE_TAU_MAX ? tau_up : R(1e30);
     const real td = down && tau_down < LSQT_NEE_TAU_MAX ? tau_down : R(1e30);
     nee_medium_terms(c, m, mi, -d, LSQT_NB > 1 ? R(1.0) : w, pv, tu, td);
-    const band_vertex bx = {-1, mi, h};
+    const band_vertex bx = {-1, mi, h, -1};
     band_spread(c, -d.z, &bx, wb);
 }
 
@@ -230,8 +246,12 @@ LSQT_INLINE void run_path(const walk_ctx *c, real3 wo, rng_t *rng, __global ulon
                 phase_vtx pv = phase_vertex(m, -d, rng);
                 nee_medium(c, medium, h, d, wb[0], LSQT_NB > 1 ? wb : 0, &pv);
                 real3 wi;
-                const real f = phase_sample(m, &pv, -d, rng, &wi);
-                if (!(f > R(0.0)) || !band_scale(wb, f) || !roulette(wb, rng)) return;
+                if (band_phases_differ(c, medium)) {
+                    if (!band_phase_sample(c, medium, &pv, -d, wb, rb, rng, &wi) || !roulette(wb, rng)) return;
+                } else {
+                    const real f = phase_sample(m, &pv, -d, rng, &wi);
+                    if (!(f > R(0.0)) || !band_scale(wb, f) || !roulette(wb, rng)) return;
+                }
                 d = wi;
                 continue;
             }

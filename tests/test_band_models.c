@@ -18,6 +18,10 @@
  *               flights: a collision weighs by the albedo only); the lower one extinctions
  *               0.5, 1.5, 1.2 and albedos 0.9, 0.9, 0.6 (spectral MIS over the flights).
  *               Each collision's phase sample and next-event terms are shared.
+ *   hg-g, hg-draine  the same with phase functions that differ by band (g from -0.5 to
+ *               0.9; Draine's alpha 0, which is HG, beside 1 and 2.5): the hero's phase
+ *               sample, each band weighed by its own phase function over the mixture,
+ *               and each band's own next-event terms.
  *   lambertian  a transmitting Lambertian (fR 0.3, 0.6, 0.1; fT 0.6, 0.2, 0.85) between
  *               two HG media, lit from above and, by the lower medium's light, from below:
  *               the hero's side, each band's fs or fo in the walk step and the next-event
@@ -93,6 +97,15 @@ static const model_case CASES[] = {
     {"sggx-specular", 3, 0, TWO_SLABS("SggxPhase Apara=1 Aperp=0.2 type=Specular")},
     {"sggx-diffuse", 3, 0, TWO_SLABS("SggxPhase Apara=0.3 Aperp=1 type=Diffuse")},
     {"draine", 3, 0, TWO_SLABS("DrainePhase g=0.4 alpha=2")},
+    /* phase functions that differ by band (bands.cl band_phase_sample): g from -0.5 to
+     * 0.9 in a slab of one extinction, then in one whose extinctions differ, where band
+     * 2 does not scatter (as a hero it samples the block's reference phase function);
+     * HG beside Draine (alpha 0 is HG) */
+    {"hg-g", 3, 0,
+     "Medium\nLayer z=2 NullBsdf\nMedium mus={0.95,0.6,0.8} mua={0.05,0.4,0.2} HenyeyGreensteinPhase g={-0.5,0.3,0.9}\n"
+     "Layer z=1 NullBsdf\nMedium mus={0.45,0,0.72} mua={0.05,0.3,0.48} HenyeyGreensteinPhase g={0.9,0.6,-0.3}\n"
+     "Layer z=0 NullBsdf\nMedium\n"},
+    {"hg-draine", 3, 0, TWO_SLABS("DrainePhase g={0.2,0.5,0.7} alpha={0,1,2.5}")},
     {"lambertian", 3, 0,
      "Medium\nLayer z=2 NullBsdf\nMedium mus={0.5,0.3,0.8} mua={0.1,0.3,0.2} HenyeyGreensteinPhase g=0.5\n"
      "Layer z=1 LambertianBsdf fR={0.3,0.6,0.1} fT={0.6,0.2,0.85}\n"

@@ -135,7 +135,7 @@ static void test_band_zscores(void)
             exit(1);
         }
         lsqt_band_block *blocks = NULL;
-        const int n_blocks = lsqt_band_blocks(&a, LSQT_BAND_BLOCK_MAX, &blocks);
+        const int n_blocks = lsqt_band_blocks(&a, LSQT_BAND_BLOCK_MAX, INFINITY, &blocks);
         if (j == 0) CHECK(n_blocks == 1 && blocks[0].nb == NBANDS, "the bands do not share their paths (%d blocks)", n_blocks);
         free(blocks);
         const size_t n = lsqt_assembly_canonical(&a, NULL, 0);

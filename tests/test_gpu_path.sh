@@ -57,19 +57,21 @@ same two two.lsqt -p 300 -wo 4 -wi 24 --wi-spread --from-below
 LSQT_NEE_RECORD_CAP=30 same Substr-parts "$EX/tutorial/Substr.lsqt" -p 300 -wo 4 -wi 24 --wi-spread
 # Bands sharing their paths (the GPU path's spread records, evaluated by lsqt_estimate):
 # three in one block (RGB; its RRSS on their sum); gold's hidden conductor, whose n and k
-# change by band, with a record budget of 30; six bands whose extinction, albedo and
-# Lambertian factors all differ (the layer's transmitted terms cross the medium below it,
-# deeper in some bands), from both sides, in two blocks of 3 (LSQT_BAND_BLOCK=4 on
-# both paths: the GPU's blocks are at most 4 wide, the CPU's 16). Then one band per
-# block, the blocks lending each other one record buffer.
+# change by band, with a record budget of 30; six bands whose extinction, albedo, phase
+# function and Lambertian factors all differ (each band's own medium records; the layer's
+# transmitted terms cross the medium below it, deeper in some bands), from both sides, in
+# two blocks of 3 (LSQT_BAND_BLOCK=4 and LSQT_BAND_DIVERGENCE=inf on both paths: the
+# GPU's blocks are at most 4 wide, the CPU's 16). Then one band per block, the blocks
+# lending each other one record buffer.
 same RGB "$EX/paint-rgb.lsqt" -p 300 -wo 4 -wi 24
 LSQT_NEE_RECORD_CAP=30 same Gold "$EX/gold-coat.lsqt" -p 300 -wo 4 -wi 24 --wi-spread --wavelengths 450:650:100
 printf '400 2.0\n700 0.3\n' > mus.txt
 printf '400 0.01\n700 0.6\n' > mua.txt
 printf '400 0.1\n700 0.6\n' > fr.txt
 printf '400 0.5\n700 0.2\n' > ft.txt
-printf 'Medium\nLayer z=1 LambertianBsdf fR=@fr.txt fT=@ft.txt\nMedium mus=@mus.txt mua=@mua.txt HenyeyGreensteinPhase g=0.5\nLayer z=0 NullBsdf\nMedium\n' > six.lsqt
-LSQT_BAND_BLOCK=4 same Six six.lsqt -p 300 -wo 4 -wi 24 --wi-spread --from-below --wavelengths 400:650:50
+printf '400 -0.3\n700 0.8\n' > g.txt
+printf 'Medium\nLayer z=1 LambertianBsdf fR=@fr.txt fT=@ft.txt\nMedium mus=@mus.txt mua=@mua.txt HenyeyGreensteinPhase g=@g.txt\nLayer z=0 NullBsdf\nMedium\n' > six.lsqt
+LSQT_BAND_BLOCK=4 LSQT_BAND_DIVERGENCE=inf same Six six.lsqt -p 300 -wo 4 -wi 24 --wi-spread --from-below --wavelengths 400:650:50
 LSQT_BAND_BLOCK=1 same RGB-apart "$EX/paint-rgb.lsqt" -p 300 -wo 4 -wi 24
 # The GPU path's blocks, as -v says: three bands in one.
 if LSQT_GPU_PATH=1 "$BIN" -v -R "$EX/paint-rgb.lsqt" -p 64 -wo 4 -wi 16 -o v.raw --lss v.lss 2>&1 | grep -q "3 bands in 1 block of up to 3"; then ok; else bad "the GPU path does not run 3 bands in one block"; fi

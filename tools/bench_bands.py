@@ -11,6 +11,11 @@ Cases (each at every band count of --bands):
          dielectric coat, --wavelengths over 400-710 nm
   slab   an absorbing and scattering slab between null layers whose albedo goes from 0 to
          0.999 over the bands (optical thickness 1, HG g 0.8)
+  paint  examples/tio2-paint.lsqt, a white paint from Mie theory (optical thickness 0.4 to
+         144, g 0.04 to 0.63), --wavelengths 400:2500 in N bands (106: every 20 nm)
+With --baseline apart, the one-band runs are one run of the same bands with
+LSQT_BAND_BLOCK=1 (every band on its own paths, one start-up for all); the default runs
+each band's own file (a start-up each).
 Every run: -wo 4 -wi 64 --wi-spread, seed 0, one untimed run first (the kernel cache).
 CPU seconds are user + sys of the lsqt-cl processes (the machine is shared); the error ratio
 is, per band, the largest over slices of R_err of the run with bands over that of the
@@ -58,14 +63,21 @@ def case_text(name, n):
                              "Layer z=0 NullBsdf\nMedium\n" % (s, a))
         return (text(fmt(alb), fmt([1 - a for a in alb])), [],
                 [text("%.6g" % a, "%.6g" % (1 - a)) for a in alb])
+    if name == "paint":
+        text = open(os.path.join(ROOT, "examples", "tio2-paint.lsqt")).read()
+        step = 2100 // (n - 1) if n > 1 else 0
+        if n < 2 or step * (n - 1) != 2100:
+            raise ValueError("paint: N - 1 must divide 2100 (106 bands: every 20 nm)")
+        wl = ["--wavelengths", "400:2500:%d" % step]
+        return (text, wl, [(text, ["--wavelengths", "%d" % (400 + step * b)]) for b in range(n)])
     raise ValueError(name)
 
 
-def run(binary, path, flags, paths, json_path):
+def run(binary, path, flags, paths, json_path, env=None):
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.time()
     subprocess.run([binary, path, "-p", str(paths), "--json", json_path] + FLAGS + flags, check=True,
-                   stdout=subprocess.DEVNULL)
+                   stdout=subprocess.DEVNULL, env=dict(os.environ, **(env or {})))
     wall = time.time() - t0
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
@@ -82,6 +94,7 @@ def main():
     ap.add_argument("-p", "--paths", type=int, default=20000)
     ap.add_argument("--bands", default="3,32")
     ap.add_argument("--cases", default="dust,gold,slab")
+    ap.add_argument("--baseline", choices=("runs", "apart"), default="runs")
     ap.add_argument("--csv")
     a = ap.parse_args()
     binary = os.path.abspath(a.lsqt_cl)
@@ -97,7 +110,13 @@ def main():
                 wall, cpu, js = run(binary, many, flags, a.paths, os.path.join(d, "many.json"))
                 one_wall = one_cpu = 0.0
                 ratios = []
-                for b, one in enumerate(ones):
+                if a.baseline == "apart":
+                    one_wall, one_cpu, j1 = run(binary, many, flags, a.paths, os.path.join(d, "one.json"),
+                                                {"LSQT_BAND_BLOCK": "1"})
+                    for b in range(n):
+                        e1 = max_r_err(j1, b, n)
+                        ratios.append(max_r_err(js, b, n) / e1 if e1 > 0 else float("nan"))
+                for b, one in enumerate(ones if a.baseline == "runs" else []):
                     t, f = one if isinstance(one, tuple) else (one, [])
                     p = os.path.join(d, "%s-%d-one%d.lsqt" % (name, n, b))
                     open(p, "w").write(t)
@@ -111,10 +130,15 @@ def main():
                        "one_band_runs_wall_s": one_wall, "one_band_runs_cpu_s": one_cpu,
                        "cpu_ratio": cpu / one_cpu if one_cpu > 0 else float("nan"),
                        "max_err_ratio": max(r for r in ratios if r == r) if any(r == r for r in ratios) else float("nan")}
+                # a band's efficiency (1 / (error^2 CPU)) over its own run's, and the gain
+                effs = sorted(1.0 / (row["cpu_ratio"] * r * r) for r in ratios if r == r and r > 0)
+                row["gain"] = effs[0] if effs else float("nan")
+                row["median_band_efficiency"] = effs[len(effs) // 2] if effs else float("nan")
                 rows.append(row)
                 print("%-5s %3d bands: one run %.2f CPU-s (%.2f s wall), %d one-band runs %.2f CPU-s (%.2f s wall): "
-                      "ratio %.3f; largest error ratio %.3f" % (name, n, cpu, wall, n, one_cpu, one_wall,
-                                                                row["cpu_ratio"], row["max_err_ratio"]), flush=True)
+                      "ratio %.3f; largest error ratio %.3f; gain %.2f (the least efficient band's; median %.2f)"
+                      % (name, n, cpu, wall, n, one_cpu, one_wall, row["cpu_ratio"], row["max_err_ratio"],
+                         row["gain"], row["median_band_efficiency"]), flush=True)
     if a.csv:
         with open(a.csv, "w", newline="") as f:
             w = csv.DictWriter(f, fieldnames=list(rows[0]))

@@ -68,6 +68,19 @@ static int hidden_index(const band_tables *t, int i)
     return rule_of(t->layers[i].kind).mode == BANDS_INDEX && t->scene.top_nonnull != i;
 }
 
+/* Whether the bands of a block may have different phase functions of this kind: one
+ * whose sampler draws its own density exactly (EXACT), so that a band's density of the
+ * hero's sample is its phase function's value (bands.cl band_phase_sample); a VERTEX
+ * sampler's density (SGGX's) has no closed form. */
+static int phase_mixes(int kind)
+{
+#define X(ID, num, name, alias, p, sampler, mirror) \
+    LSQT_IF_EXACT_##sampler(if (kind == LSQT_PHASE_##ID) return 1;)
+    LSQT_PHASES(X)
+#undef X
+    return 0;
+}
+
 static int tables_share(const band_tables *x, const band_tables *y, int n)
 {
     if (x->scene.top_nonnull != y->scene.top_nonnull) return 0;
@@ -85,11 +98,75 @@ static int tables_share(const band_tables *x, const band_tables *y, int n)
         /* the medium under an INDEX layer is its index (compared there) */
         const int metal = m == n && n > 0 && p->mus == 0 && rule_of(x->layers[n - 1].kind).mode == BANDS_INDEX;
         if ((!metal && p->eta != q->eta) || p->thickness != q->thickness) return 0;
-        /* a phase function matters only where both bands scatter */
-        if (p->mus > 0 && q->mus > 0 && (p->phase_kind != q->phase_kind || memcmp(p->pp, q->pp, sizeof p->pp)))
+        /* a phase function matters only where both bands scatter, and its parameters
+         * only where its sampler is not exact */
+        if (p->mus > 0 && q->mus > 0 &&
+            (p->phase_kind != q->phase_kind ||
+             (memcmp(p->pp, q->pp, sizeof p->pp) && !phase_mixes(p->phase_kind))))
             return 0;
     }
     return 1;
+}
+
+/* A phase function's mean cosine (the g of HG, its lobes' mean for HG2, Draine's
+ * (2003, eq. 6); 0 for the rest: Rayleigh's, and those the bands of a block share). */
+static double phase_mean_cosine(const lsqt_dev_medium_d *m)
+{
+    const double *p = m->pp;
+    if (m->phase_kind == LSQT_PHASE_HG) return p[0];
+    if (m->phase_kind == LSQT_PHASE_HG2) return (1.0 - p[2]) * p[0] + p[2] * p[1];
+    if (m->phase_kind == LSQT_PHASE_DRAINE)
+        return p[0] * (1.0 + p[1] * (3.0 + 2.0 * p[0] * p[0]) / 5.0) / (1.0 + p[1] * (1.0 + 2.0 * p[0] * p[0]) / 3.0);
+    return 0.0;
+}
+
+static double hg(double g, double mu) { return (1.0 - g * g) / (2.0 * pow(1.0 + g * g - 2.0 * g * mu, 1.5)); }
+
+/* KL(HG_g || HG_h) over cos t (midpoint rule, 256 cells: ample for |g| <= 0.95; g is held
+ * there, as sharper lobes only make the bands more different). */
+static double hg_divergence(double g, double h)
+{
+    if (g == h) return 0.0;
+    g = fmax(-0.95, fmin(0.95, g)), h = fmax(-0.95, fmin(0.95, h));
+    double kl = 0.0;
+    for (int i = 0; i < 256; i++) {
+        const double mu = -1.0 + (i + 0.5) / 128.0, p = hg(g, mu);
+        kl += p * log(p / hg(h, mu)) / 128.0;
+    }
+    return fmax(kl, 0.0);
+}
+
+/* Medium m's expected collisions on a path: tau_s (1 + tau'), its scattering depth times
+ * one plus its reduced depth (a diffusing path in a thick medium meets ~tau' reduced
+ * mean free paths), at most a / (1 - a), the mean before absorption ends it. */
+static double collisions(const lsqt_dev_medium_d *m)
+{
+    if (!(m->mut > 0.0)) return 0.0;
+    const double tau = m->mut * m->thickness, a = m->mus / m->mut, g = phase_mean_cosine(m);
+    const double n = a * tau * (1.0 + tau * (1.0 - a * g));
+    return a < 1.0 ? fmin(n, a / (1.0 - a)) : n;
+}
+
+/* How far apart two sharing bands' paths are: the sum over the interior media of the
+ * expected collisions (the larger band's) times the Kullback-Leibler divergence per
+ * collision of the flights' and the phase functions' densities; where a band is clear,
+ * the other's optical depth. A block's band then has about e^-D of its own paths among
+ * another band's (docs/design.md 3.7): where D is small, sharing costs it nothing. */
+static double path_divergence(const band_tables *x, const band_tables *y, int n)
+{
+    double d = 0.0;
+    for (int m = 1; m < n; m++) {
+        const lsqt_dev_medium_d *p = &x->media[m], *q = &y->media[m];
+        if (p->mut == q->mut && p->phase_kind == q->phase_kind && !memcmp(p->pp, q->pp, sizeof p->pp)) continue;
+        if (!(p->mut > 0.0) || !(q->mut > 0.0)) {
+            d += fmax(p->mut, q->mut) * p->thickness;
+            continue;
+        }
+        const double r = q->mut / p->mut, flight = r - 1.0 - log(r); /* KL of Exp(p) || Exp(q) */
+        const double phase = p->mus > 0.0 && q->mus > 0.0 ? hg_divergence(phase_mean_cosine(p), phase_mean_cosine(q)) : 0.0;
+        d += fmax(collisions(p), collisions(q)) * (flight + phase);
+    }
+    return d;
 }
 
 int lsqt_bands_share(const lsqt_assembly *a, int b, int c)
@@ -120,7 +197,20 @@ int lsqt_band_block_width(char *err, size_t errcap)
     return (int)w;
 }
 
-int lsqt_band_blocks(const lsqt_assembly *a, int width, lsqt_band_block **out)
+double lsqt_band_divergence_max(char *err, size_t errcap)
+{
+    const char *env = getenv("LSQT_BAND_DIVERGENCE");
+    if (!env || !*env) return LSQT_BAND_DIVERGENCE_MAX;
+    char *end = NULL;
+    const double d = strtod(env, &end);
+    if (*end || !(d >= 0.0)) {
+        snprintf(err, errcap, "LSQT_BAND_DIVERGENCE is '%s': expected a number >= 0 or inf", env);
+        return -1.0;
+    }
+    return d;
+}
+
+int lsqt_band_blocks(const lsqt_assembly *a, int width, double max_divergence, lsqt_band_block **out)
 {
     const int nb = lsqt_assembly_bands(a), n = a->n_layers;
     if (width < 1) width = 1;
@@ -130,13 +220,15 @@ int lsqt_band_blocks(const lsqt_assembly *a, int width, lsqt_band_block **out)
     lsqt_band_block *blocks = calloc((size_t)nb, sizeof *blocks);
     int ok = group && t && blocks, count = 0;
     for (int b = 0; ok && b < nb; b++) ok = !tables_of(a, b, &t[b]);
-    /* Groups: a band joins the first group every member of which it shares with. */
+    /* Groups: a band joins the first group every member of which it shares with and
+     * whose paths are within max_divergence of its own (path_divergence). */
     for (int b = 0; ok && b < nb; b++) {
         group[b] = -1;
         for (int g = 0; g < n_groups && group[b] < 0 && width > 1; g++) {
             int all = 1;
             for (int c = 0; c < b && all; c++)
-                if (group[c] == g) all = tables_share(&t[b], &t[c], n);
+                if (group[c] == g)
+                    all = tables_share(&t[b], &t[c], n) && path_divergence(&t[b], &t[c], n) <= max_divergence;
             if (all) group[b] = g;
         }
         if (group[b] < 0) group[b] = n_groups++;
@@ -169,7 +261,8 @@ int lsqt_band_blocks(const lsqt_assembly *a, int width, lsqt_band_block **out)
 }
 
 int lsqt_band_block_tables(const lsqt_assembly *a, const lsqt_band_block *blk, int nbp, double same_mut,
-                           lsqt_dev_scene *scene, lsqt_dev_medium_d *media, lsqt_dev_layer_d *layers, double *bw)
+                           lsqt_dev_scene *scene, lsqt_dev_medium_d *media, lsqt_dev_layer_d *layers, double *bw,
+                           lsqt_dev_medium_d *band_media)
 {
     const int n = a->n_layers, first = blk->band[0];
     lsqt_device_tables(lsqt_assembly_band(a, first), scene, media, layers);
@@ -255,6 +348,26 @@ int lsqt_band_block_tables(const lsqt_assembly *a, const lsqt_band_block *blk, i
             bw[LSQT_BAND_TAU_ABOVE(n, nbp, j, m)] = q->media[m].tau_above;
             bw[LSQT_BAND_TAU_BELOW(n, nbp, j, m)] = q->media[m].tau_below;
         }
+    }
+    /* Each slot's own media (a padding slot's: the last band's), a band that does not
+     * scatter in a medium with the reference's phase function (it weighs nothing there,
+     * but as a hero it samples it); per medium, whether the phase functions differ. */
+    for (int j = 0; j < blk->nb; j++) {
+        if (blk->band[j] >= 0) last = j;
+        const band_tables *q = &t[blk->band[j] >= 0 ? j : last];
+        for (int m = 0; m <= n; m++) {
+            lsqt_dev_medium_d *d = &band_media[(size_t)j * (size_t)(n + 1) + (size_t)m];
+            *d = q->media[m];
+            if (d->phase_kind == LSQT_PHASE_NONE) d->phase_kind = media[m].phase_kind, memcpy(d->pp, media[m].pp, sizeof d->pp);
+        }
+    }
+    for (int m = 0; m <= n; m++) {
+        int differ = 0;
+        for (int j = 1; j < blk->nb; j++) {
+            const lsqt_dev_medium_d *p = &band_media[m], *q = &band_media[(size_t)j * (size_t)(n + 1) + (size_t)m];
+            differ |= p->phase_kind != q->phase_kind || memcmp(p->pp, q->pp, sizeof p->pp) != 0;
+        }
+        for (int j = 0; j < blk->nb; j++) bw[LSQT_BAND_PHASES(n, nbp, j, m)] = differ;
     }
     for (int j = 0; j < have; j++) tables_free(&t[j]);
     return 0;

@@ -222,9 +222,11 @@ static int upload(lsqt_session *s, const lsqt_assembly *full, const lsqt_band_bl
     const lsqt_assembly *a = lsqt_assembly_band(full, blk->band[0]);
     const int n = a->n_layers;
     lsqt_dev_scene scene;
-    lsqt_dev_medium_d *media = calloc((size_t)n + 1, sizeof *media);
+    /* the reference media, and a block's each band's own after them (band_blocks.h) */
+    const int n_media = (n + 1) * (s->nb > 1 ? 1 + s->nb : 1);
+    lsqt_dev_medium_d *media = calloc((size_t)n_media, sizeof *media);
     lsqt_dev_layer_d *layers = calloc((size_t)n + 1, sizeof *layers);
-    lsqt_dev_medium *media_f = calloc((size_t)n + 1, sizeof *media_f);
+    lsqt_dev_medium *media_f = calloc((size_t)n_media, sizeof *media_f);
     lsqt_dev_layer *layers_f = calloc((size_t)n + 1, sizeof *layers_f);
     const int nbp = (int)LSQT_PAD(s->nb, s->vw); /* walk.cl's LSQT_NBP */
     const size_t n_bw = s->nb > 1 ? (size_t)LSQT_BAND_TAB_SIZE(n, nbp) : 1;
@@ -239,12 +241,17 @@ static int upload(lsqt_session *s, const lsqt_assembly *full, const lsqt_band_bl
     int rc = 1;
     cl_int e = CL_SUCCESS;
     if (!media || !layers || !media_f || !layers_f || !wo || !wo_f || !wi_up || !bw || !bw_f ||
-        (s->nb > 1 && lsqt_band_block_tables(full, blk, nbp, st->use_double ? 0.0 : 0x1p-19, &scene, media, layers, bw))) {
+        (s->nb > 1 && lsqt_band_block_tables(full, blk, nbp, st->use_double ? 0.0 : 0x1p-19, &scene, media, layers, bw,
+                                             media + n + 1))) {
         snprintf(err, errcap, "out of memory");
         goto done;
     }
     if (s->nb == 1) lsqt_device_tables(a, &scene, media, layers);
-    lsqt_tables_to_float(media, media_f, n + 1, layers, layers_f, n);
+    /* a phase table's place: its medium's distance to the end of the media, then its
+     * offset in the tables after them (common.cl medium_table) */
+    for (int m = 0; m < n_media; m++)
+        if (media[m].phase_kind == LSQT_PHASE_TABULATED) media[m].pp[0] = n_media - m;
+    lsqt_tables_to_float(media, media_f, n_media, layers, layers_f, n);
     for (size_t i = 0; i < n_bw; i++) bw_f[i] = (float)bw[i];
     /* the strides between the block's bands' tallies (device_layout.h) */
     if (2 * s->n_hist > UINT32_MAX || 2 * s->n_nee > UINT32_MAX || 2 * s->n_scalars > UINT32_MAX) {
@@ -265,7 +272,7 @@ static int upload(lsqt_session *s, const lsqt_assembly *full, const lsqt_band_bl
     cl_uint flags0 = 0;
     s->scene = make_buffer(cx, ro, sizeof scene, &scene, &e);
     /* the phase functions' tables follow the media in their buffer (tables.h) */
-    const size_t n_pt = lsqt_device_phase_tables(a, NULL), media_bytes = ((size_t)n + 1) * media_size;
+    const size_t n_pt = lsqt_device_phase_tables(a, NULL), media_bytes = (size_t)n_media * media_size;
     unsigned char *media_all = malloc(media_bytes + n_pt * dir_size + 1);
     double *pt = malloc(n_pt * sizeof *pt + 1);
     if (!media_all || !pt || n_pt > ((size_t)1 << 24)) { /* pp holds offsets exactly in float up to 2^24 */
@@ -645,14 +652,19 @@ static int open_lane(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, 
     if (nb > 1) {
         const int width = block_width(cx, st, slice_group, local_size, err, errcap);
         if (!width) return 1;
-        n_blocks = lsqt_band_blocks(a, width, &blocks);
+        const double most = lsqt_band_divergence_max(err, errcap);
+        if (most < 0.0) return 1;
+        n_blocks = lsqt_band_blocks(a, width, most, &blocks);
         if (n_blocks < 0) {
             snprintf(err, errcap, "out of memory");
             return 1;
         }
-        if (verbose)
+        if (verbose) {
+            int widest = 0;
+            for (int i = 0; i < n_blocks; i++) widest = blocks[i].nb > widest ? blocks[i].nb : widest;
             fprintf(stderr, "%d bands in %d block%s of up to %d sharing their paths\n", nb, n_blocks,
-                    n_blocks == 1 ? "" : "s", blocks[0].nb);
+                    n_blocks == 1 ? "" : "s", widest);
+        }
     }
     int rc = open_block(s, cx, a, st, &blocks[0], slice_group, extra_options, local_size, verbose, NULL, take, err,
                         errcap);

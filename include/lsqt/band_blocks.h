@@ -21,6 +21,13 @@ extern "C" {
  * tests/test_gpu_build.py builds every width up to it). */
 #define LSQT_GPU_BAND_BLOCK_MAX 4
 
+/* The most two bands' paths may differ and still share (host/sim/band_blocks.c
+ * path_divergence: about e^-D of a band's paths are like its own among another's). A
+ * model not yet fitted to measured efficiencies: it keeps apart the bands of a thick,
+ * bright medium whose extinction differs by more than a few percent, where one band's
+ * paths are rare among another's and sharing would cost that band more than it saves. */
+#define LSQT_BAND_DIVERGENCE_MAX 0.25
+
 /* A block: its width nb (the program's LSQT_NB) and the run's band in each of its slots,
  * -1 for a slot that only pads the block (it repeats the block's last band; its tallies are dropped). */
 typedef struct lsqt_band_block {
@@ -31,14 +38,20 @@ typedef struct lsqt_band_block {
 /* Whether bands b and c of A can share their paths: the same stack and models, and
  * values that differ only where a block has a factor per band (a closed layer's fR and
  * fT; an interior medium's mus and mua, hence mut; a hidden conductor's n and k, one
- * under another non-null layer; a phase function only where one band has no
- * scattering). */
+ * under another non-null layer; a phase function's parameters where its sampler is
+ * exact: the block samples the hero's and weighs each band by its own, kernels/bands.cl;
+ * another phase function only where one band has no scattering). */
 int lsqt_bands_share(const lsqt_assembly *a, int b, int c);
 
-/* Parts A's bands into blocks of at most width bands that share their paths (in
+/* Parts A's bands into blocks of at most width bands that share their paths and whose
+ * paths differ by at most max_divergence (INFINITY: every band that can share does) (in
  * LSQT_BAND_BLOCK_MAX or fewer slots, the blocks of a group evenly filled); returns the
  * count, or -1 when out of memory; *out is malloc'ed. */
-int lsqt_band_blocks(const lsqt_assembly *a, int width, lsqt_band_block **out);
+int lsqt_band_blocks(const lsqt_assembly *a, int width, double max_divergence, lsqt_band_block **out);
+
+/* The divergence asked for (LSQT_BAND_DIVERGENCE, a number >= 0 or inf, else
+ * LSQT_BAND_DIVERGENCE_MAX); -1 with err set for a bad value. */
+double lsqt_band_divergence_max(char *err, size_t errcap);
 
 /* The width asked for (LSQT_BAND_BLOCK, else LSQT_BAND_BLOCK_MAX); 0 with err set for a
  * bad value. */
@@ -50,9 +63,12 @@ int lsqt_band_block_width(char *err, size_t errcap);
  * padded to the kernels' vector width) each medium's largest extinction and the
  * per-band factors. Extinctions within same_mut (relative) of a medium's least are taken
  * as the least (the float kernels: 2^-19, what 6-digit decimals miss by; 0 in double).
+ * band_media: each slot's own media (blk->nb x (n_layers + 1): its phase function,
+ * extinction and depths; where a band does not scatter, the reference's phase function).
  * Returns 0, or 1 when out of memory. */
 int lsqt_band_block_tables(const lsqt_assembly *a, const lsqt_band_block *blk, int nbp, double same_mut,
-                           lsqt_dev_scene *scene, lsqt_dev_medium_d *media, lsqt_dev_layer_d *layers, double *bw);
+                           lsqt_dev_scene *scene, lsqt_dev_medium_d *media, lsqt_dev_layer_d *layers, double *bw,
+                           lsqt_dev_medium_d *band_media);
 
 #ifdef __cplusplus
 }

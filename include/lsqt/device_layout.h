@@ -137,9 +137,12 @@ typedef struct lsqt_dev_scene {
  * width, so a row loads as vectors): per layer the factors for light leaving on wo's side
  * (fs), then per layer those for the other side (fo), per medium its mus, its mut, and
  * its optical thickness above and below it, then per layer a conductor's index n and k
- * (0 for the other layers). The block's layer table holds each layer's unit model
- * (fs = fo = 1) and its medium table the least of each medium's extinction and depths
- * (host/sim/band_blocks.c). */
+ * (0 for the other layers), then per medium 1 in every band where the bands' phase
+ * functions differ (0 where they are one). The block's layer table holds each layer's
+ * unit model (fs = fo = 1) and its medium table the least of each medium's extinction
+ * and depths (host/sim/band_blocks.c); after it in the same buffer come each band's own
+ * media, n_layers + 1 a band (its phase function, extinction and depths: bands.cl
+ * band_medium), and then the phase functions' tables. */
 #define LSQT_BAND_AT(n_layers, nbp, row, b) ((n_layers) + 1 + (row) * (nbp) + (b))
 #define LSQT_BAND_FS(n_layers, nbp, b, li) LSQT_BAND_AT(n_layers, nbp, li, b)
 #define LSQT_BAND_FO(n_layers, nbp, b, li) LSQT_BAND_AT(n_layers, nbp, (n_layers) + (li), b)
@@ -149,7 +152,8 @@ typedef struct lsqt_dev_scene {
 #define LSQT_BAND_TAU_BELOW(n_layers, nbp, b, m) LSQT_BAND_AT(n_layers, nbp, 5 * (n_layers) + 3 + (m), b)
 #define LSQT_BAND_ETA(n_layers, nbp, b, li) LSQT_BAND_AT(n_layers, nbp, 6 * (n_layers) + 4 + (li), b)
 #define LSQT_BAND_KAPPA(n_layers, nbp, b, li) LSQT_BAND_AT(n_layers, nbp, 7 * (n_layers) + 4 + (li), b)
-#define LSQT_BAND_TAB_SIZE(n_layers, nbp) LSQT_BAND_AT(n_layers, nbp, 8 * (n_layers) + 4, 0)
+#define LSQT_BAND_PHASES(n_layers, nbp, b, m) LSQT_BAND_AT(n_layers, nbp, 8 * (n_layers) + 4 + (m), b)
+#define LSQT_BAND_TAB_SIZE(n_layers, nbp) LSQT_BAND_AT(n_layers, nbp, 9 * (n_layers) + 5, 0)
 
 /* The GPU code path's next-event record (kernels/walk.cl, -DLSQT_NEE_RECORDS): what a
  * path's vertex leaves for lsqt_estimate, its state that does not depend on the incident

@@ -112,6 +112,8 @@ enum { LSQT_PHASES(LSQT_ON_PHASE_) LSQT_BSDFS(LSQT_ON_BSDF_) LSQT_ON_NONE_ = 0 }
 #define LSQT_IF_SINGLE_SINGLE_WALK(s) s
 #define LSQT_IF_VERTEX_EXACT(s)
 #define LSQT_IF_VERTEX_VERTEX(s) s
+#define LSQT_IF_EXACT_EXACT(s) s
+#define LSQT_IF_EXACT_VERTEX(s)
 /* The BANDS column, likewise. */
 #define LSQT_IF_FACTORS_SAME(s)
 #define LSQT_IF_FACTORS_FACTORS(s) s
