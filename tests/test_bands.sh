@@ -226,6 +226,12 @@ expect 0 "band 3 (B):" -- "$BIN" paint-rgb.lsqt -p 2000 -wo 4 -wi 16
 cp "$EX/gold-coat.lsqt" .
 expect 0 "band 3 (700 nm):" -- "$BIN" gold-coat.lsqt -p 1000 -wo 4 -wi 16 --wavelengths 500:700:100
 expect 2 "a table without wavelengths" -- "$BIN" gold-coat.lsqt -p 1000 -R
+# The Mie paint's suggested run reads every one of its 106 bands (three tables at 1 nm
+# rows), then --max-memory refuses it before any kernel is built (a run would build a
+# program of its own: 8 s on 2 cores with an empty kernel cache), writing nothing.
+cp "$EX/tio2-paint.lsqt" .
+expect 2 "106 bands x 12 slices" -- "$BIN" tio2-paint.lsqt --wavelengths 400:2500:20 --max-memory 1
+ls tio2-paint.lsqt.* >/dev/null 2>&1 && bad "tio2-paint.lsqt refused, but wrote $(ls tio2-paint.lsqt.*)" || ok
 # Many bands: the summary gives a line a band (R and T over the slices, from the same
 # numbers as the JSON), -v every band's table.
 "$BIN" -R gold-coat.lsqt -p 1000 -wo 4 -wi 16 --wavelengths 400:650:50 --json six.json -o six.raw --lss six.lss >six.out &&
