@@ -169,19 +169,36 @@ static double path_divergence(const band_tables *x, const band_tables *y, int n)
     return d;
 }
 
-int lsqt_bands_share(const lsqt_assembly *a, int b, int c)
+/* Whether bands b and c can share, and the divergence of their paths (*d). */
+static int pair_of(const lsqt_assembly *a, int b, int c, double *d)
 {
     band_tables x, y;
-    if (lsqt_assembly_band(a, b)->n_layers != lsqt_assembly_band(a, c)->n_layers) return 0;
+    const int n = lsqt_assembly_band(a, b)->n_layers;
+    *d = INFINITY;
+    if (n != lsqt_assembly_band(a, c)->n_layers) return 0;
     if (tables_of(a, b, &x)) return 0;
     if (tables_of(a, c, &y)) {
         tables_free(&x);
         return 0;
     }
-    const int r = tables_share(&x, &y, lsqt_assembly_band(a, b)->n_layers);
+    const int r = tables_share(&x, &y, n);
+    if (r) *d = path_divergence(&x, &y, n);
     tables_free(&x);
     tables_free(&y);
     return r;
+}
+
+int lsqt_bands_share(const lsqt_assembly *a, int b, int c)
+{
+    double d;
+    return pair_of(a, b, c, &d);
+}
+
+double lsqt_bands_divergence(const lsqt_assembly *a, int b, int c)
+{
+    double d;
+    pair_of(a, b, c, &d);
+    return d;
 }
 
 int lsqt_band_block_width(char *err, size_t errcap)

@@ -637,6 +637,45 @@ static int open_grouped(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *
     return open_lane(s, cx, a, st, slice_group, extra_options, local_size, verbose, take, err, errcap);
 }
 
+/* -v: each block's bands (runs of neighbours as FIRST-LAST), the largest divergence of
+ * two of its bands' paths, and where a band's next runs in another block, theirs: why
+ * the bands were grouped so. */
+static void describe_blocks(const lsqt_assembly *a, const lsqt_state *st, const lsqt_band_block *blocks,
+                            int n_blocks, double most)
+{
+    fprintf(stderr, "blocks (the largest divergence of two bands' paths in a block, and [the next band's from them] where it runs in another):");
+    for (int i = 0; i < n_blocks; i++) {
+        const lsqt_band_block *k = &blocks[i];
+        for (int j = 0; j < k->nb && k->band[j] >= 0;) {
+            int e = j;
+            while (e + 1 < k->nb && k->band[e + 1] == k->band[e] + 1) e++;
+            for (int x = 0; x < 2 && (x == 0 || e > j); x++) {
+                const int b = k->band[x ? e : j];
+                if (st->wavelengths) fprintf(stderr, "%s%g%s", x ? "-" : j ? "," : " ", st->wavelengths[b], x || e == j ? "nm" : "");
+                else fprintf(stderr, "%s%d", x ? "-" : j ? "," : " ", b + 1);
+            }
+            j = e + 1;
+        }
+        double inside = 0.0;
+        int last = 0;
+        for (int j = 0; j < k->nb && k->band[j] >= 0; j++) {
+            last = k->band[j];
+            for (int x = 0; x < j; x++) inside = fmax(inside, lsqt_bands_divergence(a, k->band[x], k->band[j]));
+        }
+        if (k->nb > 1 && k->band[1] >= 0) fprintf(stderr, " (%.2g)", inside);
+        if (last + 1 < lsqt_assembly_bands(a)) { /* the next band, when not in this block */
+            double next = 0.0;
+            int apart = 1;
+            for (int j = 0; j < k->nb && k->band[j] >= 0; j++)
+                apart &= k->band[j] != last + 1, next = fmax(next, lsqt_bands_divergence(a, k->band[j], last + 1));
+            if (apart) fprintf(stderr, " [%.2g]", next);
+        }
+        fprintf(stderr, "%s", i + 1 < n_blocks ? ";" : "\n");
+    }
+    fprintf(stderr, "blocks: bands share where their values differ only as a block allows (docs/design.md 3.7) and their "
+                    "paths differ by at most %g (LSQT_BAND_DIVERGENCE)\n", most);
+}
+
 /* One side's session: its band blocks. */
 static int open_lane(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, lsqt_state *st, int slice_group,
                      const char *extra_options, size_t local_size, int verbose, lsqt_state *take, char *err,
@@ -664,6 +703,7 @@ static int open_lane(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, 
             for (int i = 0; i < n_blocks; i++) widest = blocks[i].nb > widest ? blocks[i].nb : widest;
             fprintf(stderr, "%d bands in %d block%s of up to %d sharing their paths\n", nb, n_blocks,
                     n_blocks == 1 ? "" : "s", widest);
+            describe_blocks(a, st, blocks, n_blocks, most);
         }
     }
     int rc = open_block(s, cx, a, st, &blocks[0], slice_group, extra_options, local_size, verbose, NULL, take, err,

@@ -43,6 +43,10 @@ typedef struct lsqt_band_block {
  * another phase function only where one band has no scattering). */
 int lsqt_bands_share(const lsqt_assembly *a, int b, int c);
 
+/* The divergence of the paths of bands b and c (host/sim/band_blocks.c path_divergence;
+ * INFINITY where they cannot share). */
+double lsqt_bands_divergence(const lsqt_assembly *a, int b, int c);
+
 /* Parts A's bands into blocks of at most width bands that share their paths and whose
  * paths differ by at most max_divergence (INFINITY: every band that can share does) (in
  * LSQT_BAND_BLOCK_MAX or fewer slots, the blocks of a group evenly filled); returns the
