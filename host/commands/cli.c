@@ -143,8 +143,9 @@ static void help_stops_and_notes(FILE *f)
           "width 2, work-groups of 64, one RNG block at a time: how the tests check it on a\n"
           "CPU), =0 the CPU's; LSQT_BAND_BLOCK=1..16 (default 16; the GPU code path takes at\n"
           "most 4) is the most bands that share their paths (1: every band on paths of its\n"
-          "own, as its one-band run); LSQT_BAND_DIVERGENCE=D (default 0.25, inf: no\n"
-          "limit) how far apart the paths of bands that share may be; PoCL reads\n"
+          "own, as its one-band run); LSQT_BAND_DIVERGENCE=D (default: a model of what\n"
+          "sharing pays; inf: no limit) how far apart the paths of bands that share may\n"
+          "be; PoCL reads\n"
           "its own (POCL_CACHE_DIR, POCL_CPU_MAX_CU_NUM, ...).\n"
           "Exit status: 0 success, 1 failure, 2 bad input or flags, 3 no usable OpenCL device.\n",
           f);

@@ -217,14 +217,21 @@ int lsqt_band_block_width(char *err, size_t errcap)
 double lsqt_band_divergence_max(char *err, size_t errcap)
 {
     const char *env = getenv("LSQT_BAND_DIVERGENCE");
-    if (!env || !*env) return LSQT_BAND_DIVERGENCE_MAX;
+    if (!env || !*env) return -1.0;
     char *end = NULL;
     const double d = strtod(env, &end);
     if (*end || !(d >= 0.0)) {
         snprintf(err, errcap, "LSQT_BAND_DIVERGENCE is '%s': expected a number >= 0 or inf", env);
-        return -1.0;
+        return -2.0;
     }
     return d;
+}
+
+double lsqt_band_divergence_allowed(int k)
+{
+    if (k <= 1) return INFINITY;
+    const double rho = (LSQT_BAND_GAIN_MIN * (1.0 + LSQT_BAND_COST * (k - 1)) - 1.0) / (k - 1);
+    return rho <= 0.0 ? INFINITY : rho >= 1.0 ? 0.0 : -log(rho);
 }
 
 int lsqt_band_blocks(const lsqt_assembly *a, int width, double max_divergence, lsqt_band_block **out)
@@ -238,14 +245,17 @@ int lsqt_band_blocks(const lsqt_assembly *a, int width, double max_divergence, l
     int ok = group && t && blocks, count = 0;
     for (int b = 0; ok && b < nb; b++) ok = !tables_of(a, b, &t[b]);
     /* Groups: a band joins the first group every member of which it shares with and
-     * whose paths are within max_divergence of its own (path_divergence). */
+     * whose paths are within max_divergence of its own (path_divergence; < 0: what the
+     * model allows in a block as large as the group would be, or a full one). */
     for (int b = 0; ok && b < nb; b++) {
         group[b] = -1;
         for (int g = 0; g < n_groups && group[b] < 0 && width > 1; g++) {
-            int all = 1;
+            int all = 1, size = 1;
+            for (int c = 0; c < b; c++) size += group[c] == g;
+            const double most = max_divergence >= 0.0 ? max_divergence
+                                                      : lsqt_band_divergence_allowed(size < width ? size : width);
             for (int c = 0; c < b && all; c++)
-                if (group[c] == g)
-                    all = tables_share(&t[b], &t[c], n) && path_divergence(&t[b], &t[c], n) <= max_divergence;
+                if (group[c] == g) all = tables_share(&t[b], &t[c], n) && path_divergence(&t[b], &t[c], n) <= most;
             if (all) group[b] = g;
         }
         if (group[b] < 0) group[b] = n_groups++;

@@ -672,8 +672,14 @@ static void describe_blocks(const lsqt_assembly *a, const lsqt_state *st, const 
         }
         fprintf(stderr, "%s", i + 1 < n_blocks ? ";" : "\n");
     }
-    fprintf(stderr, "blocks: bands share where their values differ only as a block allows (docs/design.md 3.7) and their "
-                    "paths differ by at most %g (LSQT_BAND_DIVERGENCE)\n", most);
+    if (most >= 0.0)
+        fprintf(stderr, "blocks: bands share where their values differ only as a block allows (docs/design.md 3.7) and "
+                        "their paths differ by at most %g (LSQT_BAND_DIVERGENCE)\n", most);
+    else
+        fprintf(stderr, "blocks: bands share where their values differ only as a block allows (docs/design.md 3.7) and "
+                        "their paths differ by at most %.2g in a block of 2, %.2g of 16 (sharing must pay every band "
+                        "%g times, by a model of what it costs; LSQT_BAND_DIVERGENCE=D sets D)\n",
+                lsqt_band_divergence_allowed(2), lsqt_band_divergence_allowed(16), LSQT_BAND_GAIN_MIN);
 }
 
 /* One side's session: its band blocks. */
@@ -692,7 +698,7 @@ static int open_lane(lsqt_session *s, lsqt_context *cx, const lsqt_assembly *a, 
         const int width = block_width(cx, st, slice_group, local_size, err, errcap);
         if (!width) return 1;
         const double most = lsqt_band_divergence_max(err, errcap);
-        if (most < 0.0) return 1;
+        if (most < -1.0) return 1;
         n_blocks = lsqt_band_blocks(a, width, most, &blocks);
         if (n_blocks < 0) {
             snprintf(err, errcap, "out of memory");

@@ -21,12 +21,17 @@ extern "C" {
  * tests/test_gpu_build.py builds every width up to it). */
 #define LSQT_GPU_BAND_BLOCK_MAX 4
 
-/* The most two bands' paths may differ and still share (host/sim/band_blocks.c
- * path_divergence: about e^-D of a band's paths are like its own among another's). A
- * model not yet fitted to measured efficiencies: it keeps apart the bands of a thick,
- * bright medium whose extinction differs by more than a few percent, where one band's
- * paths are rare among another's and sharing would cost that band more than it saves. */
-#define LSQT_BAND_DIVERGENCE_MAX 0.25
+/* What sharing pays (docs/design.md 3.7): two bands whose paths diverge by D
+ * (host/sim/band_blocks.c path_divergence) see about e^-D of each other's paths as their
+ * own, so in a block of k bands whose paths pairwise diverge by at most D a band has at
+ * least 1 + (k - 1) e^-D paths' worth of its own for about 1 + LSQT_BAND_COST (k - 1)
+ * one-band runs' work (a band's own next-event terms and tallies). Bands share where that
+ * predicted efficiency gain is at least LSQT_BAND_GAIN_MIN for every band, a margin for
+ * what the model leaves out (fitted on the Mie paint and dusty coats of
+ * docs/performance.md: at D = 1 two bands' errors grow 1.2 times, at D = 2.3 to 3.8 1.3 to
+ * 1.9 times). */
+#define LSQT_BAND_COST 0.4
+#define LSQT_BAND_GAIN_MIN 1.3
 
 /* A block: its width nb (the program's LSQT_NB) and the run's band in each of its slots,
  * -1 for a slot that only pads the block (it repeats the block's last band; its tallies are dropped). */
@@ -47,14 +52,19 @@ int lsqt_bands_share(const lsqt_assembly *a, int b, int c);
  * INFINITY where they cannot share). */
 double lsqt_bands_divergence(const lsqt_assembly *a, int b, int c);
 
+/* The largest divergence of two bands' paths in a block of k bands that the model
+ * allows (LSQT_BAND_GAIN_MIN); INFINITY for k = 1. */
+double lsqt_band_divergence_allowed(int k);
+
 /* Parts A's bands into blocks of at most width bands that share their paths and whose
- * paths differ by at most max_divergence (INFINITY: every band that can share does) (in
+ * paths differ by at most max_divergence (< 0: lsqt_band_divergence_allowed of the
+ * group's size; INFINITY: every band that can share does) (in
  * LSQT_BAND_BLOCK_MAX or fewer slots, the blocks of a group evenly filled); returns the
  * count, or -1 when out of memory; *out is malloc'ed. */
 int lsqt_band_blocks(const lsqt_assembly *a, int width, double max_divergence, lsqt_band_block **out);
 
-/* The divergence asked for (LSQT_BAND_DIVERGENCE, a number >= 0 or inf, else
- * LSQT_BAND_DIVERGENCE_MAX); -1 with err set for a bad value. */
+/* The divergence asked for (LSQT_BAND_DIVERGENCE, a number >= 0 or inf), -1 for the
+ * model's (unset), -2 with err set for a bad value. */
 double lsqt_band_divergence_max(char *err, size_t errcap);
 
 /* The width asked for (LSQT_BAND_BLOCK, else LSQT_BAND_BLOCK_MAX); 0 with err set for a
