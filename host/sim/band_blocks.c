@@ -377,8 +377,10 @@ int lsqt_band_block_tables(const lsqt_assembly *a, const lsqt_band_block *blk, i
         }
     }
     /* Each slot's own media (a padding slot's: the last band's), a band that does not
-     * scatter in a medium with the reference's phase function (it weighs nothing there,
-     * but as a hero it samples it); per medium, whether the phase functions differ. */
+     * scatter in a medium with the reference's phase function: it weighs nothing there,
+     * but as a hero it samples it, so that its paths go on for the other bands (with none,
+     * they would end there: still unbiased, as its density of what follows is then 0,
+     * but wasted); per medium, whether the phase functions differ. */
     for (int j = 0; j < blk->nb; j++) {
         if (blk->band[j] >= 0) last = j;
         const band_tables *q = &t[blk->band[j] >= 0 ? j : last];
